@@ -1,0 +1,196 @@
+//! Command-line parsing, by hand: the brief's single-dash long options
+//! (`-out`, `-time`) sit beside GNU-style flags, which argument-parsing
+//! crates cannot mix.
+
+use std::ffi::OsString;
+use std::path::PathBuf;
+
+/// What the user asked for.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Command {
+    Help,
+    Version,
+    /// Render a scene (headless), or open the app on it (GUI build, no
+    /// headless flag).
+    Render(RenderArgs),
+    /// `export-pov scene.xml [-out scene.pov]`.
+    ExportPov {
+        scene: PathBuf,
+        out: Option<PathBuf>,
+    },
+}
+
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub struct RenderArgs {
+    /// The scene file; `None` means the built-in example (app only).
+    pub scene: Option<PathBuf>,
+    pub out: Option<PathBuf>,
+    pub time: bool,
+    pub no_gui: bool,
+    pub threads: Option<usize>,
+    pub aa: Option<u32>,
+}
+
+/// A command line that does not parse: exit status 2.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct UsageError(pub String);
+
+fn usage(msg: impl Into<String>) -> UsageError {
+    UsageError(msg.into())
+}
+
+/// Parses the arguments after the program name.
+pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageError> {
+    let mut args = args.into_iter();
+    let mut r = RenderArgs::default();
+    let mut positionals: Vec<PathBuf> = Vec::new();
+    let mut help = false;
+    let mut version = false;
+    let mut only_positionals = false;
+
+    while let Some(arg) = args.next() {
+        let Some(text) = arg
+            .to_str()
+            .filter(|t| t.starts_with('-') && !only_positionals)
+        else {
+            positionals.push(PathBuf::from(arg));
+            continue;
+        };
+        // `--flag=value` form.
+        let (flag, inline) = match text.split_once('=') {
+            Some((f, v)) if f.starts_with("--") => (f, Some(v.to_owned())),
+            _ => (text, None),
+        };
+        let mut value = |name: &str| -> Result<String, UsageError> {
+            match inline.clone() {
+                Some(v) => Ok(v),
+                None => args
+                    .next()
+                    .map(|v| v.to_string_lossy().into_owned())
+                    .ok_or_else(|| usage(format!("{name} needs a value"))),
+            }
+        };
+        match flag {
+            "--" => only_positionals = true,
+            "-" => positionals.push(PathBuf::from(text)),
+            "-h" | "--help" => help = true,
+            "-V" | "--version" => version = true,
+            "-out" | "--out" | "-o" => {
+                if r.out.is_some() {
+                    return Err(usage("-out given twice"));
+                }
+                r.out = Some(PathBuf::from(value(flag)?));
+            }
+            "-time" | "--time" => r.time = true,
+            "--no-gui" => r.no_gui = true,
+            "--threads" => {
+                let v = value(flag)?;
+                r.threads = Some(v.parse().ok().filter(|&n: &usize| n >= 1).ok_or_else(|| {
+                    usage(format!("--threads expects an integer >= 1, not {v:?}"))
+                })?);
+            }
+            "--aa" => {
+                let v = value(flag)?;
+                let max = rayoflight::render::MAX_AA;
+                r.aa = Some(
+                    v.parse()
+                        .ok()
+                        .filter(|n| (1..=max).contains(n))
+                        .ok_or_else(|| {
+                            usage(format!(
+                                "--aa expects an integer from 1 to {max}, not {v:?}"
+                            ))
+                        })?,
+                );
+            }
+            _ => return Err(usage(format!("unknown flag '{text}'"))),
+        }
+    }
+
+    if help {
+        return Ok(Command::Help);
+    }
+    if version {
+        return Ok(Command::Version);
+    }
+    let mut positionals = positionals.into_iter();
+    let first = positionals.next();
+    if first.as_deref() == Some(std::path::Path::new("export-pov")) {
+        let scene = positionals
+            .next()
+            .ok_or_else(|| usage("export-pov needs a scene file"))?;
+        if let Some(extra) = positionals.next() {
+            return Err(usage(format!("unexpected argument '{}'", extra.display())));
+        }
+        if r.time || r.no_gui || r.threads.is_some() || r.aa.is_some() {
+            return Err(usage("export-pov takes only a scene and -out"));
+        }
+        return Ok(Command::ExportPov { scene, out: r.out });
+    }
+    if let Some(extra) = positionals.next() {
+        return Err(usage(format!(
+            "unexpected argument '{}' (one scene at a time)",
+            extra.display()
+        )));
+    }
+    r.scene = first;
+    Ok(Command::Render(r))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p(args: &[&str]) -> Result<Command, UsageError> {
+        parse(args.iter().map(OsString::from))
+    }
+
+    #[test]
+    fn brief_syntax_and_gnu_forms_agree() {
+        let brief = p(&["-time", "s.xml", "-out", "x.png"]).unwrap();
+        let gnu = p(&["--time", "s.xml", "--out=x.png"]).unwrap();
+        assert_eq!(brief, gnu);
+        let Command::Render(r) = brief else { panic!() };
+        assert_eq!(r.scene, Some(PathBuf::from("s.xml")));
+        assert_eq!(r.out, Some(PathBuf::from("x.png")));
+        assert!(r.time);
+    }
+
+    #[test]
+    fn numbers_are_checked() {
+        assert!(p(&["s.xml", "--threads", "0"]).is_err());
+        assert!(p(&["s.xml", "--aa", "17"]).is_err());
+        assert!(p(&["s.xml", "--aa"]).is_err());
+        let Ok(Command::Render(r)) = p(&["s.xml", "--aa", "4", "--threads=3"]) else {
+            panic!()
+        };
+        assert_eq!((r.aa, r.threads), (Some(4), Some(3)));
+    }
+
+    #[test]
+    fn unknown_flags_are_named() {
+        assert_eq!(p(&["-x"]).unwrap_err().0, "unknown flag '-x'");
+        assert_eq!(p(&["--outt", "a"]).unwrap_err().0, "unknown flag '--outt'");
+    }
+
+    #[test]
+    fn export_pov_subcommand() {
+        assert_eq!(
+            p(&["export-pov", "s.xml", "-out", "s.pov"]).unwrap(),
+            Command::ExportPov {
+                scene: "s.xml".into(),
+                out: Some("s.pov".into())
+            }
+        );
+        assert!(p(&["export-pov"]).is_err());
+    }
+
+    #[test]
+    fn double_dash_ends_flags() {
+        let Ok(Command::Render(r)) = p(&["--", "-weird.xml"]) else {
+            panic!()
+        };
+        assert_eq!(r.scene, Some(PathBuf::from("-weird.xml")));
+    }
+}

@@ -1,0 +1,173 @@
+//! The command line: `rayoflight [-time] scene.xml [-out image.png]` and its
+//! subcommands. This is the binary's edge: it turns typed library errors into
+//! one-line messages on stderr and exit statuses (0 success, 1 a scene,
+//! render or output error, 2 a usage error).
+
+mod args;
+
+use args::{Command, RenderArgs, UsageError};
+use rayoflight::{output, pov, render, scene};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+const USAGE: &str = "\
+Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N]
+       rayoflight export-pov scene.xml [-out scene.pov]
+       rayoflight --help | --version";
+
+const HELP: &str = "\
+Renders an XML scene (spheres, planes, lights, one camera, an illumination
+model) to an image.
+
+Options:
+  -out, --out FILE   image to write; the format follows the extension
+                     (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp).
+                     Default: the scene's path with the extension .png
+  -time, --time      print the render time (prepare + trace) as 'render: N ns'
+  --threads N        render threads (default: one per core)
+  --aa N             N×N rays per pixel, 1 to 16 (default 1: the pixel centre)
+  --no-gui           never open a window (the headless build never does)
+  -h, --help         this help
+  -V, --version      the version
+
+Subcommands:
+  export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
+
+Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
+
+/// A failure at the edge: what to print and which status to exit with.
+enum Failure {
+    Usage(String),
+    Error(String),
+}
+
+impl From<UsageError> for Failure {
+    fn from(e: UsageError) -> Failure {
+        Failure::Usage(e.0)
+    }
+}
+
+fn fail(e: impl std::fmt::Display) -> Failure {
+    Failure::Error(e.to_string())
+}
+
+pub fn main() -> ExitCode {
+    match run(std::env::args_os().skip(1)) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::Usage(msg)) if msg.is_empty() => {
+            eprintln!("{USAGE}");
+            ExitCode::from(2)
+        }
+        Err(Failure::Usage(msg)) => {
+            eprintln!("rayoflight: {msg}; see 'rayoflight --help'");
+            ExitCode::from(2)
+        }
+        Err(Failure::Error(msg)) => {
+            eprintln!("{msg}");
+            ExitCode::from(1)
+        }
+    }
+}
+
+fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure> {
+    match args::parse(args)? {
+        Command::Help => {
+            print_line(&format!("{USAGE}\n\n{HELP}"));
+            Ok(())
+        }
+        Command::Version => {
+            print_line(&format!("rayoflight {}", env!("CARGO_PKG_VERSION")));
+            Ok(())
+        }
+        Command::ExportPov { scene, out } => export_pov(&scene, out),
+        Command::Render(r) => render_scene(r),
+    }
+}
+
+/// Prints to stdout, ignoring a closed pipe (`rayoflight -time … | head`).
+fn print_line(text: &str) {
+    let _ = writeln!(std::io::stdout(), "{text}");
+}
+
+fn render_scene(r: RenderArgs) -> Result<(), Failure> {
+    // No scene: the app opens the built-in example once it exists; the
+    // headless CLI prints its usage.
+    let Some(scene_path) = r.scene.clone() else {
+        return Err(Failure::Usage(String::new()));
+    };
+    let out = r
+        .out
+        .clone()
+        .unwrap_or_else(|| scene_path.with_extension("png"));
+    // Everything that can be checked before work is checked first.
+    output::format_for(&out).map_err(fail)?;
+    refuse_same_file(&scene_path, &out)?;
+
+    let scene = scene::load(&scene_path).map_err(fail)?;
+    let options = render::RenderOptions {
+        threads: r.threads,
+        aa: r.aa.unwrap_or(1),
+    };
+    let start = Instant::now();
+    let image = render::render(&scene, &options).map_err(fail)?;
+    let elapsed = start.elapsed();
+    output::save(&image, &out).map_err(fail)?;
+    if r.time {
+        print_line(&format!("render: {} ns", elapsed.as_nanos()));
+    }
+    Ok(())
+}
+
+fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
+    let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
+    refuse_same_file(scene_path, &out)?;
+    let scene = scene::load(scene_path).map_err(fail)?;
+    let text = pov::export(&scene);
+    output::write_atomic(&out, text.as_bytes()).map_err(fail)
+}
+
+/// The output must never replace the scene: compare canonical paths (so
+/// `./a/../s.xml` and symbolic links are caught), and on Unix the inode
+/// (hard links).
+fn refuse_same_file(scene: &Path, out: &Path) -> Result<(), Failure> {
+    let same = match (scene.canonicalize(), canonical_target(out)) {
+        (Ok(a), Some(b)) => a == b || same_inode(&a, &b),
+        _ => false,
+    };
+    if same {
+        return Err(Failure::Error(format!(
+            "{}: refusing to overwrite the scene file with the output",
+            out.display()
+        )));
+    }
+    Ok(())
+}
+
+/// Canonical form of a path that may not exist yet: its parent made
+/// canonical, joined with its file name.
+fn canonical_target(path: &Path) -> Option<PathBuf> {
+    if let Ok(p) = path.canonicalize() {
+        return Some(p);
+    }
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    Some(parent.canonicalize().ok()?.join(path.file_name()?))
+}
+
+#[cfg(unix)]
+fn same_inode(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (a.metadata(), b.metadata()) {
+        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
+        _ => false,
+    }
+}
+
+#[cfg(not(unix))]
+fn same_inode(_: &Path, _: &Path) -> bool {
+    false
+}

@@ -1,0 +1,113 @@
+//! Ray against the unit sphere |P|² = 1 centred on the origin.
+
+use super::Ray;
+
+/// Nearest root t > 0 of |o + t d|² = 1, or `None`.
+///
+/// Numerically stable form: the discriminant is computed from the distance
+/// of the line to the centre (Hearn & Baker, as in *Ray Tracing Gems* ch. 7),
+/// which does not cancel when the sphere is small and far, and the two roots
+/// come from `q` and `c / q`, which avoids subtracting nearly equal numbers.
+pub fn intersect_sphere(ray: &Ray) -> Option<f64> {
+    let (o, d) = (ray.origin, ray.dir);
+    let a = d.length_squared();
+    // Half of the usual b: the quadratic is a t² + 2 b t + c = 0.
+    let b = o.dot(d);
+    let c = o.length_squared() - 1.0;
+    // Δ/4 = b² − a c = a (1 − |l|²), l the closest point of the line to the centre.
+    let l = o - (b / a) * d;
+    let quarter_disc = a * (1.0 - l.length_squared());
+    if quarter_disc.is_nan() || quarter_disc < 0.0 {
+        return None;
+    }
+    let q = -(b + quarter_disc.sqrt().copysign(b));
+    if q == 0.0 {
+        // Tangent ray through the centre's perpendicular foot: b = Δ = 0.
+        return None;
+    }
+    let (t0, t1) = (q / a, c / q);
+    nearest_positive(t0, t1)
+}
+
+/// The textbook root formula (−b ± √(b² − 4ac)) / 2a, kept for the study of
+/// where it fails: it cancels for small, distant spheres.
+pub fn intersect_sphere_textbook(ray: &Ray) -> Option<f64> {
+    let (o, d) = (ray.origin, ray.dir);
+    let a = d.length_squared();
+    let b = 2.0 * o.dot(d);
+    let c = o.length_squared() - 1.0;
+    let disc = b * b - 4.0 * a * c;
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let sq = disc.sqrt();
+    nearest_positive((-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a))
+}
+
+fn nearest_positive(t0: f64, t1: f64) -> Option<f64> {
+    let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+    if near > 0.0 {
+        Some(near)
+    } else if far > 0.0 {
+        Some(far)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn hits_the_front_from_outside() {
+        let r = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z);
+        assert_eq!(intersect_sphere(&r), Some(4.0));
+        assert_eq!(intersect_sphere_textbook(&r), Some(4.0));
+    }
+
+    #[test]
+    fn hits_the_far_side_from_inside() {
+        let r = Ray::new(DVec3::ZERO, DVec3::X);
+        assert_eq!(intersect_sphere(&r), Some(1.0));
+    }
+
+    #[test]
+    fn misses_behind_and_beside() {
+        assert_eq!(
+            intersect_sphere(&Ray::new(DVec3::new(0.0, 0.0, 5.0), DVec3::Z)),
+            None
+        );
+        assert_eq!(
+            intersect_sphere(&Ray::new(DVec3::new(0.0, 1.5, -5.0), DVec3::Z)),
+            None
+        );
+    }
+
+    #[test]
+    fn scaled_direction_gives_world_distance() {
+        // A sphere of radius 2 seen in its object space: the unit world
+        // direction becomes length 1/2, and t stays the world distance.
+        let r = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z * 0.5);
+        assert_eq!(intersect_sphere(&r), Some(8.0));
+    }
+
+    #[test]
+    fn stable_where_the_textbook_formula_cancels() {
+        // A unit sphere seen from 1e9 away: the textbook discriminant loses
+        // every digit (b² and 4ac are both ~4e18), the stable one does not.
+        let o = DVec3::new(0.0, 0.0, -1e9);
+        let hit = Ray::new(o, DVec3::new(0.0, 0.5e-9, 1.0).normalize());
+        let exact = 1e9 - 0.75_f64.sqrt();
+        let t = intersect_sphere(&hit).unwrap();
+        assert!((t - exact).abs() < 1e-6, "{t}");
+        let t = intersect_sphere_textbook(&hit).unwrap();
+        assert!((t - exact).abs() > 0.5, "{t}");
+        // Passing 1.5 from the centre: a miss, which the textbook formula
+        // reports as a tangent hit.
+        let miss = Ray::new(o, DVec3::new(0.0, 1.5e-9, 1.0).normalize());
+        assert_eq!(intersect_sphere(&miss), None);
+        assert!(intersect_sphere_textbook(&miss).is_some());
+    }
+}

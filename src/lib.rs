@@ -1,0 +1,30 @@
+//! RayOfLight: a small raytracer for XML scenes.
+//!
+//! The flow every front end shares (CLI, desktop app, study):
+//!
+//! ```text
+//! scene::load ──► Scene ──► render::prepare ──► Prepared ──► render tiles ──► Image ──► output::save
+//! ```
+//!
+//! - [`scene`]: the file format, its validation and its errors (`file:line:col`).
+//! - [`math`]: transforms with their cached inverse and normal matrix.
+//! - [`geometry`]: rays and the ray/sphere and ray/plane intersections.
+//! - [`shading`]: the illumination formulas (ambient, lambert, phong, whitted).
+//! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
+//! - [`output`]: writing images atomically, format chosen by extension.
+//! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
+//!
+//! The library never prints and knows nothing of windows or terminals.
+
+#![forbid(unsafe_code)]
+
+pub mod geometry;
+pub mod math;
+pub mod output;
+pub mod pov;
+pub mod render;
+pub mod scene;
+pub mod shading;
+
+/// The built-in example scene from the brief (`scenes/example.xml`).
+pub const EXAMPLE_SCENE: &str = include_str!("../scenes/example.xml");

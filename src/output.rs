@@ -1,0 +1,179 @@
+//! Writing images: the format follows the file's extension, and files are
+//! written atomically (a temporary file in the target directory, renamed
+//! into place), so a failure never leaves a partial file nor touches an
+//! existing one.
+
+use image::codecs::jpeg::JpegEncoder;
+use image::{ImageFormat, RgbImage};
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+/// JPEG quality used for `.jpg` / `.jpeg`.
+pub const JPEG_QUALITY: u8 = 95;
+
+/// Extensions that can be written, lower case, and their formats.
+pub const SUPPORTED: &[(&str, ImageFormat)] = &[
+    ("png", ImageFormat::Png),
+    ("jpg", ImageFormat::Jpeg),
+    ("jpeg", ImageFormat::Jpeg),
+    ("gif", ImageFormat::Gif),
+    ("bmp", ImageFormat::Bmp),
+    ("tga", ImageFormat::Tga),
+    ("ppm", ImageFormat::Pnm),
+    ("tif", ImageFormat::Tiff),
+    ("tiff", ImageFormat::Tiff),
+    ("qoi", ImageFormat::Qoi),
+    ("webp", ImageFormat::WebP),
+];
+
+/// Why an image or file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    #[error("{}: unknown image extension {ext:?}; supported: {}", path.display(), supported_list())]
+    UnknownExtension { path: PathBuf, ext: String },
+    #[error("{}: no file extension to choose the image format; supported: {}", path.display(), supported_list())]
+    NoExtension { path: PathBuf },
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{}: cannot encode the image: {source}", path.display())]
+    Encode {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+}
+
+/// The supported extensions, comma separated, for messages.
+pub fn supported_list() -> String {
+    SUPPORTED
+        .iter()
+        .map(|(ext, _)| *ext)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The image format for a path, from its extension (case-insensitive).
+pub fn format_for(path: &Path) -> Result<ImageFormat, OutputError> {
+    let ext = path
+        .extension()
+        .ok_or_else(|| OutputError::NoExtension {
+            path: path.to_owned(),
+        })?
+        .to_string_lossy()
+        .to_ascii_lowercase();
+    SUPPORTED
+        .iter()
+        .find(|(e, _)| *e == ext)
+        .map(|(_, f)| *f)
+        .ok_or(OutputError::UnknownExtension {
+            path: path.to_owned(),
+            ext,
+        })
+}
+
+/// Encodes `image` in the format of `path`'s extension and writes it
+/// atomically.
+pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
+    let format = format_for(path)?;
+    let encoded = encode(image, format).map_err(|source| OutputError::Encode {
+        path: path.to_owned(),
+        source,
+    })?;
+    write_atomic(path, &encoded)
+}
+
+/// The image encoded in memory (JPEG at [`JPEG_QUALITY`]).
+pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::ImageError> {
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    if format == ImageFormat::Jpeg {
+        image.write_with_encoder(JpegEncoder::new_with_quality(&mut bytes, JPEG_QUALITY))?;
+    } else {
+        image.write_to(&mut bytes, format)?;
+    }
+    Ok(bytes.into_inner())
+}
+
+/// Writes `bytes` to `path` through a temporary file in the same directory,
+/// synced, then renamed over `path`. On any failure the temporary file is
+/// removed and an existing `path` is left as it was.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let io_error = |source| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if path.is_dir() {
+        return Err(io_error(std::io::Error::new(
+            std::io::ErrorKind::IsADirectory,
+            "is a directory",
+        )));
+    }
+    let mut file = tempfile::Builder::new()
+        .prefix(".rayoflight-")
+        .suffix(".tmp")
+        .tempfile_in(dir)
+        .map_err(io_error)?;
+    {
+        let mut w = BufWriter::new(file.as_file_mut());
+        w.write_all(bytes).map_err(io_error)?;
+        w.flush().map_err(io_error)?;
+    }
+    file.as_file().sync_all().map_err(io_error)?;
+    file.persist(path).map_err(|e| io_error(e.error))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn sample() -> RgbImage {
+        RgbImage::from_fn(7, 5, |x, y| image::Rgb([x as u8 * 30, y as u8 * 40, 200]))
+    }
+
+    #[test]
+    fn every_supported_format_encodes() {
+        for (ext, format) in SUPPORTED {
+            let bytes = encode(&sample(), *format).unwrap_or_else(|e| panic!("{ext}: {e}"));
+            let back = image::load_from_memory_with_format(&bytes, *format)
+                .unwrap_or_else(|e| panic!("{ext}: {e}"))
+                .to_rgb8();
+            assert_eq!(back.dimensions(), (7, 5), "{ext}");
+            if !matches!(format, ImageFormat::Jpeg | ImageFormat::Gif) {
+                assert_eq!(back, sample(), "{ext} should be lossless");
+            }
+        }
+    }
+
+    #[test]
+    fn format_follows_the_extension() {
+        assert_eq!(format_for(Path::new("a.PNG")).unwrap(), ImageFormat::Png);
+        assert_eq!(format_for(Path::new("a.jpeg")).unwrap(), ImageFormat::Jpeg);
+        let err = format_for(Path::new("a.xyz")).unwrap_err().to_string();
+        assert!(err.contains("\"xyz\"") && err.contains("png, jpg"), "{err}");
+        assert!(matches!(
+            format_for(Path::new("noext")),
+            Err(OutputError::NoExtension { .. })
+        ));
+    }
+
+    #[test]
+    fn atomic_write_replaces_and_cleans_up() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.png");
+        save(&sample(), &path).unwrap();
+        save(&sample(), &path).unwrap();
+        let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+        assert_eq!(names.len(), 1, "no temporary file left behind");
+        let missing = dir.path().join("no/such/dir/out.png");
+        assert!(matches!(
+            save(&sample(), &missing),
+            Err(OutputError::Io { .. })
+        ));
+    }
+}

@@ -1,0 +1,894 @@
+//! The scene loader: XML text to a validated [`Scene`] (contract sections
+//! 2–4 and 9), or a [`LoadError`] naming the file, the `line:column` and the
+//! element and attribute at fault.
+//!
+//! quick-xml reads the text as a stream of events; a small recursive descent
+//! (at most four levels: scene, object, transformation, step) checks each
+//! element against the grammar. Positions come from the events' slices, which
+//! borrow the text: a slice's address minus the text's address is its byte
+//! offset, turned into line and column only when an error is reported.
+//!
+//! Nothing here panics on any input, and every count the file controls is
+//! checked against its limit before anything is allocated for it.
+
+use std::borrow::Cow;
+use std::fs;
+use std::io::Read;
+use std::path::Path;
+
+use quick_xml::Reader;
+use quick_xml::escape::EscapeError;
+use quick_xml::events::attributes::AttrError;
+use quick_xml::events::{BytesStart, Event};
+
+use super::error::{LoadError, LoadErrorKind, Position};
+use super::{Camera, Color, Illumination, Light, Material, Model, Object, Scene, Shape};
+use crate::math::{Transform, TransformStep, Vec3};
+
+/// Largest scene file [`load`] reads: 1 GiB.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
+/// Most objects (spheres and planes together) in one scene.
+pub const MAX_OBJECTS: usize = 10_000_000;
+/// Most lights in one scene.
+pub const MAX_LIGHTS: usize = 1_000_000;
+/// Most pixels (`width * height`) in the camera's image: 2^28.
+pub const MAX_PIXELS: u64 = 1 << 28;
+
+/// Largest `width` or `height` on its own (the product is bounded by
+/// [`MAX_PIXELS`] too).
+const MAX_SIDE: u64 = u32::MAX as u64;
+
+const SCENE_CHILDREN: &[&str] = &["sphere", "plane", "light", "camera", "model"];
+const OBJECT_CHILDREN: &[&str] = &["color", "material", "transformation"];
+const LIGHT_CHILDREN: &[&str] = &["color"];
+const CAMERA_CHILDREN: &[&str] = &["transformation"];
+const TRANSFORM_CHILDREN: &[&str] = &["translate", "rotate-x", "rotate-y", "rotate-z", "scale"];
+const NONE: &[&str] = &[];
+
+const COLOR_ATTRS: &[&str] = &["red", "green", "blue"];
+const MATERIAL_ATTRS: &[&str] = &["ka", "kd", "ks", "m"];
+const LIGHT_ATTRS: &[&str] = &["x", "y", "z"];
+const CAMERA_ATTRS: &[&str] = &["width", "height", "eyeDistance"];
+const MODEL_ATTRS: &[&str] = &["type", "depth"];
+const TRANSLATE_ATTRS: &[&str] = &["x", "y", "z"];
+const ROTATE_ATTRS: &[&str] = &["angle"];
+const SCALE_ATTRS: &[&str] = &["factor", "x", "y", "z"];
+
+/// Reads and parses the scene file at `path`.
+///
+/// The size is checked from the file's metadata before reading (and again
+/// while reading, should the file grow): above [`MAX_FILE_BYTES`] it is
+/// refused. A directory, an unreadable file or one that is not UTF-8 gives an
+/// error without a position.
+pub fn load(path: &Path) -> Result<Scene, LoadError> {
+    let fail = |kind| LoadError::new(path, None, kind);
+    let io = |e: std::io::Error| {
+        fail(LoadErrorKind::Io {
+            kind: e.kind(),
+            message: e.to_string(),
+        })
+    };
+    let too_large = |size| {
+        fail(LoadErrorKind::FileTooLarge {
+            size,
+            limit: MAX_FILE_BYTES,
+        })
+    };
+
+    let meta = fs::metadata(path).map_err(io)?;
+    if meta.is_dir() {
+        return Err(fail(LoadErrorKind::IsDirectory));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    let file = fs::File::open(path).map_err(io)?;
+    let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
+    // Special files report a length of 0 and may never end: read one byte
+    // past the limit at most.
+    file.take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)
+        .map_err(io)?;
+    let read = u64::try_from(bytes.len()).unwrap_or(u64::MAX);
+    if read > MAX_FILE_BYTES {
+        return Err(too_large(read));
+    }
+    let text = String::from_utf8(bytes).map_err(|e| {
+        fail(LoadErrorKind::NotUtf8 {
+            offset: e.utf8_error().valid_up_to(),
+        })
+    })?;
+    parse(&text, path)
+}
+
+/// Parses a scene from `text`; `path` only names the file in errors.
+///
+/// A leading byte-order mark is skipped (and not counted in columns).
+pub fn parse(text: &str, path: &Path) -> Result<Scene, LoadError> {
+    let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+    Parser::new(body, path).document()
+}
+
+/// A start tag as the reader gave it.
+struct Elem<'a> {
+    start: BytesStart<'a>,
+    /// Byte offset of its `<`.
+    at: usize,
+    /// `<x/>`: no children and no end tag follow.
+    empty: bool,
+}
+
+/// What [`Parser::next`] returns once comments, whitespace and the like are
+/// skipped.
+enum Node<'a> {
+    Open(Elem<'a>),
+    Close,
+    Eof,
+}
+
+/// One attribute of an element, its value unescaped.
+struct Attr<'b> {
+    name: &'b str,
+    value: Cow<'b, str>,
+    /// Byte offset of the first character of its name.
+    at: usize,
+}
+
+/// The attributes of one element (names already checked against the
+/// element's list, no repeats).
+struct Attrs<'b> {
+    element: &'static str,
+    /// Byte offset of the element's `<`.
+    at: usize,
+    list: Vec<Attr<'b>>,
+}
+
+impl<'b> Attrs<'b> {
+    fn get(&self, name: &str) -> Option<&Attr<'b>> {
+        self.list.iter().find(|a| a.name == name)
+    }
+}
+
+/// Everything a `<scene>` gathers before it is checked for completeness.
+#[derive(Default)]
+struct Gathered {
+    objects: Vec<Object>,
+    lights: Vec<Light>,
+    camera: Option<Camera>,
+    model: Option<Model>,
+}
+
+struct Parser<'a> {
+    text: &'a str,
+    path: &'a Path,
+    reader: Reader<&'a [u8]>,
+    /// No event seen yet (an XML declaration must come first).
+    at_start: bool,
+    /// `</scene>` (or `<scene/>`) has been read.
+    after_root: bool,
+}
+
+impl<'a> Parser<'a> {
+    fn new(text: &'a str, path: &'a Path) -> Parser<'a> {
+        let mut reader = Reader::from_str(text);
+        let config = reader.config_mut();
+        config.check_end_names = true;
+        config.check_comments = true;
+        config.expand_empty_elements = false;
+        config.trim_text(false);
+        Parser {
+            text,
+            path,
+            reader,
+            at_start: true,
+            after_root: false,
+        }
+    }
+
+    // ----- positions and errors -----
+
+    /// The byte offset of `slice` in the text, if it is a part of it.
+    fn offset_of(&self, slice: &[u8]) -> Option<usize> {
+        let offset = (slice.as_ptr() as usize).checked_sub(self.text.as_ptr() as usize)?;
+        (offset <= self.text.len()).then_some(offset)
+    }
+
+    fn error_at(&self, offset: usize, kind: LoadErrorKind) -> LoadError {
+        LoadError::new(
+            self.path,
+            Some(Position::at_offset(self.text, offset)),
+            kind,
+        )
+    }
+
+    fn xml_at(&self, offset: usize, message: String) -> LoadError {
+        self.error_at(offset, LoadErrorKind::Xml { message })
+    }
+
+    /// End of file inside `<element>`.
+    fn unclosed(&self, element: &str) -> LoadError {
+        self.xml_at(
+            self.text.len(),
+            format!("<{element}> is not closed: the file ends before </{element}>"),
+        )
+    }
+
+    fn reader_offset(&self) -> usize {
+        usize::try_from(self.reader.buffer_position()).unwrap_or(usize::MAX)
+    }
+
+    // ----- events -----
+
+    /// The next start tag, end tag or end of file; comments, processing
+    /// instructions, the XML declaration and whitespace are skipped, anything
+    /// else is an error.
+    fn next(&mut self) -> Result<Node<'a>, LoadError> {
+        loop {
+            let before = self.reader_offset();
+            let event = match self.reader.read_event() {
+                Ok(event) => event,
+                Err(e) => {
+                    let at = usize::try_from(self.reader.error_position()).unwrap_or(usize::MAX);
+                    let message = match e {
+                        quick_xml::Error::Syntax(e) => e.to_string(),
+                        quick_xml::Error::IllFormed(e) => e.to_string(),
+                        other => other.to_string(),
+                    };
+                    return Err(self.xml_at(at, message));
+                }
+            };
+            let first = std::mem::replace(&mut self.at_start, false);
+            match event {
+                Event::Start(start) => return Ok(Node::Open(self.elem(start, before, false))),
+                Event::Empty(start) => return Ok(Node::Open(self.elem(start, before, true))),
+                Event::End(_) => return Ok(Node::Close),
+                Event::Eof => return Ok(Node::Eof),
+                Event::Text(text) => self.check_text(&text, before)?,
+                Event::CData(data) => self.check_text(&data, before)?,
+                Event::GeneralRef(reference) => {
+                    let text = format!("&{};", String::from_utf8_lossy(&reference));
+                    return Err(self.text_error(before, text));
+                }
+                Event::Comment(_) | Event::PI(_) => {}
+                Event::Decl(decl) => {
+                    if !first || before != 0 {
+                        return Err(self.xml_at(
+                            before,
+                            "the XML declaration <?xml ...?> must be at the very start of the file"
+                                .to_owned(),
+                        ));
+                    }
+                    if let Err(e) = decl.version() {
+                        return Err(self.xml_at(before, e.to_string()));
+                    }
+                }
+                Event::DocType(_) => return Err(self.error_at(before, LoadErrorKind::Doctype)),
+            }
+        }
+    }
+
+    fn elem(&self, start: BytesStart<'a>, before: usize, empty: bool) -> Elem<'a> {
+        // The tag's bytes start just after its `<`.
+        let at = self
+            .offset_of(start.name().as_ref())
+            .and_then(|o| o.checked_sub(1))
+            .unwrap_or(before);
+        Elem { start, at, empty }
+    }
+
+    /// Character data must be XML whitespace.
+    fn check_text(&self, bytes: &[u8], before: usize) -> Result<(), LoadError> {
+        let Some(index) = bytes
+            .iter()
+            .position(|b| !matches!(b, b' ' | b'\t' | b'\r' | b'\n'))
+        else {
+            return Ok(());
+        };
+        let at = self
+            .offset_of(bytes)
+            .unwrap_or(before)
+            .saturating_add(index);
+        let rest = bytes.get(index..).unwrap_or_default();
+        let line = rest.split(|&b| b == b'\n').next().unwrap_or_default();
+        let text = String::from_utf8_lossy(line).trim_end().to_owned();
+        Err(self.text_error(at, text))
+    }
+
+    fn text_error(&self, at: usize, text: String) -> LoadError {
+        let kind = if self.after_root {
+            LoadErrorKind::ContentAfterRoot {
+                what: format!("text \"{text}\""),
+            }
+        } else {
+            LoadErrorKind::UnexpectedText { text }
+        };
+        self.error_at(at, kind)
+    }
+
+    /// Reads the children of `e` up to its end tag. Each child must be one of
+    /// `allowed` (its name is passed to `f`); with `once`, none may repeat.
+    fn children(
+        &mut self,
+        e: &Elem<'a>,
+        parent: &'static str,
+        allowed: &'static [&'static str],
+        once: bool,
+        mut f: impl FnMut(&mut Self, &Elem<'a>, &'static str) -> Result<(), LoadError>,
+    ) -> Result<(), LoadError> {
+        if e.empty {
+            return Ok(());
+        }
+        let mut seen: Vec<&'static str> = Vec::new();
+        loop {
+            match self.next()? {
+                Node::Open(child) => {
+                    let name = child.start.name();
+                    let Some(&known) = allowed.iter().find(|a| a.as_bytes() == name.as_ref())
+                    else {
+                        return Err(self.error_at(
+                            child.at,
+                            LoadErrorKind::UnknownElement {
+                                element: String::from_utf8_lossy(name.as_ref()).into_owned(),
+                                parent: parent.to_owned(),
+                                allowed,
+                            },
+                        ));
+                    };
+                    if once {
+                        if seen.contains(&known) {
+                            return Err(self.error_at(
+                                child.at,
+                                LoadErrorKind::DuplicateElement {
+                                    element: known.to_owned(),
+                                    parent: parent.to_owned(),
+                                },
+                            ));
+                        }
+                        seen.push(known);
+                    }
+                    f(self, &child, known)?;
+                }
+                Node::Close => return Ok(()),
+                Node::Eof => return Err(self.unclosed(parent)),
+            }
+        }
+    }
+
+    /// A leaf element: no children allowed.
+    fn leaf(&mut self, e: &Elem<'a>, name: &'static str) -> Result<(), LoadError> {
+        self.children(e, name, NONE, false, |_, _, _| Ok(()))
+    }
+
+    // ----- attributes -----
+
+    /// The attributes of `e`, checked against `allowed`, without repeats,
+    /// their values unescaped.
+    fn attrs<'b>(
+        &self,
+        e: &'b Elem<'a>,
+        element: &'static str,
+        allowed: &'static [&'static str],
+    ) -> Result<Attrs<'b>, LoadError> {
+        let mut list: Vec<Attr<'b>> = Vec::new();
+        let mut iter = e.start.attributes();
+        iter.with_checks(false);
+        for attr in iter {
+            let attr = attr.map_err(|err| self.attr_syntax_error(e, element, err))?;
+            let key: &'b [u8] = attr.key.into_inner();
+            let at = self.offset_of(key).unwrap_or(e.at);
+            let known = std::str::from_utf8(key)
+                .ok()
+                .and_then(|k| allowed.iter().copied().find(|&a| a == k));
+            let Some(name) = known else {
+                return Err(self.error_at(
+                    at,
+                    LoadErrorKind::UnknownAttribute {
+                        element: element.to_owned(),
+                        attribute: String::from_utf8_lossy(key).into_owned(),
+                        allowed,
+                    },
+                ));
+            };
+            if list.iter().any(|a| a.name == name) {
+                return Err(self.error_at(
+                    at,
+                    LoadErrorKind::DuplicateAttribute {
+                        element: element.to_owned(),
+                        attribute: name.to_owned(),
+                    },
+                ));
+            }
+            let value = attr
+                .decode_and_unescape_value(self.reader.decoder())
+                .map_err(|err| {
+                    self.error_at(
+                        at,
+                        LoadErrorKind::BadReference {
+                            element: element.to_owned(),
+                            attribute: name.to_owned(),
+                            message: reference_message(&err),
+                        },
+                    )
+                })?;
+            list.push(Attr { name, value, at });
+        }
+        Ok(Attrs {
+            element,
+            at: e.at,
+            list,
+        })
+    }
+
+    fn attr_syntax_error(&self, e: &Elem<'a>, element: &str, err: AttrError) -> LoadError {
+        let (relative, what) = match err {
+            AttrError::ExpectedEq(p) => (p, "expected `=` after an attribute name".to_owned()),
+            AttrError::ExpectedValue(p) => (p, "expected a quoted value after `=`".to_owned()),
+            AttrError::UnquotedValue(p) => (p, "attribute value without quotes".to_owned()),
+            AttrError::ExpectedQuote(p, q) => (
+                p,
+                format!("attribute value not closed: missing {}", char::from(q)),
+            ),
+            AttrError::Duplicated(p, _) => (p, "repeated attribute".to_owned()),
+        };
+        // Positions are relative to the tag's bytes, which start after `<`.
+        let at = e.at.saturating_add(1).saturating_add(relative);
+        self.xml_at(at, format!("in <{element}>: {what}"))
+    }
+
+    fn required<'c, 'b>(
+        &self,
+        attrs: &'c Attrs<'b>,
+        name: &str,
+    ) -> Result<&'c Attr<'b>, LoadError> {
+        attrs.get(name).ok_or_else(|| {
+            self.error_at(
+                attrs.at,
+                LoadErrorKind::MissingAttribute {
+                    element: attrs.element.to_owned(),
+                    attribute: name.to_owned(),
+                },
+            )
+        })
+    }
+
+    /// A finite number (contract section 9).
+    fn number(&self, attrs: &Attrs<'_>, attr: &Attr<'_>) -> Result<f64, LoadError> {
+        let fields = || {
+            (
+                attrs.element.to_owned(),
+                attr.name.to_owned(),
+                attr.value.as_ref().to_owned(),
+            )
+        };
+        match attr.value.trim_ascii().parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            Ok(_) => {
+                let (element, attribute, value) = fields();
+                Err(self.error_at(
+                    attr.at,
+                    LoadErrorKind::NotFinite {
+                        element,
+                        attribute,
+                        value,
+                    },
+                ))
+            }
+            Err(_) => {
+                let (element, attribute, value) = fields();
+                Err(self.error_at(
+                    attr.at,
+                    LoadErrorKind::InvalidNumber {
+                        element,
+                        attribute,
+                        value,
+                    },
+                ))
+            }
+        }
+    }
+
+    /// The number `name`, or `default` when absent.
+    fn number_or(&self, attrs: &Attrs<'_>, name: &str, default: f64) -> Result<f64, LoadError> {
+        match attrs.get(name) {
+            Some(attr) => self.number(attrs, attr),
+            None => Ok(default),
+        }
+    }
+
+    fn required_number(&self, attrs: &Attrs<'_>, name: &str) -> Result<f64, LoadError> {
+        let attr = self.required(attrs, name)?;
+        self.number(attrs, attr)
+    }
+
+    /// `value` must satisfy `ok`, described by `rule`, or the attribute is
+    /// out of range.
+    fn check(
+        &self,
+        attrs: &Attrs<'_>,
+        name: &str,
+        value: f64,
+        ok: bool,
+        rule: &'static str,
+    ) -> Result<f64, LoadError> {
+        if ok {
+            return Ok(value);
+        }
+        let (at, text) = attrs.get(name).map_or((attrs.at, value.to_string()), |a| {
+            (a.at, a.value.as_ref().to_owned())
+        });
+        Err(self.error_at(
+            at,
+            LoadErrorKind::OutOfRange {
+                element: attrs.element.to_owned(),
+                attribute: name.to_owned(),
+                value: text,
+                rule,
+            },
+        ))
+    }
+
+    fn non_negative(&self, attrs: &Attrs<'_>, name: &str, value: f64) -> Result<f64, LoadError> {
+        self.check(attrs, name, value, value >= 0.0, ">= 0")
+    }
+
+    /// An integer in `min..=max`: ASCII digits with an optional leading `+`
+    /// (contract section 9).
+    fn integer(
+        &self,
+        attrs: &Attrs<'_>,
+        attr: &Attr<'_>,
+        min: u64,
+        max: u64,
+    ) -> Result<u64, LoadError> {
+        let text = attr.value.trim_ascii();
+        let digits = text.strip_prefix('+').unwrap_or(text);
+        let parsed = if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
+            digits.bytes().try_fold(0u64, |acc, b| {
+                acc.checked_mul(10)?.checked_add(u64::from(b - b'0'))
+            })
+        } else {
+            None
+        };
+        match parsed {
+            Some(v) if (min..=max).contains(&v) => Ok(v),
+            _ => Err(self.error_at(
+                attr.at,
+                LoadErrorKind::InvalidInteger {
+                    element: attrs.element.to_owned(),
+                    attribute: attr.name.to_owned(),
+                    value: attr.value.as_ref().to_owned(),
+                    min,
+                    max,
+                },
+            )),
+        }
+    }
+
+    // ----- the grammar -----
+
+    fn document(mut self) -> Result<Scene, LoadError> {
+        let root = loop {
+            match self.next()? {
+                Node::Open(e) => break e,
+                // quick-xml reports an end tag without a start tag itself.
+                Node::Close => {
+                    let at = self.reader_offset();
+                    return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
+                }
+                Node::Eof => {
+                    return Err(self.error_at(self.text.len(), LoadErrorKind::MissingRoot));
+                }
+            }
+        };
+        if root.start.name().as_ref() != b"scene" {
+            return Err(self.error_at(
+                root.at,
+                LoadErrorKind::RootNotScene {
+                    element: String::from_utf8_lossy(root.start.name().as_ref()).into_owned(),
+                },
+            ));
+        }
+        self.attrs(&root, "scene", NONE)?;
+
+        let mut scene = Gathered::default();
+        self.children(&root, "scene", SCENE_CHILDREN, false, |p, e, name| {
+            p.scene_child(e, name, &mut scene)
+        })?;
+
+        self.after_root = true;
+        loop {
+            match self.next()? {
+                Node::Open(e) => {
+                    let what = format!(
+                        "element <{}>",
+                        String::from_utf8_lossy(e.start.name().as_ref())
+                    );
+                    return Err(self.error_at(e.at, LoadErrorKind::ContentAfterRoot { what }));
+                }
+                Node::Close => {
+                    let at = self.reader_offset();
+                    return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
+                }
+                Node::Eof => break,
+            }
+        }
+
+        let Some(camera) = scene.camera else {
+            return Err(LoadError::new(
+                self.path,
+                None,
+                LoadErrorKind::MissingCamera,
+            ));
+        };
+        Ok(Scene {
+            objects: scene.objects,
+            lights: scene.lights,
+            camera,
+            model: scene.model.unwrap_or_default(),
+        })
+    }
+
+    fn scene_child(
+        &mut self,
+        e: &Elem<'a>,
+        name: &'static str,
+        scene: &mut Gathered,
+    ) -> Result<(), LoadError> {
+        match name {
+            "sphere" | "plane" => {
+                if scene.objects.len() >= MAX_OBJECTS {
+                    return Err(
+                        self.error_at(e.at, LoadErrorKind::TooManyObjects { limit: MAX_OBJECTS })
+                    );
+                }
+                let shape = if name == "sphere" {
+                    Shape::Sphere
+                } else {
+                    Shape::Plane
+                };
+                let object = self.object(e, shape)?;
+                scene.objects.push(object);
+            }
+            "light" => {
+                if scene.lights.len() >= MAX_LIGHTS {
+                    return Err(
+                        self.error_at(e.at, LoadErrorKind::TooManyLights { limit: MAX_LIGHTS })
+                    );
+                }
+                let light = self.light(e)?;
+                scene.lights.push(light);
+            }
+            "camera" => {
+                if scene.camera.is_some() {
+                    return Err(self.error_at(e.at, LoadErrorKind::SecondCamera));
+                }
+                scene.camera = Some(self.camera(e)?);
+            }
+            _ => {
+                if scene.model.is_some() {
+                    return Err(self.error_at(e.at, LoadErrorKind::SecondModel));
+                }
+                scene.model = Some(self.model(e)?);
+            }
+        }
+        Ok(())
+    }
+
+    fn object(&mut self, e: &Elem<'a>, shape: Shape) -> Result<Object, LoadError> {
+        let name = shape.name();
+        self.attrs(e, name, NONE)?;
+        let mut color = None;
+        let mut material = None;
+        let mut transform = None;
+        self.children(e, name, OBJECT_CHILDREN, true, |p, child, child_name| {
+            match child_name {
+                "color" => color = Some(p.color(child)?),
+                "material" => material = Some(p.material(child)?),
+                _ => transform = Some(p.transformation(child)?),
+            }
+            Ok(())
+        })?;
+        Ok(Object {
+            shape,
+            color: color.unwrap_or(Vec3::ONE),
+            material: material.unwrap_or_default(),
+            transform: transform.unwrap_or_default(),
+        })
+    }
+
+    fn color(&mut self, e: &Elem<'a>) -> Result<Color, LoadError> {
+        let color = {
+            let a = self.attrs(e, "color", COLOR_ATTRS)?;
+            let mut c = [0.0; 3];
+            for (slot, name) in c.iter_mut().zip(COLOR_ATTRS) {
+                let v = self.required_number(&a, name)?;
+                *slot = self.non_negative(&a, name, v)?;
+            }
+            Vec3::from_array(c)
+        };
+        self.leaf(e, "color")?;
+        Ok(color)
+    }
+
+    fn material(&mut self, e: &Elem<'a>) -> Result<Material, LoadError> {
+        let material = {
+            let a = self.attrs(e, "material", MATERIAL_ATTRS)?;
+            let d = Material::default();
+            let get = |name: &str, default: f64| -> Result<f64, LoadError> {
+                let v = self.number_or(&a, name, default)?;
+                self.non_negative(&a, name, v)
+            };
+            Material {
+                ka: get("ka", d.ka)?,
+                kd: get("kd", d.kd)?,
+                ks: get("ks", d.ks)?,
+                m: get("m", d.m)?,
+            }
+        };
+        self.leaf(e, "material")?;
+        Ok(material)
+    }
+
+    fn light(&mut self, e: &Elem<'a>) -> Result<Light, LoadError> {
+        let position = {
+            let a = self.attrs(e, "light", LIGHT_ATTRS)?;
+            Vec3::new(
+                self.required_number(&a, "x")?,
+                self.required_number(&a, "y")?,
+                self.required_number(&a, "z")?,
+            )
+        };
+        let mut color = None;
+        self.children(e, "light", LIGHT_CHILDREN, true, |p, child, _| {
+            color = Some(p.color(child)?);
+            Ok(())
+        })?;
+        Ok(Light {
+            position,
+            color: color.unwrap_or(Vec3::ONE),
+        })
+    }
+
+    fn camera(&mut self, e: &Elem<'a>) -> Result<Camera, LoadError> {
+        let (width, height, eye_distance) = {
+            let a = self.attrs(e, "camera", CAMERA_ATTRS)?;
+            let width = self.integer(&a, self.required(&a, "width")?, 1, MAX_SIDE)?;
+            let height = self.integer(&a, self.required(&a, "height")?, 1, MAX_SIDE)?;
+            let eye = self.required_number(&a, "eyeDistance")?;
+            let eye = self.check(&a, "eyeDistance", eye, eye > 0.0, "> 0")?;
+            (width, height, eye)
+        };
+        // Both are at most u32::MAX: the product fits in a u64.
+        if width.saturating_mul(height) > MAX_PIXELS {
+            return Err(self.error_at(
+                e.at,
+                LoadErrorKind::ImageTooLarge {
+                    width,
+                    height,
+                    limit: MAX_PIXELS,
+                },
+            ));
+        }
+        let mut transform = None;
+        self.children(e, "camera", CAMERA_CHILDREN, true, |p, child, _| {
+            transform = Some(p.transformation(child)?);
+            Ok(())
+        })?;
+        Ok(Camera {
+            width: u32::try_from(width).unwrap_or(u32::MAX),
+            height: u32::try_from(height).unwrap_or(u32::MAX),
+            eye_distance,
+            transform: transform.unwrap_or_default(),
+        })
+    }
+
+    fn model(&mut self, e: &Elem<'a>) -> Result<Model, LoadError> {
+        let model = {
+            let a = self.attrs(e, "model", MODEL_ATTRS)?;
+            let kind = self.required(&a, "type")?;
+            let Some(illumination) = Illumination::from_name(kind.value.trim_ascii()) else {
+                return Err(self.error_at(
+                    kind.at,
+                    LoadErrorKind::UnknownModel {
+                        value: kind.value.as_ref().to_owned(),
+                    },
+                ));
+            };
+            let depth = match a.get("depth") {
+                Some(attr) => self.integer(&a, attr, 0, u64::from(Model::MAX_DEPTH))?,
+                None => 1,
+            };
+            Model {
+                illumination,
+                depth: u32::try_from(depth).unwrap_or(Model::MAX_DEPTH),
+            }
+        };
+        self.leaf(e, "model")?;
+        Ok(model)
+    }
+
+    fn transformation(&mut self, e: &Elem<'a>) -> Result<Transform, LoadError> {
+        self.attrs(e, "transformation", NONE)?;
+        let mut steps = Vec::new();
+        self.children(
+            e,
+            "transformation",
+            TRANSFORM_CHILDREN,
+            false,
+            |p, child, name| {
+                steps.push(p.step(child, name)?);
+                Ok(())
+            },
+        )?;
+        Transform::from_steps(steps)
+            .map_err(|_| self.error_at(e.at, LoadErrorKind::SingularTransform))
+    }
+
+    fn step(&mut self, e: &Elem<'a>, name: &'static str) -> Result<TransformStep, LoadError> {
+        let step = match name {
+            "translate" => {
+                let a = self.attrs(e, name, TRANSLATE_ATTRS)?;
+                TransformStep::Translate(Vec3::new(
+                    self.number_or(&a, "x", 0.0)?,
+                    self.number_or(&a, "y", 0.0)?,
+                    self.number_or(&a, "z", 0.0)?,
+                ))
+            }
+            "rotate-x" | "rotate-y" | "rotate-z" => {
+                let a = self.attrs(e, name, ROTATE_ATTRS)?;
+                let angle = self.required_number(&a, "angle")?;
+                match name {
+                    "rotate-x" => TransformStep::RotateX(angle),
+                    "rotate-y" => TransformStep::RotateY(angle),
+                    _ => TransformStep::RotateZ(angle),
+                }
+            }
+            _ => {
+                let a = self.attrs(e, name, SCALE_ATTRS)?;
+                let mut factor_seen = false;
+                let mut axis_seen = false;
+                for attr in &a.list {
+                    if attr.name == "factor" {
+                        factor_seen = true;
+                    } else {
+                        axis_seen = true;
+                    }
+                    if factor_seen && axis_seen {
+                        return Err(self.error_at(
+                            attr.at,
+                            LoadErrorKind::ScaleFactorWithAxes {
+                                attribute: attr.name.to_owned(),
+                            },
+                        ));
+                    }
+                }
+                match a.get("factor") {
+                    Some(factor) => TransformStep::UniformScale(self.number(&a, factor)?),
+                    None => TransformStep::Scale(Vec3::new(
+                        self.number_or(&a, "x", 1.0)?,
+                        self.number_or(&a, "y", 1.0)?,
+                        self.number_or(&a, "z", 1.0)?,
+                    )),
+                }
+            }
+        };
+        self.leaf(e, name)?;
+        Ok(step)
+    }
+}
+
+/// A one-line description of a bad reference in an attribute value.
+fn reference_message(err: &quick_xml::Error) -> String {
+    match err {
+        quick_xml::Error::Escape(EscapeError::UnrecognizedEntity(_, name)) => format!(
+            "unknown entity &{name}; (only &lt; &gt; &amp; &apos; &quot; and character references like &#49; are allowed)"
+        ),
+        quick_xml::Error::Escape(EscapeError::UnterminatedEntity(_)) => {
+            "'&' without a closing ';' (write &amp; for a literal '&')".to_owned()
+        }
+        quick_xml::Error::Escape(EscapeError::InvalidCharRef(e)) => {
+            format!("invalid character reference: {e}")
+        }
+        other => other.to_string(),
+    }
+}
