@@ -102,8 +102,8 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
         .clone()
         .unwrap_or_else(|| scene_path.with_extension("png"));
     // Everything that can be checked before work is checked first.
-    output::format_for(&out).map_err(fail)?;
     refuse_same_file(&scene_path, &out)?;
+    output::format_for(&out).map_err(fail)?;
 
     let scene = scene::load(&scene_path).map_err(fail)?;
     let options = render::RenderOptions {

@@ -1,0 +1,260 @@
+//! The command line, driven through the built binary as a user would: exit
+//! statuses, messages on stderr, and what is (not) written to disk.
+//! Every render runs with `--no-gui`, which the GUI build needs to stay
+//! headless and the headless build accepts.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn rayoflight(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+const TINY: &str = r#"<scene>
+  <sphere><transformation><translate z="3"/></transformation></sphere>
+  <light x="0" y="-3" z="-3"/>
+  <camera width="16" height="12" eyeDistance="2"/>
+</scene>
+"#;
+
+/// A temporary directory holding `tiny.xml`.
+fn workdir() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("tiny.xml");
+    fs::write(&scene, TINY).unwrap();
+    (dir, scene)
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+#[test]
+fn renders_a_png_next_to_the_scene_by_default() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stdout(&o), "", "silent without -time");
+    let image = image::open(dir.path().join("tiny.png")).unwrap().to_rgb8();
+    assert_eq!(image.dimensions(), (16, 12));
+    assert_eq!(files_in(dir.path()), ["tiny.png", "tiny.xml"]);
+}
+
+#[test]
+fn time_prints_render_nanoseconds_and_out_picks_the_format() {
+    let (dir, _) = workdir();
+    let o = rayoflight(
+        dir.path(),
+        &["-time", "tiny.xml", "-out", "x.jpg", "--no-gui"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let ns = out
+        .strip_prefix("render: ")
+        .and_then(|s| s.strip_suffix(" ns\n"))
+        .unwrap_or_else(|| panic!("unexpected stdout {out:?}"));
+    assert!(ns.parse::<u64>().unwrap() > 0);
+    let bytes = fs::read(dir.path().join("x.jpg")).unwrap();
+    assert_eq!(
+        image::guess_format(&bytes).unwrap(),
+        image::ImageFormat::Jpeg
+    );
+}
+
+#[test]
+fn threads_and_aa_do_not_change_the_default_image() {
+    let (dir, _) = workdir();
+    let run = |args: &[&str]| {
+        let o = rayoflight(dir.path(), args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    run(&["--no-gui", "tiny.xml", "-out", "a.png", "--threads", "1"]);
+    run(&["--no-gui", "tiny.xml", "-out", "b.png", "--threads", "3"]);
+    run(&["--no-gui", "tiny.xml", "-out", "c.png", "--aa", "3"]);
+    let read = |n: &str| image::open(dir.path().join(n)).unwrap().to_rgb8();
+    assert_eq!(read("a.png"), read("b.png"));
+    assert_ne!(read("a.png"), read("c.png"), "--aa 3 smooths the edges");
+}
+
+#[test]
+fn no_arguments_prints_usage_and_exits_2() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["--no-gui"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("Usage: rayoflight"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn help_and_version_succeed_on_stdout() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["--help"]);
+    assert!(o.status.success());
+    assert!(stdout(&o).contains("-out, --out FILE"));
+    let o = rayoflight(dir.path(), &["-V"]);
+    assert!(o.status.success());
+    assert!(stdout(&o).starts_with("rayoflight "));
+}
+
+#[test]
+fn unknown_flag_is_a_usage_error_that_names_it() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["tiny.xml", "--frobnicate"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("unknown flag '--frobnicate'"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}
+
+#[test]
+fn bad_flag_values_are_usage_errors() {
+    let (dir, _) = workdir();
+    for args in [
+        &["tiny.xml", "--threads", "0"][..],
+        &["tiny.xml", "--aa", "17"],
+        &["tiny.xml", "-out"],
+        &["tiny.xml", "other.xml"],
+    ] {
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+    }
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}
+
+#[test]
+fn missing_scene_fails_with_its_name() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["--no-gui", "nope.xml"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.starts_with("nope.xml: "), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}
+
+#[test]
+fn scene_that_is_a_directory_fails() {
+    let (dir, _) = workdir();
+    fs::create_dir(dir.path().join("d.xml")).unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "d.xml"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).starts_with("d.xml: "), "{}", stderr(&o));
+    assert_eq!(files_in(dir.path()), ["d.xml", "tiny.xml"]);
+}
+
+#[test]
+fn unknown_extension_lists_the_supported_ones() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml", "-out", "x.xyz"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("\"xyz\"") && err.contains("png, jpg, jpeg"),
+        "{err}"
+    );
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}
+
+#[test]
+fn output_equal_to_the_scene_is_refused() {
+    let (dir, scene) = workdir();
+    fs::create_dir(dir.path().join("sub")).unwrap();
+    // The same file reached through another path, and a scene whose name
+    // would make the default output be itself.
+    fs::write(dir.path().join("s.png"), TINY).unwrap();
+    for args in [
+        &["--no-gui", "tiny.xml", "-out", "sub/../tiny.xml"][..],
+        &["--no-gui", "s.png"],
+        &["export-pov", "tiny.xml", "-out", "./tiny.xml"],
+    ] {
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(
+            stderr(&o).contains("refusing to overwrite the scene"),
+            "{}",
+            stderr(&o)
+        );
+    }
+    assert_eq!(fs::read_to_string(&scene).unwrap(), TINY);
+    assert_eq!(fs::read_to_string(dir.path().join("s.png")).unwrap(), TINY);
+}
+
+#[test]
+fn missing_output_directory_fails_without_leftovers() {
+    let (dir, _) = workdir();
+    let o = rayoflight(
+        dir.path(),
+        &["--no-gui", "tiny.xml", "-out", "no/such/dir/x.png"],
+    );
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).starts_with("no/such/dir/x.png: "),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}
+
+#[test]
+fn output_that_is_a_directory_fails() {
+    let (dir, _) = workdir();
+    fs::create_dir(dir.path().join("out.png")).unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml", "-out", "out.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).starts_with("out.png: "), "{}", stderr(&o));
+    assert_eq!(files_in(dir.path()), ["out.png", "tiny.xml"]);
+}
+
+#[test]
+fn a_broken_scene_leaves_an_existing_image_untouched() {
+    let (dir, scene) = workdir();
+    let old = b"an older image".to_vec();
+    fs::write(dir.path().join("tiny.png"), &old).unwrap();
+    fs::write(
+        &scene,
+        "<scene>\n  <camera width=\"4\" height=\"4\" eyeDistance=\"1\"/>\n  <material ka=\"-1\"/>\n</scene>\n",
+    )
+    .unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.starts_with("tiny.xml:3:3: "), "{err}");
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert_eq!(fs::read(dir.path().join("tiny.png")).unwrap(), old);
+    assert_eq!(files_in(dir.path()), ["tiny.png", "tiny.xml"]);
+}
+
+#[test]
+fn export_pov_writes_a_pov_file() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["export-pov", "tiny.xml"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let pov = fs::read_to_string(dir.path().join("tiny.pov")).unwrap();
+    assert!(pov.contains("camera") && pov.contains("sphere"), "{pov}");
+}
