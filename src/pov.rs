@@ -15,7 +15,8 @@
 //! and `no_shadow` on every object (lights are never occluded). Terms the
 //! model does not use are left out, except `diffuse 0` for `ambient` (POV-Ray's
 //! default diffuse is 0.6). `max_trace_level` is the reflection depth plus one
-//! and `adc_bailout 0` follows every reflection to the end.
+//! and `adc_bailout 0` follows every reflection to the end. The file starts
+//! with `#version 3.7;` so that POV-Ray applies no 3.6 compatibility settings.
 //!
 //! Render the result with
 //! `povray -A +FN File_Gamma=1.0 +W<w> +H<h> +I<file>.pov +O<out>.png`

@@ -124,7 +124,8 @@ fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
     refuse_same_file(scene_path, &out)?;
     let scene = scene::load(scene_path).map_err(fail)?;
-    let text = pov::export(&scene);
+    let name = scene_path.file_name().map(|n| n.to_string_lossy());
+    let text = pov::export_named(&scene, name.as_deref());
     output::write_atomic(&out, text.as_bytes()).map_err(fail)
 }
 

@@ -12,7 +12,7 @@ mod tile;
 
 pub use camera::CameraRays;
 pub use prepared::{Hit, Prepared, prepare};
-pub use tile::{Cancel, Tile, render_tile, tiles};
+pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
 
 use crate::scene::Scene;
 use image::RgbImage;
@@ -87,7 +87,7 @@ fn render_all(scene: &Scene, options: &RenderOptions) -> RgbImage {
     let prepared = prepare(scene, options);
     let (width, height) = (prepared.width(), prepared.height());
     let cancel = Cancel::never();
-    let done: Vec<(Tile, Vec<u8>)> = tiles(width, height, tile::TILE_SIZE)
+    let done: Vec<(Tile, Vec<u8>)> = tiles(width, height, TILE_SIZE)
         .into_par_iter()
         .filter_map(|t| render_tile(&prepared, &t, &cancel).map(|px| (t, px)))
         .collect();

@@ -71,8 +71,8 @@ pub enum LoadErrorKind {
     /// references) or is malformed.
     #[error("<{element}> attribute {attribute}: {}", one_line(message))]
     BadReference {
-        element: String,
-        attribute: String,
+        element: &'static str,
+        attribute: &'static str,
         message: String,
     },
     /// A `<!DOCTYPE>`: scene files declare no entities.
@@ -101,7 +101,7 @@ pub enum LoadErrorKind {
     )]
     UnknownElement {
         element: String,
-        parent: String,
+        parent: &'static str,
         allowed: &'static [&'static str],
     },
     /// An attribute the element does not have (a typo is never ignored).
@@ -111,28 +111,37 @@ pub enum LoadErrorKind {
         allowed_attributes(element, allowed)
     )]
     UnknownAttribute {
-        element: String,
+        element: &'static str,
         attribute: String,
         allowed: &'static [&'static str],
     },
     /// A required attribute is absent.
     #[error("<{element}> is missing the required attribute {attribute}")]
-    MissingAttribute { element: String, attribute: String },
+    MissingAttribute {
+        element: &'static str,
+        attribute: &'static str,
+    },
     /// The same attribute twice on one element.
     #[error("<{element}> attribute {attribute} is repeated")]
-    DuplicateAttribute { element: String, attribute: String },
+    DuplicateAttribute {
+        element: &'static str,
+        attribute: &'static str,
+    },
     /// A second `<color>`, `<material>` or `<transformation>` in one element.
     #[error("second <{element}> in <{parent}>: at most one is allowed")]
-    DuplicateElement { element: String, parent: String },
+    DuplicateElement {
+        element: &'static str,
+        parent: &'static str,
+    },
     /// A value that is not a number.
     #[error(
         "<{element}> attribute {attribute}=\"{}\" is not a number",
         shown(value)
     )]
     InvalidNumber {
-        element: String,
-        attribute: String,
-        value: String,
+        element: &'static str,
+        attribute: &'static str,
+        value: Box<str>,
     },
     /// A number that is infinite or NaN (or overflows to infinity).
     #[error(
@@ -140,9 +149,9 @@ pub enum LoadErrorKind {
         shown(value)
     )]
     NotFinite {
-        element: String,
-        attribute: String,
-        value: String,
+        element: &'static str,
+        attribute: &'static str,
+        value: Box<str>,
     },
     /// An integer attribute that is not an integer or is out of its range.
     #[error(
@@ -150,9 +159,9 @@ pub enum LoadErrorKind {
         shown(value)
     )]
     InvalidInteger {
-        element: String,
-        attribute: String,
-        value: String,
+        element: &'static str,
+        attribute: &'static str,
+        value: Box<str>,
         min: u64,
         max: u64,
     },
@@ -162,9 +171,9 @@ pub enum LoadErrorKind {
         shown(value)
     )]
     OutOfRange {
-        element: String,
-        attribute: String,
-        value: String,
+        element: &'static str,
+        attribute: &'static str,
+        value: Box<str>,
         rule: &'static str,
     },
     /// `<model type>` names no illumination model.
@@ -172,7 +181,7 @@ pub enum LoadErrorKind {
         "<model> attribute type=\"{}\" is not a known model: expected ambient, lambert, phong or whitted",
         shown(value)
     )]
-    UnknownModel { value: String },
+    UnknownModel { value: Box<str> },
     /// The scene has no `<camera>`.
     #[error("the scene has no <camera>: exactly one is required")]
     MissingCamera,
@@ -184,7 +193,7 @@ pub enum LoadErrorKind {
     SecondModel,
     /// `<scale>` with both `factor` and one of `x`, `y`, `z`.
     #[error("<scale> attribute {attribute}: factor cannot be combined with x, y or z")]
-    ScaleFactorWithAxes { attribute: String },
+    ScaleFactorWithAxes { attribute: &'static str },
     /// The composed `<transformation>` has no finite inverse (a zero scale,
     /// or numbers so large that the matrix overflows).
     #[error("singular <transformation>: its matrix has no finite inverse (a zero scale?)")]
@@ -331,8 +340,8 @@ mod tests {
                 column: 12,
             }),
             LoadErrorKind::InvalidNumber {
-                element: "color".into(),
-                attribute: "red".into(),
+                element: "color",
+                attribute: "red",
                 value: "1\n2".into(),
             },
         );

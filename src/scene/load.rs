@@ -61,6 +61,12 @@ const SCALE_ATTRS: &[&str] = &["factor", "x", "y", "z"];
 /// refused. A directory, an unreadable file or one that is not UTF-8 gives an
 /// error without a position.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
+    load_with_text(path).map(|(_, scene)| scene)
+}
+
+/// Like [`load`], and also returns the file's text (the app keeps it to
+/// write edits back into it).
+pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
     let fail = |kind| LoadError::new(path, None, kind);
     let io = |e: std::io::Error| {
         fail(LoadErrorKind::Io {
@@ -98,7 +104,8 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
             offset: e.utf8_error().valid_up_to(),
         })
     })?;
-    parse(&text, path)
+    let scene = parse(&text, path)?;
+    Ok((text, scene))
 }
 
 /// Parses a scene from `text`; `path` only names the file in errors.
@@ -122,13 +129,14 @@ struct Elem<'a> {
 /// skipped.
 enum Node<'a> {
     Open(Elem<'a>),
-    Close,
+    /// An end tag, with the byte offset of its `<`.
+    Close(usize),
     Eof,
 }
 
 /// One attribute of an element, its value unescaped.
 struct Attr<'b> {
-    name: &'b str,
+    name: &'static str,
     value: Cow<'b, str>,
     /// Byte offset of the first character of its name.
     at: usize,
@@ -166,6 +174,9 @@ struct Parser<'a> {
     at_start: bool,
     /// `</scene>` (or `<scene/>`) has been read.
     after_root: bool,
+    /// [`MAX_OBJECTS`] and [`MAX_LIGHTS`], lowered by unit tests.
+    max_objects: usize,
+    max_lights: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -182,6 +193,8 @@ impl<'a> Parser<'a> {
             reader,
             at_start: true,
             after_root: false,
+            max_objects: MAX_OBJECTS,
+            max_lights: MAX_LIGHTS,
         }
     }
 
@@ -241,7 +254,7 @@ impl<'a> Parser<'a> {
             match event {
                 Event::Start(start) => return Ok(Node::Open(self.elem(start, before, false))),
                 Event::Empty(start) => return Ok(Node::Open(self.elem(start, before, true))),
-                Event::End(_) => return Ok(Node::Close),
+                Event::End(_) => return Ok(Node::Close(before)),
                 Event::Eof => return Ok(Node::Eof),
                 Event::Text(text) => self.check_text(&text, before)?,
                 Event::CData(data) => self.check_text(&data, before)?,
@@ -318,37 +331,44 @@ impl<'a> Parser<'a> {
         if e.empty {
             return Ok(());
         }
-        let mut seen: Vec<&'static str> = Vec::new();
+        // Bit i: allowed[i] has been read (the lists are short).
+        let mut seen = 0u64;
         loop {
             match self.next()? {
                 Node::Open(child) => {
                     let name = child.start.name();
-                    let Some(&known) = allowed.iter().find(|a| a.as_bytes() == name.as_ref())
-                    else {
+                    let found = allowed
+                        .iter()
+                        .enumerate()
+                        .find(|(_, a)| a.as_bytes() == name.as_ref());
+                    let Some((index, &known)) = found else {
                         return Err(self.error_at(
                             child.at,
                             LoadErrorKind::UnknownElement {
                                 element: String::from_utf8_lossy(name.as_ref()).into_owned(),
-                                parent: parent.to_owned(),
+                                parent,
                                 allowed,
                             },
                         ));
                     };
+                    let bit = 1u64
+                        .checked_shl(u32::try_from(index).unwrap_or(u32::MAX))
+                        .unwrap_or(0);
                     if once {
-                        if seen.contains(&known) {
+                        if seen & bit != 0 {
                             return Err(self.error_at(
                                 child.at,
                                 LoadErrorKind::DuplicateElement {
-                                    element: known.to_owned(),
-                                    parent: parent.to_owned(),
+                                    element: known,
+                                    parent,
                                 },
                             ));
                         }
-                        seen.push(known);
+                        seen |= bit;
                     }
                     f(self, &child, known)?;
                 }
-                Node::Close => return Ok(()),
+                Node::Close(_) => return Ok(()),
                 Node::Eof => return Err(self.unclosed(parent)),
             }
         }
@@ -383,7 +403,7 @@ impl<'a> Parser<'a> {
                 return Err(self.error_at(
                     at,
                     LoadErrorKind::UnknownAttribute {
-                        element: element.to_owned(),
+                        element,
                         attribute: String::from_utf8_lossy(key).into_owned(),
                         allowed,
                     },
@@ -393,8 +413,8 @@ impl<'a> Parser<'a> {
                 return Err(self.error_at(
                     at,
                     LoadErrorKind::DuplicateAttribute {
-                        element: element.to_owned(),
-                        attribute: name.to_owned(),
+                        element,
+                        attribute: name,
                     },
                 ));
             }
@@ -404,8 +424,8 @@ impl<'a> Parser<'a> {
                     self.error_at(
                         at,
                         LoadErrorKind::BadReference {
-                            element: element.to_owned(),
-                            attribute: name.to_owned(),
+                            element,
+                            attribute: name,
                             message: reference_message(&err),
                         },
                     )
@@ -438,14 +458,14 @@ impl<'a> Parser<'a> {
     fn required<'c, 'b>(
         &self,
         attrs: &'c Attrs<'b>,
-        name: &str,
+        name: &'static str,
     ) -> Result<&'c Attr<'b>, LoadError> {
         attrs.get(name).ok_or_else(|| {
             self.error_at(
                 attrs.at,
                 LoadErrorKind::MissingAttribute {
-                    element: attrs.element.to_owned(),
-                    attribute: name.to_owned(),
+                    element: attrs.element,
+                    attribute: name,
                 },
             )
         })
@@ -453,13 +473,7 @@ impl<'a> Parser<'a> {
 
     /// A finite number (contract section 9).
     fn number(&self, attrs: &Attrs<'_>, attr: &Attr<'_>) -> Result<f64, LoadError> {
-        let fields = || {
-            (
-                attrs.element.to_owned(),
-                attr.name.to_owned(),
-                attr.value.as_ref().to_owned(),
-            )
-        };
+        let fields = || (attrs.element, attr.name, Box::from(attr.value.as_ref()));
         match attr.value.trim_ascii().parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(v),
             Ok(_) => {
@@ -488,14 +502,19 @@ impl<'a> Parser<'a> {
     }
 
     /// The number `name`, or `default` when absent.
-    fn number_or(&self, attrs: &Attrs<'_>, name: &str, default: f64) -> Result<f64, LoadError> {
+    fn number_or(
+        &self,
+        attrs: &Attrs<'_>,
+        name: &'static str,
+        default: f64,
+    ) -> Result<f64, LoadError> {
         match attrs.get(name) {
             Some(attr) => self.number(attrs, attr),
             None => Ok(default),
         }
     }
 
-    fn required_number(&self, attrs: &Attrs<'_>, name: &str) -> Result<f64, LoadError> {
+    fn required_number(&self, attrs: &Attrs<'_>, name: &'static str) -> Result<f64, LoadError> {
         let attr = self.required(attrs, name)?;
         self.number(attrs, attr)
     }
@@ -505,7 +524,7 @@ impl<'a> Parser<'a> {
     fn check(
         &self,
         attrs: &Attrs<'_>,
-        name: &str,
+        name: &'static str,
         value: f64,
         ok: bool,
         rule: &'static str,
@@ -519,15 +538,20 @@ impl<'a> Parser<'a> {
         Err(self.error_at(
             at,
             LoadErrorKind::OutOfRange {
-                element: attrs.element.to_owned(),
-                attribute: name.to_owned(),
-                value: text,
+                element: attrs.element,
+                attribute: name,
+                value: text.into(),
                 rule,
             },
         ))
     }
 
-    fn non_negative(&self, attrs: &Attrs<'_>, name: &str, value: f64) -> Result<f64, LoadError> {
+    fn non_negative(
+        &self,
+        attrs: &Attrs<'_>,
+        name: &'static str,
+        value: f64,
+    ) -> Result<f64, LoadError> {
         self.check(attrs, name, value, value >= 0.0, ">= 0")
     }
 
@@ -554,9 +578,9 @@ impl<'a> Parser<'a> {
             _ => Err(self.error_at(
                 attr.at,
                 LoadErrorKind::InvalidInteger {
-                    element: attrs.element.to_owned(),
-                    attribute: attr.name.to_owned(),
-                    value: attr.value.as_ref().to_owned(),
+                    element: attrs.element,
+                    attribute: attr.name,
+                    value: Box::from(attr.value.as_ref()),
                     min,
                     max,
                 },
@@ -567,18 +591,13 @@ impl<'a> Parser<'a> {
     // ----- the grammar -----
 
     fn document(mut self) -> Result<Scene, LoadError> {
-        let root = loop {
-            match self.next()? {
-                Node::Open(e) => break e,
-                // quick-xml reports an end tag without a start tag itself.
-                Node::Close => {
-                    let at = self.reader_offset();
-                    return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
-                }
-                Node::Eof => {
-                    return Err(self.error_at(self.text.len(), LoadErrorKind::MissingRoot));
-                }
+        let root = match self.next()? {
+            Node::Open(e) => e,
+            // quick-xml reports an end tag without a start tag itself.
+            Node::Close(at) => {
+                return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
             }
+            Node::Eof => return Err(self.error_at(self.text.len(), LoadErrorKind::MissingRoot)),
         };
         if root.start.name().as_ref() != b"scene" {
             return Err(self.error_at(
@@ -596,21 +615,18 @@ impl<'a> Parser<'a> {
         })?;
 
         self.after_root = true;
-        loop {
-            match self.next()? {
-                Node::Open(e) => {
-                    let what = format!(
-                        "element <{}>",
-                        String::from_utf8_lossy(e.start.name().as_ref())
-                    );
-                    return Err(self.error_at(e.at, LoadErrorKind::ContentAfterRoot { what }));
-                }
-                Node::Close => {
-                    let at = self.reader_offset();
-                    return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
-                }
-                Node::Eof => break,
+        match self.next()? {
+            Node::Open(e) => {
+                let what = format!(
+                    "element <{}>",
+                    String::from_utf8_lossy(e.start.name().as_ref())
+                );
+                return Err(self.error_at(e.at, LoadErrorKind::ContentAfterRoot { what }));
             }
+            Node::Close(at) => {
+                return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
+            }
+            Node::Eof => {}
         }
 
         let Some(camera) = scene.camera else {
@@ -636,10 +652,13 @@ impl<'a> Parser<'a> {
     ) -> Result<(), LoadError> {
         match name {
             "sphere" | "plane" => {
-                if scene.objects.len() >= MAX_OBJECTS {
-                    return Err(
-                        self.error_at(e.at, LoadErrorKind::TooManyObjects { limit: MAX_OBJECTS })
-                    );
+                if scene.objects.len() >= self.max_objects {
+                    return Err(self.error_at(
+                        e.at,
+                        LoadErrorKind::TooManyObjects {
+                            limit: self.max_objects,
+                        },
+                    ));
                 }
                 let shape = if name == "sphere" {
                     Shape::Sphere
@@ -650,10 +669,13 @@ impl<'a> Parser<'a> {
                 scene.objects.push(object);
             }
             "light" => {
-                if scene.lights.len() >= MAX_LIGHTS {
-                    return Err(
-                        self.error_at(e.at, LoadErrorKind::TooManyLights { limit: MAX_LIGHTS })
-                    );
+                if scene.lights.len() >= self.max_lights {
+                    return Err(self.error_at(
+                        e.at,
+                        LoadErrorKind::TooManyLights {
+                            limit: self.max_lights,
+                        },
+                    ));
                 }
                 let light = self.light(e)?;
                 scene.lights.push(light);
@@ -714,7 +736,7 @@ impl<'a> Parser<'a> {
         let material = {
             let a = self.attrs(e, "material", MATERIAL_ATTRS)?;
             let d = Material::default();
-            let get = |name: &str, default: f64| -> Result<f64, LoadError> {
+            let get = |name: &'static str, default: f64| -> Result<f64, LoadError> {
                 let v = self.number_or(&a, name, default)?;
                 self.non_negative(&a, name, v)
             };
@@ -790,7 +812,7 @@ impl<'a> Parser<'a> {
                 return Err(self.error_at(
                     kind.at,
                     LoadErrorKind::UnknownModel {
-                        value: kind.value.as_ref().to_owned(),
+                        value: Box::from(kind.value.as_ref()),
                     },
                 ));
             };
@@ -857,7 +879,7 @@ impl<'a> Parser<'a> {
                         return Err(self.error_at(
                             attr.at,
                             LoadErrorKind::ScaleFactorWithAxes {
-                                attribute: attr.name.to_owned(),
+                                attribute: attr.name,
                             },
                         ));
                     }
@@ -890,5 +912,57 @@ fn reference_message(err: &quick_xml::Error) -> String {
             format!("invalid character reference: {e}")
         }
         other => other.to_string(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_with_limits(text: &str, objects: usize, lights: usize) -> Result<Scene, LoadError> {
+        let mut parser = Parser::new(text, Path::new("t.xml"));
+        parser.max_objects = objects;
+        parser.max_lights = lights;
+        parser.document()
+    }
+
+    const CAMERA: &str = r#"<camera width="2" height="2" eyeDistance="1"/>"#;
+
+    #[test]
+    fn object_count_is_refused_at_the_first_one_over_the_limit() {
+        let text = format!("<scene>{CAMERA}\n<sphere/>\n<plane/>\n<sphere/>\n</scene>");
+        assert_eq!(
+            parse_with_limits(&text, 3, 1).map(|s| s.objects.len()),
+            Ok(3)
+        );
+        let err = parse_with_limits(&text, 2, 1).expect_err("over the limit");
+        assert_eq!(err.kind, LoadErrorKind::TooManyObjects { limit: 2 });
+        assert_eq!(err.position, Some(Position { line: 4, column: 1 }));
+        assert_eq!(
+            err.to_string(),
+            "t.xml:4:1: too many objects: more than the limit of 2"
+        );
+    }
+
+    #[test]
+    fn light_count_is_refused_at_the_first_one_over_the_limit() {
+        let light = r#"<light x="0" y="0" z="0"/>"#;
+        let text = format!("<scene>\n{light}{light} {light}{CAMERA}</scene>");
+        assert_eq!(
+            parse_with_limits(&text, 1, 3).map(|s| s.lights.len()),
+            Ok(3)
+        );
+        let err = parse_with_limits(&text, 1, 2).expect_err("over the limit");
+        assert_eq!(err.kind, LoadErrorKind::TooManyLights { limit: 2 });
+        let column = 2 * light.chars().count() + 2;
+        assert_eq!(err.position, Some(Position { line: 2, column }));
+    }
+
+    #[test]
+    fn limits_are_the_documented_ones() {
+        assert_eq!(MAX_FILE_BYTES, 1 << 30);
+        assert_eq!(MAX_OBJECTS, 10_000_000);
+        assert_eq!(MAX_LIGHTS, 1_000_000);
+        assert_eq!(MAX_PIXELS, 1 << 28);
     }
 }

@@ -11,7 +11,7 @@ mod error;
 mod load;
 
 pub use error::{LoadError, LoadErrorKind, Position};
-pub use load::{MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, parse};
+pub use load::{MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_with_text, parse};
 
 use crate::math::Transform;
 pub use crate::shading::{Color, Illumination, Light, Material, Model};
