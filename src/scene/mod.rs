@@ -7,6 +7,7 @@
 //! A `Scene` holds no render state: `render::prepare` turns it into what the
 //! tracer needs.
 
+pub mod edit;
 mod error;
 mod load;
 
