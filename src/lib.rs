@@ -13,12 +13,16 @@
 //! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
 //! - [`output`]: writing images atomically, format chosen by extension.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
+//! - `gui` (feature `gui`): the desktop previewer, which uses only the
+//!   modules above.
 //!
-//! The library never prints and knows nothing of windows or terminals.
+//! The core never prints and knows nothing of windows or terminals.
 
 #![forbid(unsafe_code)]
 
 pub mod geometry;
+#[cfg(feature = "gui")]
+pub mod gui;
 pub mod math;
 pub mod output;
 pub mod pov;

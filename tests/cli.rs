@@ -258,3 +258,21 @@ fn export_pov_writes_a_pov_file() {
     let pov = fs::read_to_string(dir.path().join("tiny.pov")).unwrap();
     assert!(pov.contains("camera") && pov.contains("sphere"), "{pov}");
 }
+
+/// The GUI build opens a window unless told not to: with no display it
+/// says so, names --no-gui, and exits 2 without writing anything.
+#[cfg(feature = "gui")]
+#[test]
+fn without_a_display_the_app_names_no_gui() {
+    let (dir, _) = workdir();
+    for args in [&[][..], &["tiny.xml"]] {
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let err = stderr(&o);
+        assert!(
+            err.contains("no display") && err.contains("--no-gui"),
+            "{err}"
+        );
+    }
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}

@@ -31,6 +31,19 @@ pub struct RenderArgs {
     pub aa: Option<u32>,
 }
 
+impl RenderArgs {
+    /// Whether the command asks for headless work: any of `-out`, `-time`,
+    /// `--no-gui`, `--threads`, `--aa`. In the GUI build, anything else
+    /// opens the app.
+    pub fn headless(&self) -> bool {
+        self.out.is_some()
+            || self.time
+            || self.no_gui
+            || self.threads.is_some()
+            || self.aa.is_some()
+    }
+}
+
 /// A command line that does not parse: exit status 2.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{0}")]
@@ -154,7 +167,7 @@ mod tests {
         let Command::Render(r) = brief else { panic!() };
         assert_eq!(r.scene, Some(PathBuf::from("s.xml")));
         assert_eq!(r.out, Some(PathBuf::from("x.png")));
-        assert!(r.time);
+        assert!(r.time && r.headless());
     }
 
     #[test]

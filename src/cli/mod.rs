@@ -92,8 +92,11 @@ fn print_line(text: &str) {
 }
 
 fn render_scene(r: RenderArgs) -> Result<(), Failure> {
-    // No scene: the app opens the built-in example once it exists; the
-    // headless CLI prints its usage.
+    #[cfg(feature = "gui")]
+    if !r.headless() {
+        return open_app(r.scene.as_deref());
+    }
+    // No scene: the headless CLI prints its usage.
     let Some(scene_path) = r.scene.clone() else {
         return Err(Failure::Usage(String::new()));
     };
@@ -118,6 +121,18 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
         print_line(&format!("render: {} ns", elapsed.as_nanos()));
     }
     Ok(())
+}
+
+/// Opens the desktop app (GUI build). No display is a usage problem: the
+/// message names `--no-gui` and the exit status is 2.
+#[cfg(feature = "gui")]
+fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
+    use rayoflight::gui::{self, GuiError};
+    match gui::run(scene) {
+        Ok(()) => Ok(()),
+        Err(e @ (GuiError::NoDisplay | GuiError::Window(_))) => Err(Failure::Usage(e.to_string())),
+        Err(e) => Err(fail(e)),
+    }
 }
 
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {

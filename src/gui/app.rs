@@ -1,0 +1,736 @@
+//! The application: window layout and the glue between the document, the
+//! file watcher, the render worker and the picture on screen.
+//!
+//! State is small and owned here; the work is elsewhere: the worker renders,
+//! the watcher reads files, [`Document`] keeps the text and the edits,
+//! [`Preview`] assembles tiles.
+
+use super::document::{Document, FileState, Reload};
+use super::panel;
+use super::preview::{Preview, RenderState};
+use super::watcher::{FileEvent, SceneWatcher};
+use super::worker::Worker;
+use crate::render::{self, RenderOptions};
+use egui::{Color32, Key, KeyboardShortcut, Modifiers, Pos2, Rect, Sense, TextureOptions, Vec2};
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::time::{Duration, Instant};
+
+const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
+const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
+const EXPORT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::E);
+
+/// How the picture is placed in the central area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct View {
+    /// Screen pixels per image pixel (1 = 1:1, crisp).
+    zoom: f32,
+    /// Offset of the picture's centre from the area's centre, in points.
+    pan: Vec2,
+    /// Keep the whole picture in view as the window changes.
+    fit: bool,
+}
+
+impl Default for View {
+    fn default() -> Self {
+        View {
+            zoom: 1.0,
+            pan: Vec2::ZERO,
+            fit: true,
+        }
+    }
+}
+
+/// A file dialog running on its own thread, so the window keeps painting.
+enum DialogKind {
+    Open,
+    SaveAs,
+    Export,
+}
+
+/// What background threads send to the UI thread.
+enum Background {
+    File(FileEvent),
+    Exported(PathBuf, Result<(), String>),
+    Dialog(DialogKind, Option<PathBuf>, Duration),
+}
+
+/// A plain path field, offered where no file dialog can open.
+struct PathPrompt {
+    kind: DialogKind,
+    text: String,
+}
+
+pub struct RayOfLightApp {
+    doc: Document,
+    worker: Worker,
+    preview: Preview,
+    texture: Option<egui::TextureHandle>,
+    watcher: Option<SceneWatcher>,
+    background: Receiver<Background>,
+    background_tx: Sender<Background>,
+    path_prompt: Option<PathPrompt>,
+    view: View,
+    selected: Option<usize>,
+    /// Anti-aliasing of the preview and of exports.
+    aa: u32,
+    /// A transient message for the status bar (export done, save failed).
+    notice: Option<(String, Instant)>,
+    recent: Vec<PathBuf>,
+    /// Frame times of the last second, for the frames-per-second readout.
+    frames: VecDeque<Instant>,
+    /// The pixel under the cursor and its colour.
+    hovered: Option<(u32, u32, [u8; 3])>,
+    /// The window title last sent.
+    title: String,
+    /// Print the status figures to stderr once a second (RAYOFLIGHT_STATS).
+    stats: bool,
+    last_stats: Instant,
+    ctx: egui::Context,
+}
+
+impl RayOfLightApp {
+    pub fn new(ctx: &egui::Context, doc: Document) -> RayOfLightApp {
+        let wake_ctx = ctx.clone();
+        let worker = Worker::spawn(Worker::default_threads(), move || {
+            wake_ctx.request_repaint()
+        });
+        let (background_tx, background) = mpsc::channel();
+        let mut app = RayOfLightApp {
+            doc,
+            worker,
+            preview: Preview::default(),
+            texture: None,
+            watcher: None,
+            background,
+            background_tx,
+            title: String::new(),
+            stats: std::env::var_os("RAYOFLIGHT_STATS").is_some(),
+            last_stats: Instant::now(),
+            path_prompt: None,
+            view: View::default(),
+            selected: None,
+            aa: 1,
+            notice: None,
+            recent: super::recent::load(),
+            frames: VecDeque::new(),
+            hovered: None,
+            ctx: ctx.clone(),
+        };
+        app.watch();
+        app.request_render();
+        app
+    }
+
+    /// (Re)starts watching the document's file, if it has one.
+    fn watch(&mut self) {
+        self.watcher = None;
+        let Some(path) = self.doc.path().map(Path::to_owned) else {
+            return;
+        };
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        match SceneWatcher::new(&path, move |event| {
+            let _ = tx.send(Background::File(event));
+            ctx.request_repaint();
+        }) {
+            Ok(w) => self.watcher = Some(w),
+            Err(e) => self.notify(format!("{e}; saves from other editors will not show")),
+        }
+        super::recent::push(&mut self.recent, &path);
+    }
+
+    pub fn document(&self) -> &Document {
+        &self.doc
+    }
+
+    pub fn preview(&self) -> &Preview {
+        &self.preview
+    }
+
+    /// The newest render generation requested from the worker.
+    pub fn newest_generation(&self) -> u64 {
+        self.worker.newest()
+    }
+
+    fn notify(&mut self, message: String) {
+        self.notice = Some((message, Instant::now()));
+    }
+
+    fn request_render(&mut self) {
+        let options = RenderOptions {
+            threads: None,
+            aa: self.aa,
+        };
+        self.worker
+            .request(Arc::new(self.doc.scene.clone()), options);
+    }
+
+    /// Replaces the document by the file at `path`.
+    fn open(&mut self, path: &Path) {
+        if self.doc.has_unsaved_edits() {
+            self.notify("unsaved edits were discarded".into());
+        }
+        match Document::open(path) {
+            Ok(doc) => {
+                self.doc = doc;
+                self.selected = None;
+                self.view = View::default();
+                self.watch();
+                self.request_render();
+            }
+            Err(e) => self.notify(e.to_string()),
+        }
+    }
+
+    fn save(&mut self) {
+        if self.doc.path().is_none() {
+            self.start_dialog(DialogKind::SaveAs);
+            return;
+        }
+        match self.doc.save() {
+            Ok(()) => self.notify("saved".into()),
+            Err(e) => self.notify(format!("save failed: {e}")),
+        }
+    }
+
+    fn save_as(&mut self, path: &Path) {
+        match self.doc.save_as(path) {
+            Ok(()) => {
+                self.notify(format!("saved as {}", path.display()));
+                self.watch();
+            }
+            Err(e) => self.notify(format!("save failed: {e}")),
+        }
+    }
+
+    /// Renders at full resolution with the chosen anti-aliasing on a
+    /// background thread and writes the file atomically.
+    fn export(&mut self, path: PathBuf) {
+        if let Err(e) = crate::output::format_for(&path) {
+            self.notify(e.to_string());
+            return;
+        }
+        let scene = self.doc.scene.clone();
+        let options = RenderOptions {
+            threads: Some(Worker::default_threads()),
+            aa: self.aa,
+        };
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        self.notify(format!("exporting {}…", path.display()));
+        std::thread::spawn(move || {
+            let result = render::render(&scene, &options)
+                .map_err(|e| e.to_string())
+                .and_then(|image| crate::output::save(&image, &path).map_err(|e| e.to_string()));
+            let _ = tx.send(Background::Exported(path, result));
+            ctx.request_repaint();
+        });
+    }
+
+    fn start_dialog(&mut self, kind: DialogKind) {
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        let start_dir = self.doc.path().and_then(Path::parent).map(Path::to_owned);
+        std::thread::spawn(move || {
+            let started = Instant::now();
+            let mut dialog = rfd::FileDialog::new();
+            if let Some(dir) = start_dir {
+                dialog = dialog.set_directory(dir);
+            }
+            let picked = match kind {
+                DialogKind::Open => dialog.add_filter("Scene", &["xml"]).pick_file(),
+                DialogKind::SaveAs => dialog
+                    .add_filter("Scene", &["xml"])
+                    .set_file_name("scene.xml")
+                    .save_file(),
+                DialogKind::Export => dialog
+                    .add_filter("Image", &["png", "jpg", "jpeg"])
+                    .set_file_name("render.png")
+                    .save_file(),
+            };
+            let _ = tx.send(Background::Dialog(kind, picked, started.elapsed()));
+            ctx.request_repaint();
+        });
+    }
+
+    fn dialog_done(&mut self, kind: DialogKind, path: Option<PathBuf>, took: Duration) {
+        match path {
+            Some(path) => self.path_chosen(kind, path),
+            // A dialog that closes at once without a choice could not open
+            // (no desktop portal): offer a plain path field instead.
+            None if took < Duration::from_millis(300) => {
+                self.path_prompt = Some(PathPrompt {
+                    kind,
+                    text: String::new(),
+                })
+            }
+            None => {}
+        }
+    }
+
+    fn path_chosen(&mut self, kind: DialogKind, path: PathBuf) {
+        match kind {
+            DialogKind::Open => self.open(&path),
+            DialogKind::SaveAs => self.save_as(&path),
+            DialogKind::Export => self.export(path),
+        }
+    }
+
+    /// Handles what the watcher, the worker and the dialogs sent.
+    fn drain_events(&mut self) {
+        let newest = self.worker.newest();
+        let events: Vec<_> = self.worker.events().collect();
+        for event in events {
+            self.preview.apply(newest, event);
+        }
+        while let Ok(message) = self.background.try_recv() {
+            match message {
+                Background::File(event) => self.file_event(event),
+                Background::Exported(path, Ok(())) => {
+                    self.notify(format!("exported {}", path.display()))
+                }
+                Background::Exported(_, Err(e)) => self.notify(format!("export failed: {e}")),
+                Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
+            }
+        }
+    }
+
+    fn file_event(&mut self, event: FileEvent) {
+        match event {
+            FileEvent::Loaded(text, scene) => {
+                if self.doc.file_loaded(text, *scene) == Reload::Replaced {
+                    self.request_render();
+                }
+            }
+            FileEvent::Broken(error) => {
+                self.doc.file_broken(&error);
+            }
+            FileEvent::Missing => self.doc.file_missing(),
+        }
+    }
+
+    fn shortcuts(&mut self, ctx: &egui::Context) {
+        if ctx.input_mut(|i| i.consume_shortcut(&OPEN)) {
+            self.start_dialog(DialogKind::Open);
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&SAVE)) {
+            self.save();
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&EXPORT)) {
+            self.start_dialog(DialogKind::Export);
+        }
+        let dropped: Vec<PathBuf> = ctx.input(|i| {
+            i.raw
+                .dropped_files
+                .iter()
+                .map(|f| f.path().to_owned())
+                .collect()
+        });
+        if let Some(path) = dropped.into_iter().next() {
+            self.open(&path);
+        }
+        if ctx.egui_wants_keyboard_input() {
+            return;
+        }
+        ctx.input(|i| {
+            if i.key_pressed(Key::F) {
+                self.view.fit = true;
+            }
+            if i.key_pressed(Key::Num1) {
+                self.view = View {
+                    fit: false,
+                    ..View::default()
+                };
+            }
+            if i.key_pressed(Key::Plus) || i.key_pressed(Key::Equals) {
+                self.view.zoom = (self.view.zoom * 1.25).min(64.0);
+                self.view.fit = false;
+            }
+            if i.key_pressed(Key::Minus) {
+                self.view.zoom = (self.view.zoom / 1.25).max(1.0 / 64.0);
+                self.view.fit = false;
+            }
+        });
+        if ctx.input(|i| i.key_pressed(Key::Escape)) {
+            self.worker.cancel();
+        }
+    }
+
+    fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        egui::MenuBar::new().ui(ui, |ui| {
+            ui.menu_button("File", |ui| {
+                if ui.button("Open…  Ctrl+O").clicked() {
+                    self.start_dialog(DialogKind::Open);
+                }
+                if ui.button("Open path…").clicked() {
+                    self.path_prompt = Some(PathPrompt {
+                        kind: DialogKind::Open,
+                        text: String::new(),
+                    });
+                }
+                if ui.button("Open built-in example").clicked() {
+                    self.doc = Document::builtin();
+                    self.watch();
+                    self.request_render();
+                }
+                ui.menu_button("Recent", |ui| {
+                    if self.recent.is_empty() {
+                        ui.label("(none)");
+                    }
+                    for path in self.recent.clone() {
+                        if ui.button(path.display().to_string()).clicked() {
+                            self.open(&path);
+                        }
+                    }
+                });
+                ui.separator();
+                if ui.button("Save  Ctrl+S").clicked() {
+                    self.save();
+                }
+                if ui.button("Save as…").clicked() {
+                    self.start_dialog(DialogKind::SaveAs);
+                }
+                if ui
+                    .add_enabled(
+                        self.doc.has_unsaved_edits(),
+                        egui::Button::new("Revert edits"),
+                    )
+                    .clicked()
+                {
+                    self.doc.revert();
+                    self.request_render();
+                }
+                ui.separator();
+                if ui.button("Export image…  Ctrl+E").clicked() {
+                    self.start_dialog(DialogKind::Export);
+                }
+                if ui.button("Export to path…").clicked() {
+                    self.path_prompt = Some(PathPrompt {
+                        kind: DialogKind::Export,
+                        text: String::new(),
+                    });
+                }
+                ui.separator();
+                if ui.button("Quit").clicked() {
+                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                }
+            });
+            ui.menu_button("View", |ui| {
+                if ui.button("Fit  F").clicked() {
+                    self.view.fit = true;
+                }
+                if ui.button("1:1  1").clicked() {
+                    self.view = View {
+                        fit: false,
+                        ..View::default()
+                    };
+                }
+                ui.separator();
+                ui.label("Anti-aliasing");
+                for aa in [1, 2, 3, 4] {
+                    if ui
+                        .selectable_label(self.aa == aa, format!("{aa}×{aa} rays per pixel"))
+                        .clicked()
+                    {
+                        self.aa = aa;
+                        self.request_render();
+                    }
+                }
+            });
+        });
+    }
+
+    fn error_banner(&mut self, ui: &mut egui::Ui) {
+        let Some(error) = self.doc.error().map(str::to_owned) else {
+            return;
+        };
+        egui::Panel::top("error-banner")
+            .frame(
+                egui::Frame::new()
+                    .fill(Color32::from_rgb(120, 20, 20))
+                    .inner_margin(6.0),
+            )
+            .show(ui, |ui| {
+                ui.colored_label(
+                    Color32::WHITE,
+                    format!("The last save does not load; showing the last good scene.\n{error}"),
+                );
+            });
+    }
+
+    fn status_bar(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("status").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                match self.preview.state() {
+                    RenderState::Idle => ui.label("idle"),
+                    RenderState::Rendering {
+                        scale,
+                        tiles_done,
+                        tiles_total,
+                    } => {
+                        let progress = *tiles_done as f32 / (*tiles_total).max(1) as f32;
+                        ui.add(egui::ProgressBar::new(progress).desired_width(120.0).text(
+                            if *scale == 1 {
+                                "rendering".to_owned()
+                            } else {
+                                format!("preview 1/{scale}")
+                            },
+                        ))
+                    }
+                    RenderState::Done { .. } => ui.label("done"),
+                    RenderState::Failed(message) => ui.colored_label(Color32::RED, message),
+                };
+                if let Some((elapsed, rays)) = self.preview.last_render() {
+                    let secs = elapsed.as_secs_f64().max(1e-9);
+                    ui.separator();
+                    ui.label(format!("{:.1} ms", secs * 1e3));
+                    ui.label(format!("{:.2} Mrays/s", rays as f64 / secs / 1e6));
+                }
+                ui.separator();
+                let camera = &self.doc.scene.camera;
+                ui.label(format!("{}×{}", camera.width, camera.height));
+                ui.separator();
+                ui.label(match self.doc.state() {
+                    FileState::Builtin => "built-in example".to_owned(),
+                    FileState::Missing => "file missing: waiting for it to come back".to_owned(),
+                    FileState::Watching if self.doc.error().is_some() => {
+                        "file has errors".to_owned()
+                    }
+                    FileState::Watching if self.doc.has_unsaved_edits() => {
+                        "unsaved edits (Ctrl+S saves)".to_owned()
+                    }
+                    FileState::Watching => "watching, saved".to_owned(),
+                });
+                if let Some((x, y, rgb)) = self.hovered {
+                    ui.separator();
+                    ui.label(format!(
+                        "({x}, {y}) rgb({}, {}, {})",
+                        rgb[0], rgb[1], rgb[2]
+                    ));
+                }
+                ui.separator();
+                ui.label(format!("{} fps", self.frames.len()));
+                if let Some((notice, _)) = &self.notice {
+                    ui.separator();
+                    ui.label(notice.as_str());
+                }
+            });
+        });
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::left("scene-panel")
+            .resizable(true)
+            .default_size(320.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    let changed = panel::scene_panel(ui, &mut self.doc.scene, &mut self.selected);
+                    if changed {
+                        self.request_render();
+                    }
+                });
+            });
+    }
+
+    fn picture(&mut self, ui: &mut egui::Ui) {
+        egui::CentralPanel::default().show(ui, |ui| {
+            if self.preview.take_dirty() || self.texture.is_none() {
+                let image = self.preview.image();
+                let (w, h) = image.dimensions();
+                let color_image =
+                    egui::ColorImage::from_rgb([w as usize, h as usize], image.as_raw());
+                match &mut self.texture {
+                    Some(t) => t.set(color_image, TextureOptions::NEAREST),
+                    None => {
+                        self.texture = Some(ui.ctx().load_texture(
+                            "render",
+                            color_image,
+                            TextureOptions::NEAREST,
+                        ))
+                    }
+                }
+            }
+            let Some(texture) = &self.texture else {
+                return;
+            };
+            let area = ui.available_rect_before_wrap();
+            let response = ui.allocate_rect(area, Sense::click_and_drag());
+            let (w, h) = self.preview.image().dimensions();
+            let image_size = Vec2::new(w as f32, h as f32);
+            let ppp = ui.ctx().pixels_per_point();
+            if self.view.fit {
+                let fit = (area.width() / image_size.x).min(area.height() / image_size.y) * ppp;
+                // Whole steps when enlarging keep pixels square and crisp.
+                self.view.zoom = if fit >= 1.0 { fit.floor() } else { fit };
+                self.view.pan = Vec2::ZERO;
+            }
+            if response.hovered() {
+                let (scroll, zoom) = ui.input(|i| (i.smooth_scroll_delta.y, i.zoom_delta()));
+                let factor = zoom * (scroll / 200.0).exp();
+                if factor != 1.0 {
+                    self.view.zoom = (self.view.zoom * factor).clamp(1.0 / 64.0, 64.0);
+                    self.view.fit = false;
+                }
+            }
+            if response.dragged() {
+                self.view.pan += response.drag_delta();
+                self.view.fit = false;
+            }
+            let size = image_size * self.view.zoom / ppp;
+            let rect = Rect::from_center_size(area.center() + self.view.pan, size);
+            // Snap to physical pixels so 1:1 stays crisp.
+            let rect = Rect::from_min_size(
+                Pos2::new(
+                    (rect.min.x * ppp).round() / ppp,
+                    (rect.min.y * ppp).round() / ppp,
+                ),
+                size,
+            );
+            let painter = ui.painter_at(area);
+            painter.image(
+                texture.id(),
+                rect,
+                Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
+                Color32::WHITE,
+            );
+            // Pixel inspector and pick.
+            self.hovered = None;
+            if let Some(pos) = response.hover_pos() {
+                let rel = (pos - rect.min) / size * image_size;
+                if rel.x >= 0.0 && rel.y >= 0.0 && rel.x < image_size.x && rel.y < image_size.y {
+                    let (x, y) = (rel.x as u32, rel.y as u32);
+                    let rgb = self.preview.image().get_pixel(x, y).0;
+                    self.hovered = Some((x, y, rgb));
+                    if response.clicked() {
+                        let prepared = render::prepare(&self.doc.scene, &RenderOptions::default());
+                        self.selected = prepared.pick(f64::from(rel.x), f64::from(rel.y));
+                    }
+                }
+            }
+        });
+    }
+
+    fn modals(&mut self, ui: &mut egui::Ui) {
+        if self.doc.has_conflict() {
+            egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
+                ui.heading("The file changed on disk");
+                ui.label(
+                    "The scene file was saved by another program, but the panel has unsaved edits.",
+                );
+                ui.horizontal(|ui| {
+                    if ui.button("Load the file's version").clicked() {
+                        self.doc.take_file_version();
+                        self.request_render();
+                    }
+                    if ui.button("Keep my edits").clicked() {
+                        self.doc.keep_edits();
+                    }
+                });
+            });
+        }
+        let mut chosen = None;
+        if let Some(prompt) = &mut self.path_prompt {
+            let mut close = false;
+            egui::Modal::new(egui::Id::unique("path-prompt")).show(ui.ctx(), |ui| {
+                ui.label(match prompt.kind {
+                    DialogKind::Open => "Open scene file:",
+                    DialogKind::SaveAs => "Save scene as:",
+                    DialogKind::Export => "Export image to (.png or .jpg):",
+                });
+                let edit = ui.text_edit_singleline(&mut prompt.text);
+                edit.request_focus();
+                ui.horizontal(|ui| {
+                    let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+                    if (ui.button("OK").clicked() || enter) && !prompt.text.trim().is_empty() {
+                        chosen = Some(PathBuf::from(prompt.text.trim()));
+                        close = true;
+                    }
+                    if ui.button("Cancel").clicked() {
+                        close = true;
+                    }
+                });
+            });
+            if close {
+                let prompt = self.path_prompt.take();
+                if let (Some(prompt), Some(path)) = (prompt, chosen) {
+                    self.path_chosen(prompt.kind, path);
+                }
+            }
+        }
+    }
+
+    fn count_frame(&mut self) {
+        let now = Instant::now();
+        // Once a second, with RAYOFLIGHT_STATS set: the figures the status
+        // bar shows, on stderr, for measuring the app from outside.
+        if self.stats && now.duration_since(self.last_stats) >= Duration::from_secs(1) {
+            self.last_stats = now;
+            eprintln!(
+                "stats: fps={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
+                self.frames.len(),
+                self.preview.state(),
+                self.preview.first_pass().map(|d| d.as_secs_f64() * 1e3),
+                self.preview
+                    .last_render()
+                    .map(|(d, _)| d.as_secs_f64() * 1e3),
+            );
+        }
+        self.frames.push_back(now);
+        while self
+            .frames
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+        {
+            self.frames.pop_front();
+        }
+        if self
+            .notice
+            .as_ref()
+            .is_some_and(|(_, t)| t.elapsed() > Duration::from_secs(8))
+        {
+            self.notice = None;
+        }
+    }
+}
+
+impl eframe::App for RayOfLightApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.draw(ui);
+    }
+}
+
+impl RayOfLightApp {
+    /// The whole window's content for one frame.
+    pub fn draw(&mut self, ui: &mut egui::Ui) {
+        self.count_frame();
+        self.drain_events();
+        let ctx = ui.ctx().clone();
+        self.shortcuts(&ctx);
+        let title = format!(
+            "RayOfLight — {}{}",
+            self.doc.title(),
+            if self.doc.has_unsaved_edits() {
+                " •"
+            } else {
+                ""
+            }
+        );
+        if title != self.title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
+        egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
+        self.error_banner(ui);
+        self.status_bar(ui);
+        self.side_panel(ui);
+        self.picture(ui);
+        self.modals(ui);
+        if matches!(self.preview.state(), RenderState::Rendering { .. }) || self.stats {
+            // Keep the progress bar moving between tiles.
+            ctx.request_repaint_after(Duration::from_millis(16));
+        }
+    }
+}

@@ -1,0 +1,65 @@
+//! The desktop previewer (feature `gui`): an eframe/egui window that shows
+//! the render beside a panel of every scene value, re-rendering on each
+//! edit and each save of the file.
+//!
+//! - [`app`]: the window: layout, menus, keys, the picture.
+//! - [`panel`]: the side panel's widgets.
+//! - [`document`]: the file's text and scene, the unsaved panel edits.
+//! - [`worker`]: the background render thread, coarse to fine, newest wins.
+//! - [`preview`]: the picture assembled from the worker's tiles.
+//! - [`watcher`]: the file watcher (notify), debounced.
+//!
+//! It reaches the core only through `scene`, `render` and `output`.
+
+pub mod app;
+pub mod document;
+mod panel;
+pub mod preview;
+mod recent;
+pub mod watcher;
+pub mod worker;
+
+use std::path::Path;
+
+#[derive(Debug, thiserror::Error)]
+pub enum GuiError {
+    #[error("no display: set DISPLAY or WAYLAND_DISPLAY, or render without a window with --no-gui")]
+    NoDisplay,
+    #[error("{0}")]
+    Load(#[from] crate::scene::LoadError),
+    #[error("the window could not open: {0}; render without a window with --no-gui")]
+    Window(String),
+}
+
+/// Whether a display server is reachable by the environment's say-so.
+pub fn display_available() -> bool {
+    ["DISPLAY", "WAYLAND_DISPLAY"]
+        .iter()
+        .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
+}
+
+/// Opens the app on `scene` (or the built-in example) and returns when the
+/// window is closed.
+pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
+    if !display_available() {
+        return Err(GuiError::NoDisplay);
+    }
+    let doc = match scene {
+        Some(path) => document::Document::open(path)?,
+        None => document::Document::builtin(),
+    };
+    let options = eframe::NativeOptions {
+        viewport: egui::ViewportBuilder::default()
+            .with_inner_size([1200.0, 800.0])
+            .with_min_inner_size([480.0, 320.0])
+            .with_drag_and_drop(true)
+            .with_title("RayOfLight"),
+        ..Default::default()
+    };
+    eframe::run_native(
+        "RayOfLight",
+        options,
+        Box::new(move |cc| Ok(Box::new(app::RayOfLightApp::new(&cc.egui_ctx, doc)))),
+    )
+    .map_err(|e| GuiError::Window(e.to_string()))
+}

@@ -1,0 +1,166 @@
+//! The image on screen, assembled from the worker's tiles.
+//!
+//! Holds the full-size picture and keeps the last good one until new pixels
+//! replace it: a coarse pass paints blocks of `scale × scale` pixels, the
+//! full pass exact pixels. Events of any generation but the newest are
+//! dropped, so a stale render can never paint over a newer one.
+
+use super::worker::Event;
+use image::RgbImage;
+use std::time::Duration;
+
+/// What the renderer is doing, for the status bar.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RenderState {
+    Idle,
+    Rendering {
+        scale: u32,
+        tiles_done: usize,
+        tiles_total: usize,
+    },
+    Done {
+        elapsed: Duration,
+        rays: u64,
+    },
+    Failed(String),
+}
+
+#[derive(Debug, Clone)]
+pub struct Preview {
+    image: RgbImage,
+    /// Generation whose pixels are arriving.
+    generation: u64,
+    state: RenderState,
+    /// Set when pixels changed since the last [`Preview::take_dirty`].
+    dirty: bool,
+    /// Time of the last finished full-resolution pass.
+    last_render: Option<(Duration, u64)>,
+    /// Time from the request to the end of the first (coarsest) pass of the
+    /// current render: how long until the picture first reacts.
+    first_pass: Option<Duration>,
+}
+
+impl Default for Preview {
+    fn default() -> Self {
+        Preview {
+            image: RgbImage::new(1, 1),
+            generation: 0,
+            state: RenderState::Idle,
+            dirty: false,
+            last_render: None,
+            first_pass: None,
+        }
+    }
+}
+
+impl Preview {
+    pub fn image(&self) -> &RgbImage {
+        &self.image
+    }
+
+    pub fn state(&self) -> &RenderState {
+        &self.state
+    }
+
+    /// Duration and primary rays of the last complete render.
+    pub fn last_render(&self) -> Option<(Duration, u64)> {
+        self.last_render
+    }
+
+    /// Time from the request to the first pass's last pixel, for the
+    /// current render.
+    pub fn first_pass(&self) -> Option<Duration> {
+        self.first_pass
+    }
+
+    /// Whether a render has completed at least once.
+    pub fn has_image(&self) -> bool {
+        self.last_render.is_some() || self.generation != 0
+    }
+
+    /// True once after pixels changed: the texture needs an upload.
+    pub fn take_dirty(&mut self) -> bool {
+        std::mem::take(&mut self.dirty)
+    }
+
+    /// Applies a worker event; `newest` is the newest generation requested.
+    /// Returns false when the event was stale and dropped.
+    pub fn apply(&mut self, newest: u64, event: Event) -> bool {
+        if event.generation() != newest {
+            return false;
+        }
+        match event {
+            Event::PassStarted {
+                generation,
+                scale,
+                width,
+                height,
+            } => {
+                if generation != self.generation {
+                    self.first_pass = None;
+                }
+                self.generation = generation;
+                if self.image.dimensions() != (width, height) {
+                    self.image = RgbImage::new(width, height);
+                    self.dirty = true;
+                }
+                let tiles_total = crate::render::tiles(
+                    width.div_ceil(scale),
+                    height.div_ceil(scale),
+                    crate::render::TILE_SIZE,
+                )
+                .len();
+                self.state = RenderState::Rendering {
+                    scale,
+                    tiles_done: 0,
+                    tiles_total,
+                };
+            }
+            Event::Tile {
+                scale,
+                tile,
+                pixels,
+                ..
+            } => {
+                self.paint(scale, &tile, &pixels);
+                if let RenderState::Rendering { tiles_done, .. } = &mut self.state {
+                    *tiles_done += 1;
+                }
+            }
+            Event::PassFinished {
+                scale,
+                elapsed,
+                since_start,
+                rays,
+                ..
+            } => {
+                self.first_pass.get_or_insert(since_start);
+                if scale == 1 {
+                    self.state = RenderState::Done { elapsed, rays };
+                    self.last_render = Some((elapsed, rays));
+                }
+            }
+            Event::Failed { message, .. } => self.state = RenderState::Failed(message),
+        }
+        true
+    }
+
+    /// Paints a tile of a pass at 1/`scale` resolution into the full image.
+    fn paint(&mut self, scale: u32, tile: &crate::render::Tile, pixels: &[u8]) {
+        let (width, height) = self.image.dimensions();
+        let row_bytes = tile.width as usize * 3;
+        for (row, line) in pixels.chunks_exact(row_bytes).enumerate() {
+            let y0 = (tile.y + row as u32) * scale;
+            for (col, rgb) in line.chunks_exact(3).enumerate() {
+                let x0 = (tile.x + col as u32) * scale;
+                let color = image::Rgb([rgb[0], rgb[1], rgb[2]]);
+                for y in y0..(y0 + scale).min(height) {
+                    for x in x0..(x0 + scale).min(width) {
+                        self.image.put_pixel(x, y, color);
+                    }
+                }
+            }
+        }
+        self.dirty = true;
+    }
+}

@@ -1,0 +1,284 @@
+//! The render worker: one background thread that owns all rendering for the
+//! app, so the UI thread never traces a ray.
+//!
+//! Every request gets a generation number. A newer request cancels the older
+//! one within a pixel (the [`Cancel`] token is checked before every pixel),
+//! and requests that queued up while a render ran are skipped for the
+//! newest, so dragging a slider never stacks renders behind each other.
+//! Each request is rendered coarse to fine (1/8, 1/2, then full
+//! resolution for large images) and every finished tile is sent to the UI
+//! at once, with a wake-up call so it repaints.
+
+use crate::render::{self, Cancel, RenderOptions, Tile};
+use crate::scene::Scene;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+/// Below this many pixels the image is rendered in one full-resolution pass.
+const SINGLE_PASS_PIXELS: u64 = 256 * 256;
+
+/// What the worker reports, tagged with the request's generation.
+#[derive(Debug)]
+pub enum Event {
+    /// A pass began, at 1/`scale` of the full resolution.
+    PassStarted {
+        generation: u64,
+        scale: u32,
+        /// Size of the full image.
+        width: u32,
+        height: u32,
+    },
+    /// A finished tile of a pass: row-major RGB8 pixels of the pass's
+    /// (scaled-down) image.
+    Tile {
+        generation: u64,
+        scale: u32,
+        tile: Tile,
+        pixels: Vec<u8>,
+    },
+    /// The pass is complete.
+    PassFinished {
+        generation: u64,
+        scale: u32,
+        /// Time of this pass alone.
+        elapsed: Duration,
+        /// Time since the worker took the request (all passes so far).
+        since_start: Duration,
+        /// Primary rays traced in this pass.
+        rays: u64,
+    },
+    /// The render could not run (bad options).
+    Failed { generation: u64, message: String },
+}
+
+impl Event {
+    pub fn generation(&self) -> u64 {
+        match self {
+            Event::PassStarted { generation, .. }
+            | Event::Tile { generation, .. }
+            | Event::PassFinished { generation, .. }
+            | Event::Failed { generation, .. } => *generation,
+        }
+    }
+}
+
+enum Message {
+    Render {
+        generation: u64,
+        scene: Arc<Scene>,
+        options: RenderOptions,
+    },
+    Quit,
+}
+
+/// Handle to the worker thread. Dropping it stops the worker promptly.
+pub struct Worker {
+    newest: Arc<AtomicU64>,
+    to_worker: Sender<Message>,
+    events: Receiver<Event>,
+    thread: Option<JoinHandle<()>>,
+}
+
+impl Worker {
+    /// Starts the worker with `threads` render threads; `wake` is called
+    /// whenever an event is ready (the app passes `request_repaint`).
+    pub fn spawn(threads: usize, wake: impl Fn() + Send + Sync + 'static) -> Worker {
+        let newest = Arc::new(AtomicU64::new(0));
+        let (to_worker, inbox) = mpsc::channel();
+        let (events_tx, events) = mpsc::channel();
+        let state = WorkerThread {
+            newest: newest.clone(),
+            inbox,
+            events: events_tx,
+            wake: Arc::new(wake),
+            pool: rayon::ThreadPoolBuilder::new()
+                .num_threads(threads.max(1))
+                .thread_name(|i| format!("render-{i}"))
+                .build()
+                .ok(),
+        };
+        let thread = std::thread::Builder::new()
+            .name("render-worker".into())
+            .spawn(move || state.run())
+            .ok();
+        Worker {
+            newest,
+            to_worker,
+            events,
+            thread,
+        }
+    }
+
+    /// The default thread count for the app: one fewer than the cores, at
+    /// least one, so the UI thread keeps a core.
+    pub fn default_threads() -> usize {
+        std::thread::available_parallelism()
+            .map(|n| n.get().saturating_sub(1))
+            .unwrap_or(1)
+            .max(1)
+    }
+
+    /// Asks for a render; cancels any older one. Returns its generation.
+    pub fn request(&self, scene: Arc<Scene>, options: RenderOptions) -> u64 {
+        let generation = self.newest.fetch_add(1, Ordering::Relaxed) + 1;
+        let _ = self.to_worker.send(Message::Render {
+            generation,
+            scene,
+            options,
+        });
+        generation
+    }
+
+    /// Cancels whatever is rendering, without starting anything new.
+    pub fn cancel(&self) {
+        self.newest.fetch_add(1, Ordering::Relaxed);
+    }
+
+    /// The newest generation requested.
+    pub fn newest(&self) -> u64 {
+        self.newest.load(Ordering::Relaxed)
+    }
+
+    /// Events ready now, oldest first.
+    pub fn events(&self) -> impl Iterator<Item = Event> + '_ {
+        self.events.try_iter()
+    }
+
+    /// Waits up to `timeout` for the next event (for tests and batch use).
+    pub fn next_event(&self, timeout: Duration) -> Option<Event> {
+        self.events.recv_timeout(timeout).ok()
+    }
+}
+
+impl Drop for Worker {
+    fn drop(&mut self) {
+        // A generation no request has: the running render stops at its next
+        // pixel, then the thread reads Quit.
+        self.newest.store(u64::MAX, Ordering::Relaxed);
+        let _ = self.to_worker.send(Message::Quit);
+        if let Some(thread) = self.thread.take() {
+            let _ = thread.join();
+        }
+    }
+}
+
+struct WorkerThread {
+    newest: Arc<AtomicU64>,
+    inbox: Receiver<Message>,
+    events: Sender<Event>,
+    wake: Arc<dyn Fn() + Send + Sync>,
+    pool: Option<rayon::ThreadPool>,
+}
+
+impl WorkerThread {
+    fn run(self) {
+        while let Ok(mut message) = self.inbox.recv() {
+            // Requests that queued up meanwhile: only the newest counts.
+            while let Ok(newer) = self.inbox.try_recv() {
+                message = newer;
+            }
+            match message {
+                Message::Quit => return,
+                Message::Render {
+                    generation,
+                    scene,
+                    options,
+                } => {
+                    let cancel = Cancel::new(self.newest.clone(), generation);
+                    if !cancel.is_cancelled() {
+                        self.render(generation, &scene, &options, &cancel);
+                    }
+                }
+            }
+        }
+    }
+
+    fn send(&self, event: Event) {
+        let _ = self.events.send(event);
+        (self.wake)();
+    }
+
+    fn render(&self, generation: u64, scene: &Scene, options: &RenderOptions, cancel: &Cancel) {
+        if let Err(e) = options.validate() {
+            self.send(Event::Failed {
+                generation,
+                message: e.to_string(),
+            });
+            return;
+        }
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let render_start = Instant::now();
+        for scale in passes(width, height) {
+            if cancel.is_cancelled() {
+                return;
+            }
+            self.send(Event::PassStarted {
+                generation,
+                scale,
+                width,
+                height,
+            });
+            let start = Instant::now();
+            let mut pass_scene = scene.clone();
+            pass_scene.camera.width = width.div_ceil(scale);
+            pass_scene.camera.height = height.div_ceil(scale);
+            let pass_options = RenderOptions {
+                // Coarse passes are previews: one ray per pixel.
+                aa: if scale == 1 { options.aa } else { 1 },
+                ..options.clone()
+            };
+            let prepared = render::prepare(&pass_scene, &pass_options);
+            let tiles = render::tiles(
+                pass_scene.camera.width,
+                pass_scene.camera.height,
+                render::TILE_SIZE,
+            );
+            // Tiles are sent from the render threads as they finish.
+            let (events, wake) = (&self.events, &self.wake);
+            let render_one = |tile: &Tile| {
+                if let Some(pixels) = render::render_tile(&prepared, tile, cancel) {
+                    let _ = events.send(Event::Tile {
+                        generation,
+                        scale,
+                        tile: *tile,
+                        pixels,
+                    });
+                    wake();
+                }
+            };
+            match &self.pool {
+                Some(pool) => pool.install(|| {
+                    use rayon::prelude::*;
+                    tiles.par_iter().for_each(render_one)
+                }),
+                None => tiles.iter().for_each(render_one),
+            }
+            if cancel.is_cancelled() {
+                return;
+            }
+            let rays = u64::from(pass_scene.camera.width)
+                * u64::from(pass_scene.camera.height)
+                * u64::from(pass_options.aa).pow(2);
+            self.send(Event::PassFinished {
+                generation,
+                scale,
+                elapsed: start.elapsed(),
+                since_start: render_start.elapsed(),
+                rays,
+            });
+        }
+    }
+}
+
+/// The passes for an image: full resolution only when small, otherwise
+/// 1/8, 1/2 and full.
+pub fn passes(width: u32, height: u32) -> Vec<u32> {
+    if u64::from(width) * u64::from(height) <= SINGLE_PASS_PIXELS {
+        vec![1]
+    } else {
+        vec![8, 2, 1]
+    }
+}

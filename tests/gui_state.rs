@@ -1,0 +1,372 @@
+//! The app's logic without a display: the render worker (newest request
+//! wins, stale events dropped, cancellation), the picture assembled from
+//! tiles, the file watcher (atomic rename, plain write, delete and
+//! recreate, debounced), and the document (broken saves, conflicts,
+//! save-back).
+#![cfg(feature = "gui")]
+
+use egui_kittest::kittest::Queryable;
+use rayoflight::gui::app::RayOfLightApp;
+use rayoflight::gui::document::{Document, FileState, Reload};
+use rayoflight::gui::preview::{Preview, RenderState};
+use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
+use rayoflight::gui::worker::{Event, Worker};
+use rayoflight::render::{self, RenderOptions};
+use rayoflight::scene::{self, Scene};
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+fn scene_text(red: f64, width: u32) -> String {
+    format!(
+        r#"<scene>
+  <!-- a comment that save-back must keep -->
+  <sphere>
+    <color red="{red}" green="0.5" blue="0.25"/>
+    <transformation><translate z="3"/></transformation>
+  </sphere>
+  <light x="0" y="-3" z="-3"/>
+  <camera width="{width}" height="{width}" eyeDistance="2"/>
+</scene>
+"#
+    )
+}
+
+fn parse(text: &str) -> Scene {
+    scene::parse(text, Path::new("test.xml")).unwrap()
+}
+
+/// Two facing perfect mirrors and the camera between them: every pixel
+/// bounces `depth` times. Very slow on purpose.
+fn mirrors(depth: u32, width: u32, height: u32) -> Scene {
+    parse(&format!(
+        r#"<scene>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
+  <light x="0" y="-1" z="0"/>
+  <camera width="{width}" height="{height}" eyeDistance="1"/>
+  <model type="whitted" depth="{depth}"/>
+</scene>"#
+    ))
+}
+
+/// Collects the worker's events until the full-resolution pass of
+/// `generation` finishes; returns them and the time it took.
+fn until_finished(worker: &Worker, generation: u64, limit: Duration) -> (Vec<Event>, Duration) {
+    let start = Instant::now();
+    let mut events = Vec::new();
+    while start.elapsed() < limit {
+        if let Some(e) = worker.next_event(Duration::from_millis(10)) {
+            let done =
+                matches!(e, Event::PassFinished { generation: g, scale: 1, .. } if g == generation);
+            events.push(e);
+            if done {
+                return (events, start.elapsed());
+            }
+        }
+    }
+    panic!("generation {generation} did not finish within {limit:?}");
+}
+
+#[test]
+fn worker_renders_the_same_image_as_the_cli_path() {
+    let s = parse(&scene_text(1.0, 300));
+    let worker = Worker::spawn(1, || {});
+    let generation = worker.request(Arc::new(s.clone()), RenderOptions::default());
+    let (events, _) = until_finished(&worker, generation, Duration::from_secs(30));
+    let mut preview = Preview::default();
+    for e in events {
+        assert!(preview.apply(generation, e));
+    }
+    let expected = render::render(&s, &RenderOptions::default()).unwrap();
+    assert_eq!(preview.image(), &expected);
+    assert!(matches!(preview.state(), RenderState::Done { .. }));
+}
+
+#[test]
+fn coarse_passes_come_first_for_large_images() {
+    let s = parse(&scene_text(1.0, 600));
+    let worker = Worker::spawn(1, || {});
+    let generation = worker.request(Arc::new(s), RenderOptions::default());
+    let (events, _) = until_finished(&worker, generation, Duration::from_secs(30));
+    let scales: Vec<u32> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::PassStarted { scale, .. } => Some(*scale),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(scales, [8, 2, 1]);
+}
+
+#[test]
+fn a_newer_request_cancels_the_older_within_100_ms() {
+    // Depth 10 000 between two mirrors at 3840×2160: minutes of work.
+    let heavy = mirrors(10_000, 3840, 2160);
+    let light = parse(&scene_text(0.3, 32));
+    let worker = Worker::spawn(Worker::default_threads(), || {});
+    let old = worker.request(Arc::new(heavy), RenderOptions::default());
+    std::thread::sleep(Duration::from_millis(300));
+    let new = worker.request(Arc::new(light.clone()), RenderOptions::default());
+    // The light scene takes well under a millisecond: what is measured is
+    // the time for the heavy render to notice it was cancelled.
+    let (events, took) = until_finished(&worker, new, Duration::from_secs(10));
+    eprintln!("newer render finished {took:?} after the request");
+    assert!(
+        took < Duration::from_millis(300),
+        "cancel took {took:?} (promise 100 ms, 3x allowed on a noisy CI machine)"
+    );
+    // Stale events are dropped by the preview.
+    let mut preview = Preview::default();
+    let mut stale = 0;
+    for e in events {
+        if e.generation() == old {
+            assert!(!preview.apply(new, e));
+            stale += 1;
+        } else {
+            assert!(preview.apply(new, e));
+        }
+    }
+    let _ = stale;
+    let expected = render::render(&light, &RenderOptions::default()).unwrap();
+    assert_eq!(preview.image(), &expected);
+}
+
+#[test]
+fn dropping_the_worker_stops_a_long_render_promptly() {
+    let worker = Worker::spawn(Worker::default_threads(), || {});
+    worker.request(
+        Arc::new(mirrors(10_000, 3840, 2160)),
+        RenderOptions::default(),
+    );
+    std::thread::sleep(Duration::from_millis(200));
+    let start = Instant::now();
+    drop(worker);
+    let took = start.elapsed();
+    eprintln!("worker stopped in {took:?}");
+    assert!(took < Duration::from_millis(300), "stopping took {took:?}");
+}
+
+#[test]
+fn queued_requests_collapse_to_the_newest() {
+    let worker = Worker::spawn(1, || {});
+    let scenes: Vec<_> = (0..20)
+        .map(|i| Arc::new(parse(&scene_text(f64::from(i) / 20.0, 64))))
+        .collect();
+    let mut last = 0;
+    for s in &scenes {
+        last = worker.request(s.clone(), RenderOptions::default());
+    }
+    let (events, _) = until_finished(&worker, last, Duration::from_secs(30));
+    let finished: Vec<u64> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::PassFinished { generation, .. } => Some(*generation),
+            _ => None,
+        })
+        .collect();
+    assert!(finished.len() < 5, "renders were queued: {finished:?}");
+    assert_eq!(finished.last(), Some(&last));
+}
+
+/// Waits for the next watcher event.
+fn next(rx: &mpsc::Receiver<FileEvent>) -> FileEvent {
+    rx.recv_timeout(Duration::from_secs(5))
+        .expect("the watcher reported within 5 s")
+}
+
+fn assert_loaded_red(event: FileEvent, red: f64) {
+    match event {
+        FileEvent::Loaded(_, s) => assert_eq!(s.objects[0].color.x, red),
+        other => panic!("expected a loaded scene, got {other:?}"),
+    }
+}
+
+/// Nothing more arrives for a while (debounced, and nothing spurious).
+fn quiet(rx: &mpsc::Receiver<FileEvent>) {
+    if let Ok(e) = rx.recv_timeout(Duration::from_millis(400)) {
+        panic!("unexpected event {e:?}");
+    }
+}
+
+#[test]
+fn watcher_sees_renames_writes_deletes_and_recreates() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, scene_text(0.1, 8)).unwrap();
+    let (tx, rx) = mpsc::channel();
+    let _watcher = SceneWatcher::new(&path, move |e| {
+        let _ = tx.send(e);
+    })
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+
+    // Atomic rename, as vim, VS Code and sed -i save.
+    let tmp = dir.path().join(".scene.xml.swp");
+    std::fs::write(&tmp, scene_text(0.2, 8)).unwrap();
+    std::fs::rename(&tmp, &path).unwrap();
+    assert_loaded_red(next(&rx), 0.2);
+    quiet(&rx);
+
+    // A plain write in several quick chunks: one event, after the last.
+    let text = scene_text(0.3, 8);
+    let (a, b) = text.split_at(text.len() / 2);
+    std::fs::write(&path, a).unwrap();
+    std::thread::sleep(Duration::from_millis(20));
+    let mut f = std::fs::OpenOptions::new()
+        .append(true)
+        .open(&path)
+        .unwrap();
+    std::io::Write::write_all(&mut f, b.as_bytes()).unwrap();
+    drop(f);
+    assert_loaded_red(next(&rx), 0.3);
+    quiet(&rx);
+
+    // Deleted, then created again.
+    std::fs::remove_file(&path).unwrap();
+    assert!(matches!(next(&rx), FileEvent::Missing));
+    std::fs::write(&path, scene_text(0.4, 8)).unwrap();
+    assert_loaded_red(next(&rx), 0.4);
+
+    // A broken save reports the error with its position.
+    std::fs::write(
+        &path,
+        "<scene>\n  <sphere><material ka=\"-1\"/></sphere>\n</scene>\n",
+    )
+    .unwrap();
+    match next(&rx) {
+        FileEvent::Broken(e) => {
+            let message = e.to_string();
+            assert!(message.contains("scene.xml:2:21:"), "{message}");
+        }
+        other => panic!("expected an error, got {other:?}"),
+    }
+
+    // Other files in the directory are ignored.
+    std::fs::write(dir.path().join("other.xml"), "x").unwrap();
+    quiet(&rx);
+}
+
+fn document_on(text: &str) -> (tempfile::TempDir, std::path::PathBuf, Document) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, text).unwrap();
+    let doc = Document::open(&path).unwrap();
+    (dir, path, doc)
+}
+
+#[test]
+fn a_broken_save_keeps_the_last_good_scene_and_shows_the_error() {
+    let (_dir, path, mut doc) = document_on(&scene_text(0.1, 8));
+    let good = doc.scene.clone();
+    let error = scene::load(&path).err();
+    assert!(error.is_none());
+    std::fs::write(&path, "<scene><camera width=\"0\"").unwrap();
+    let error = scene::load(&path).unwrap_err();
+    assert_eq!(doc.file_broken(&error), Reload::Broken);
+    assert_eq!(doc.scene, good);
+    assert!(
+        doc.error()
+            .unwrap()
+            .starts_with(&format!("{}:1:", path.display()))
+    );
+    // The next good save clears it.
+    let text = scene_text(0.7, 8);
+    assert_eq!(
+        doc.file_loaded(text.clone(), parse(&text)),
+        Reload::Replaced
+    );
+    assert!(doc.error().is_none());
+    assert_eq!(doc.scene.objects[0].color.x, 0.7);
+    // The same content again is not a change.
+    assert_eq!(
+        doc.file_loaded(text.clone(), parse(&text)),
+        Reload::Unchanged
+    );
+    doc.file_missing();
+    assert_eq!(doc.state(), &FileState::Missing);
+}
+
+#[test]
+fn a_file_change_never_silently_drops_unsaved_edits() {
+    let (_dir, _path, mut doc) = document_on(&scene_text(0.1, 8));
+    doc.scene.objects[0].material.ka = 0.9;
+    assert!(doc.has_unsaved_edits());
+    let text = scene_text(0.6, 8);
+    assert_eq!(
+        doc.file_loaded(text.clone(), parse(&text)),
+        Reload::Conflict
+    );
+    assert!(doc.has_conflict());
+    assert_eq!(doc.scene.objects[0].material.ka, 0.9, "edits still there");
+    doc.keep_edits();
+    assert!(!doc.has_conflict());
+    assert_eq!(doc.scene.objects[0].material.ka, 0.9);
+
+    let text = scene_text(0.8, 8);
+    assert_eq!(
+        doc.file_loaded(text.clone(), parse(&text)),
+        Reload::Conflict
+    );
+    doc.take_file_version();
+    assert_eq!(doc.scene.objects[0].color.x, 0.8);
+    assert!(!doc.has_unsaved_edits());
+}
+
+#[test]
+fn saving_edits_keeps_the_comments_and_reloads_equal() {
+    let original = scene_text(0.1, 8);
+    let (_dir, path, mut doc) = document_on(&original);
+    doc.scene.objects[0].material.kd = 0.75;
+    doc.scene.model.illumination = scene::Illumination::Lambert;
+    doc.save().unwrap();
+    assert!(!doc.has_unsaved_edits());
+    let saved = std::fs::read_to_string(&path).unwrap();
+    assert!(saved.contains("<!-- a comment that save-back must keep -->"));
+    assert!(saved.contains(r#"<color red="0.1" green="0.5" blue="0.25"/>"#));
+    let reloaded = scene::load(&path).unwrap();
+    assert_eq!(reloaded, doc.scene);
+    // Our own save seen by the watcher is not a change.
+    assert_eq!(doc.file_loaded(saved, reloaded), Reload::Unchanged);
+}
+
+#[test]
+fn a_panel_edit_renders_the_edited_scene() {
+    let app = RayOfLightApp::new(&egui::Context::default(), Document::builtin());
+    let mut harness = egui_kittest::Harness::builder()
+        .with_size(egui::vec2(1200.0, 800.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    harness.run_steps(2);
+    let before = harness.state().newest_generation();
+    harness.get_by_label("lambert").click();
+    harness.run_steps(2);
+    let app = harness.state();
+    assert_eq!(
+        app.document().scene.model.illumination,
+        scene::Illumination::Lambert
+    );
+    assert!(app.document().has_unsaved_edits());
+    assert!(
+        app.newest_generation() > before,
+        "the edit asked for a render"
+    );
+
+    // The picture becomes the lambert render, as the CLI would draw it.
+    let expected = render::render(&app.document().scene, &RenderOptions::default()).unwrap();
+    let start = Instant::now();
+    loop {
+        harness.step();
+        let app = harness.state();
+        if matches!(app.preview().state(), RenderState::Done { .. })
+            && app.preview().image() == &expected
+        {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the edited scene never showed"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
