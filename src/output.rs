@@ -113,11 +113,19 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
             "is a directory",
         )));
     }
-    let mut file = tempfile::Builder::new()
-        .prefix(".rayoflight-")
-        .suffix(".tmp")
-        .tempfile_in(dir)
-        .map_err(io_error)?;
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".rayoflight-").suffix(".tmp");
+    // A new file gets the usual mode (0666 less the umask, as the kernel
+    // applies it at creation), not tempfile's private 0600.
+    #[cfg(unix)]
+    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
+    let mut file = builder.tempfile_in(dir).map_err(io_error)?;
+    // A replaced file keeps its own permissions.
+    if let Ok(meta) = std::fs::metadata(path) {
+        file.as_file()
+            .set_permissions(meta.permissions())
+            .map_err(io_error)?;
+    }
     {
         let mut w = BufWriter::new(file.as_file_mut());
         w.write_all(bytes).map_err(io_error)?;
@@ -160,6 +168,23 @@ mod tests {
             format_for(Path::new("noext")),
             Err(OutputError::NoExtension { .. })
         ));
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn atomic_write_keeps_usual_and_existing_permissions() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("out.txt");
+        write_atomic(&path, b"a").unwrap();
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        // The same mode as a file created the ordinary way.
+        let plain = dir.path().join("plain.txt");
+        std::fs::write(&plain, b"a").unwrap();
+        assert_eq!(mode(&path), mode(&plain));
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o640)).unwrap();
+        write_atomic(&path, b"b").unwrap();
+        assert_eq!(mode(&path), 0o640);
     }
 
     #[test]

@@ -61,6 +61,18 @@ enum Background {
 struct PathPrompt {
     kind: DialogKind,
     text: String,
+    /// Keyboard focus was given to the field (once, when it opened).
+    focused: bool,
+}
+
+impl PathPrompt {
+    fn new(kind: DialogKind) -> PathPrompt {
+        PathPrompt {
+            kind,
+            text: String::new(),
+            focused: false,
+        }
+    }
 }
 
 pub struct RayOfLightApp {
@@ -262,10 +274,7 @@ impl RayOfLightApp {
             // A dialog that closes at once without a choice could not open
             // (no desktop portal): offer a plain path field instead.
             None if took < Duration::from_millis(300) => {
-                self.path_prompt = Some(PathPrompt {
-                    kind,
-                    text: String::new(),
-                })
+                self.path_prompt = Some(PathPrompt::new(kind))
             }
             None => {}
         }
@@ -366,10 +375,7 @@ impl RayOfLightApp {
                     self.start_dialog(DialogKind::Open);
                 }
                 if ui.button("Open path…").clicked() {
-                    self.path_prompt = Some(PathPrompt {
-                        kind: DialogKind::Open,
-                        text: String::new(),
-                    });
+                    self.path_prompt = Some(PathPrompt::new(DialogKind::Open));
                 }
                 if ui.button("Open built-in example").clicked() {
                     self.doc = Document::builtin();
@@ -408,10 +414,7 @@ impl RayOfLightApp {
                     self.start_dialog(DialogKind::Export);
                 }
                 if ui.button("Export to path…").clicked() {
-                    self.path_prompt = Some(PathPrompt {
-                        kind: DialogKind::Export,
-                        text: String::new(),
-                    });
+                    self.path_prompt = Some(PathPrompt::new(DialogKind::Export));
                 }
                 ui.separator();
                 if ui.button("Quit").clicked() {
@@ -641,7 +644,13 @@ impl RayOfLightApp {
                     DialogKind::Export => "Export image to (.png or .jpg):",
                 });
                 let edit = ui.text_edit_singleline(&mut prompt.text);
-                edit.request_focus();
+                if !prompt.focused {
+                    edit.request_focus();
+                    prompt.focused = true;
+                }
+                if ui.input(|i| i.key_pressed(Key::Escape)) {
+                    close = true;
+                }
                 ui.horizontal(|ui| {
                     let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
                     if (ui.button("OK").clicked() || enter) && !prompt.text.trim().is_empty() {
