@@ -112,6 +112,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     let options = render::RenderOptions {
         threads: r.threads,
         aa: r.aa.unwrap_or(1),
+        ..render::RenderOptions::default()
     };
     let start = Instant::now();
     let image = render::render(&scene, &options).map_err(fail)?;

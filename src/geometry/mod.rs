@@ -6,11 +6,19 @@
 //! renormalised, so the parameter t found in object space is the world
 //! distance along the unit world direction: hits on differently scaled
 //! objects compare directly (contract section 2).
+//!
+//! [`Primitive`] flattens what the transform allows (a sphere under a
+//! similarity is a world centre and radius; a plane a world point and
+//! normal); [`Bvh`] finds the nearest of many bounded primitives.
 
+mod bvh;
 mod plane;
+mod primitive;
 mod ray;
 mod sphere;
 
-pub use plane::intersect_plane;
+pub use bvh::{Aabb, Bvh};
+pub use plane::{intersect_plane, intersect_plane_world};
+pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
-pub use sphere::{intersect_sphere, intersect_sphere_textbook};
+pub use sphere::{intersect_ball, intersect_sphere, intersect_sphere_textbook};

@@ -12,6 +12,18 @@ pub fn intersect_plane(ray: &Ray) -> Option<f64> {
     (t > 0.0 && t.is_finite()).then_some(t)
 }
 
+/// t > 0 where the ray meets the plane through `point` with unit `normal`
+/// (world space), or `None` when parallel or moving away.
+#[inline]
+pub fn intersect_plane_world(ray: &Ray, point: glam::DVec3, normal: glam::DVec3) -> Option<f64> {
+    let denom = normal.dot(ray.dir);
+    if denom == 0.0 {
+        return None;
+    }
+    let t = normal.dot(point - ray.origin) / denom;
+    (t > 0.0 && t.is_finite()).then_some(t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

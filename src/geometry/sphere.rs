@@ -29,6 +29,34 @@ pub fn intersect_sphere(ray: &Ray) -> Option<f64> {
     nearest_positive(t0, t1)
 }
 
+/// Nearest root t > 0 of |o + t d − center|² = radius² for a unit
+/// direction d: the same stable formula in world space, for spheres whose
+/// transform is a similarity.
+#[inline]
+pub fn intersect_ball(ray: &Ray, center: glam::DVec3, radius: f64) -> Option<f64> {
+    // f: from the centre to the origin; with |d| = 1 the quadratic is
+    // t² + 2 b t + c = 0.
+    let f = ray.origin - center;
+    let d = ray.dir;
+    let b = f.dot(d);
+    let r2 = radius * radius;
+    let c = f.length_squared() - r2;
+    if c > 0.0 && b > 0.0 {
+        return None; // outside the sphere and moving away from it
+    }
+    // Δ/4 = r² − |l|², l the foot of the perpendicular from the centre.
+    let l = f - b * d;
+    let quarter_disc = r2 - l.length_squared();
+    if quarter_disc.is_nan() || quarter_disc < 0.0 {
+        return None;
+    }
+    let q = -(b + quarter_disc.sqrt().copysign(b));
+    if q == 0.0 {
+        return None;
+    }
+    nearest_positive(q, c / q)
+}
+
 /// The textbook root formula (−b ± √(b² − 4ac)) / 2a, kept for the study of
 /// where it fails: it cancels for small, distant spheres.
 pub fn intersect_sphere_textbook(ray: &Ray) -> Option<f64> {
@@ -65,6 +93,17 @@ mod tests {
         let r = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z);
         assert_eq!(intersect_sphere(&r), Some(4.0));
         assert_eq!(intersect_sphere_textbook(&r), Some(4.0));
+    }
+
+    #[test]
+    fn ball_matches_the_unit_sphere_scaled() {
+        let c = DVec3::new(1.0, -2.0, 10.0);
+        let r = Ray::new(DVec3::ZERO, (c + DVec3::new(0.5, 0.0, 0.0)).normalize());
+        let t = intersect_ball(&r, c, 2.0).unwrap();
+        let local = Ray::new((r.origin - c) / 2.0, r.dir / 2.0);
+        let u = intersect_sphere(&local).unwrap();
+        assert!((t - u).abs() < 1e-12, "{t} {u}");
+        assert!(((r.at(t) - c).length() - 2.0).abs() < 1e-12);
     }
 
     #[test]

@@ -173,8 +173,8 @@ impl RayOfLightApp {
 
     fn request_render(&mut self) {
         let options = RenderOptions {
-            threads: None,
             aa: self.aa,
+            ..RenderOptions::default()
         };
         self.worker
             .request(Arc::new(self.doc.scene.clone()), options);
@@ -229,6 +229,7 @@ impl RayOfLightApp {
         let options = RenderOptions {
             threads: Some(Worker::default_threads()),
             aa: self.aa,
+            ..RenderOptions::default()
         };
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();

@@ -30,6 +30,9 @@ pub struct RenderOptions {
     /// Supersampling: `aa × aa` rays per pixel on a regular grid, 1 to
     /// [`MAX_AA`]. 1 is one ray through the pixel centre.
     pub aa: u32,
+    /// End a whitted chain once the rest of it cannot change the pixel's
+    /// 8-bit value (exact: the image is the same either way).
+    pub early_stop: bool,
 }
 
 impl Default for RenderOptions {
@@ -37,6 +40,7 @@ impl Default for RenderOptions {
         RenderOptions {
             threads: None,
             aa: 1,
+            early_stop: true,
         }
     }
 }
@@ -86,23 +90,44 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RgbImage, Render
 fn render_all(scene: &Scene, options: &RenderOptions) -> RgbImage {
     let prepared = prepare(scene, options);
     let (width, height) = (prepared.width(), prepared.height());
-    let cancel = Cancel::never();
-    let done: Vec<(Tile, Vec<u8>)> = tiles(width, height, TILE_SIZE)
-        .into_par_iter()
-        .filter_map(|t| render_tile(&prepared, &t, &cancel).map(|px| (t, px)))
-        .collect();
+    // Bands of TILE_SIZE rows spread over the pool by rayon; each band is
+    // traced tile by tile (so each tile culls once) and copied in place.
     let mut image = RgbImage::new(width, height);
-    for (t, pixels) in done {
-        t.copy_into(&pixels, &mut image);
-    }
+    let row_bytes = width as usize * 3;
+    let cancel = Cancel::never();
+    image
+        .par_chunks_mut(row_bytes * TILE_SIZE as usize)
+        .enumerate()
+        .for_each(|(band, rows)| {
+            let y = band as u32 * TILE_SIZE;
+            let band_height = (rows.len() / row_bytes) as u32;
+            let mut pixels = Vec::new();
+            for x in (0..width).step_by(TILE_SIZE as usize) {
+                let tile = Tile {
+                    x,
+                    y,
+                    width: TILE_SIZE.min(width - x),
+                    height: band_height,
+                };
+                prepared.render_tile_into(&tile, &cancel, &mut pixels);
+                let tile_row = tile.width as usize * 3;
+                for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
+                    let start = r * row_bytes + x as usize * 3;
+                    rows[start..start + tile_row].copy_from_slice(src);
+                }
+            }
+        });
     image
 }
 
 /// Clamps a channel to [0, 1] and rounds it to 8 bits: floor(c·255 + 0.5).
 /// NaN becomes 0.
+#[inline]
 pub fn to_8bit(c: f64) -> u8 {
     if c > 0.0 {
-        (c.min(1.0) * 255.0 + 0.5).floor() as u8
+        // The value is in [0.5, 255.5], where truncation is floor (and
+        // avoids a libm call on baseline x86-64).
+        (c.min(1.0) * 255.0 + 0.5) as u8
     } else {
         0
     }

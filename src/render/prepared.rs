@@ -1,22 +1,34 @@
-//! The prepared scene: objects with their world-to-object matrices, lights,
-//! camera rays and the model, laid out for tracing.
+//! The prepared scene: what tracing needs and nothing more.
+//!
+//! - Objects become [`Primitive`]s: spheres under a similarity are a world
+//!   centre and radius, planes a world point and normal; only other spheres
+//!   keep their matrices.
+//! - Bounded primitives go into a [`Bvh`] once there are enough of them to
+//!   pay for it; planes are always tested one by one.
+//! - Primary rays of a tile only test the spheres that can be inside the
+//!   tile's frustum (four planes through the eye); a tile with none of them
+//!   and no plane is black without a single ray.
+//! - Shading data (colour, material) sits apart, read once per hit.
+//! - Whitted chains stop as soon as nothing the rest of the chain could add
+//!   can change the pixel's 8-bit value (exact: the image is unchanged).
 
-use super::{CameraRays, RenderOptions, to_8bit};
-use crate::geometry::{Ray, intersect_plane, intersect_sphere};
-use crate::scene::{Scene, Shape};
+use super::{CameraRays, Cancel, RenderOptions, Tile, to_8bit};
+use crate::geometry::{Aabb, Bvh, Primitive, Ray};
+use crate::scene::Scene;
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color, reflect};
-use glam::{DAffine3, DMat3, DVec3};
+use glam::DVec3;
 
-/// An object as the tracer sees it.
-#[derive(Debug, Clone)]
-struct PreparedObject {
-    shape: Shape,
+/// With fewer bounded primitives than this, a linear scan beats the BVH.
+const BVH_THRESHOLD: usize = 8;
+/// Up to this many bounded primitives, each tile culls them against its
+/// frustum for its primary rays (4 dot products each per tile).
+const CULL_LIMIT: usize = 64;
+
+/// What shading needs of an object.
+#[derive(Debug, Clone, Copy)]
+struct Surface {
     color: Color,
     material: Material,
-    /// World to object space.
-    to_object: DAffine3,
-    /// Object-space normal to world space: (M⁻¹)ᵀ.
-    normal: DMat3,
 }
 
 /// The nearest hit of a ray.
@@ -26,42 +38,150 @@ pub struct Hit {
     pub t: f64,
     /// Index of the object in the scene's object list.
     pub object: usize,
-    /// Geometric normal at the hit in object space (not normalised).
-    object_normal: DVec3,
+    /// Which primitive: index into the bounded list, or the plane list.
+    primitive: PrimitiveRef,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum PrimitiveRef {
+    Bounded(usize),
+    Plane(usize),
 }
 
 /// What rendering needs, computed once per render.
 #[derive(Debug, Clone)]
 pub struct Prepared {
-    objects: Vec<PreparedObject>,
+    /// Spheres, in the BVH's order when there is one.
+    bounded: Vec<Primitive>,
+    /// Scene object index of each bounded primitive.
+    bounded_objects: Vec<usize>,
+    bvh: Option<Bvh>,
+    planes: Vec<Primitive>,
+    plane_objects: Vec<usize>,
+    surfaces: Vec<Surface>,
     lights: Vec<Light>,
     illumination: Illumination,
     /// Reflected rays followed per primary ray (0 unless whitted).
     depth: u32,
+    /// Per channel, the most any one hit can add before weighting: the
+    /// largest ka C + Σ I (kd + ks) over the objects.
+    max_local: Color,
+    /// `tail[r]` = Σ_{k<r} max_ks^k, the most that r more reflections can
+    /// add per unit of weight and of `max_local` (empty when max_ks ≥ 1:
+    /// no bound).
+    tail: Vec<f64>,
+    /// Bounding sphere (centre, radius) of each bounded primitive, for the
+    /// tile frustum test; empty when there are too many to cull.
+    cull_spheres: Vec<(DVec3, f64)>,
     camera: CameraRays,
     aa: u32,
+    early_stop: bool,
+}
+
+/// Which bounded primitives a primary ray must test.
+#[derive(Debug, Clone, Copy)]
+enum Candidates<'a> {
+    All,
+    Only(&'a [usize]),
 }
 
 /// Builds the prepared scene.
 pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
-    let objects = scene
+    let mut bounded = Vec::new();
+    let mut bounded_objects = Vec::new();
+    let mut planes = Vec::new();
+    let mut plane_objects = Vec::new();
+    for (index, object) in scene.objects.iter().enumerate() {
+        let primitive = Primitive::new(object.shape, &object.transform);
+        if primitive.bounds().is_some() {
+            bounded.push(primitive);
+            bounded_objects.push(index);
+        } else {
+            planes.push(primitive);
+            plane_objects.push(index);
+        }
+    }
+    let bvh = (bounded.len() >= BVH_THRESHOLD).then(|| {
+        let boxes: Vec<Aabb> = bounded
+            .iter()
+            .map(|p| p.bounds().unwrap_or(Aabb::EMPTY))
+            .collect();
+        let bvh = Bvh::build(&boxes);
+        // Lay the primitives out in leaf order: leaves read them in a row.
+        bounded = bvh
+            .order()
+            .iter()
+            .map(|&i| bounded[i as usize].clone())
+            .collect();
+        bounded_objects = bvh
+            .order()
+            .iter()
+            .map(|&i| bounded_objects[i as usize])
+            .collect();
+        bvh
+    });
+
+    let illumination = scene.model.illumination;
+    let light_sum = scene.lights.iter().fold(Color::ZERO, |s, l| s + l.color);
+    let surfaces: Vec<Surface> = scene
         .objects
         .iter()
-        .map(|o| PreparedObject {
-            shape: o.shape,
+        .map(|o| Surface {
             color: o.color,
             material: o.material,
-            to_object: *o.transform.to_object(),
-            normal: *o.transform.normal_matrix(),
         })
         .collect();
+    let max_local = surfaces.iter().fold(Color::ZERO, |acc, s| {
+        let Material { ka, kd, ks, .. } = s.material;
+        let direct = match illumination {
+            Illumination::Ambient => 0.0,
+            Illumination::Lambert => kd,
+            Illumination::Phong | Illumination::Whitted => kd + ks,
+        };
+        acc.max(ka * s.color + direct * light_sum)
+    });
+    let max_ks = surfaces.iter().map(|s| s.material.ks).fold(0.0, f64::max);
+    let depth = scene.model.reflection_depth();
+    let tail = if max_ks < 1.0 && depth > 0 {
+        let mut tail = Vec::with_capacity(depth as usize + 1);
+        let (mut sum, mut power) = (0.0, 1.0);
+        tail.push(0.0);
+        for _ in 0..depth {
+            sum += power;
+            power *= max_ks;
+            tail.push(sum);
+        }
+        tail
+    } else {
+        Vec::new()
+    };
+
+    let cull_spheres = if bounded.len() <= CULL_LIMIT {
+        bounded
+            .iter()
+            .filter_map(|p| p.bounds())
+            .map(|b| (b.centroid(), 0.5 * (b.max - b.min).length()))
+            .collect()
+    } else {
+        Vec::new()
+    };
+
     Prepared {
-        objects,
+        bounded,
+        bounded_objects,
+        cull_spheres,
+        bvh,
+        planes,
+        plane_objects,
+        surfaces,
         lights: scene.lights.clone(),
-        illumination: scene.model.illumination,
-        depth: scene.model.reflection_depth(),
+        illumination,
+        depth,
+        max_local,
+        tail,
         camera: CameraRays::new(&scene.camera),
         aa: options.aa.max(1),
+        early_stop: options.early_stop,
     }
 }
 
@@ -78,50 +198,99 @@ impl Prepared {
         &self.camera
     }
 
-    /// The nearest hit with t > 0 in world distance, if any.
+    /// The nearest hit with t > 0 in world distance, if any. Ties go to the
+    /// object listed first in the scene.
     pub fn nearest_hit(&self, ray: &Ray) -> Option<Hit> {
-        let mut best: Option<(f64, usize, Ray)> = None;
-        for (index, object) in self.objects.iter().enumerate() {
-            // The ray in object space; its direction keeps the world scale,
-            // so t is a world distance.
-            let local = Ray::new(
-                object.to_object.transform_point3(ray.origin),
-                object.to_object.transform_vector3(ray.dir),
-            );
-            let t = match object.shape {
-                Shape::Sphere => intersect_sphere(&local),
-                Shape::Plane => intersect_plane(&local),
-            };
-            if let Some(t) = t
-                && best.is_none_or(|(best_t, _, _)| t < best_t)
-            {
-                best = Some((t, index, local));
+        self.nearest_hit_among(ray, Candidates::All)
+    }
+
+    fn nearest_hit_among(&self, ray: &Ray, candidates: Candidates) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let consider = |best: &mut Option<Hit>, t: f64, object: usize, primitive| {
+            if best.is_none_or(|b| t < b.t || (t == b.t && object < b.object)) {
+                *best = Some(Hit {
+                    t,
+                    object,
+                    primitive,
+                });
+            }
+        };
+        for (k, plane) in self.planes.iter().enumerate() {
+            if let Some(t) = plane.intersect(ray) {
+                consider(&mut best, t, self.plane_objects[k], PrimitiveRef::Plane(k));
             }
         }
-        best.map(|(t, object, local)| Hit {
-            t,
-            object,
-            object_normal: match self.objects[object].shape {
-                Shape::Sphere => local.at(t),
-                Shape::Plane => DVec3::Z,
-            },
-        })
+        match (&self.bvh, candidates) {
+            (_, Candidates::Only(list)) => {
+                for &k in list {
+                    if let Some(t) = self.bounded[k].intersect(ray) {
+                        consider(
+                            &mut best,
+                            t,
+                            self.bounded_objects[k],
+                            PrimitiveRef::Bounded(k),
+                        );
+                    }
+                }
+            }
+            (Some(bvh), Candidates::All) => {
+                let t_max = best.map_or(f64::INFINITY, |b| b.t);
+                // The BVH breaks ties by its own order; equal distances to
+                // two objects are rare enough to settle below.
+                if let Some((t, k)) = bvh.nearest(ray, t_max, |k| self.bounded[k].intersect(ray)) {
+                    consider(
+                        &mut best,
+                        t,
+                        self.bounded_objects[k],
+                        PrimitiveRef::Bounded(k),
+                    );
+                }
+            }
+            (None, Candidates::All) => {
+                for (k, primitive) in self.bounded.iter().enumerate() {
+                    if let Some(t) = primitive.intersect(ray) {
+                        consider(
+                            &mut best,
+                            t,
+                            self.bounded_objects[k],
+                            PrimitiveRef::Bounded(k),
+                        );
+                    }
+                }
+            }
+        }
+        best
+    }
+
+    /// The unit geometric normal at a hit.
+    fn normal(&self, ray: &Ray, hit: &Hit) -> DVec3 {
+        match hit.primitive {
+            PrimitiveRef::Bounded(k) => self.bounded[k].normal_at(ray, hit.t),
+            PrimitiveRef::Plane(k) => self.planes[k].normal_at(ray, hit.t),
+        }
     }
 
     /// The colour of a primary ray, following whitted reflections as a loop.
-    pub fn trace(&self, primary: Ray) -> Color {
+    /// `exact_stop`: end the chain once the rest cannot change the 8-bit
+    /// value of this ray's colour.
+    fn trace(&self, primary: Ray, candidates: Candidates, exact_stop: bool) -> Color {
         let mut color = Color::ZERO;
         // Product of the ks of the surfaces met so far.
         let mut weight = 1.0;
         let mut ray = primary;
         for bounce in 0..=self.depth {
-            let Some(hit) = self.nearest_hit(&ray) else {
+            let among = if bounce == 0 {
+                candidates
+            } else {
+                Candidates::All
+            };
+            let Some(hit) = self.nearest_hit_among(&ray, among) else {
                 break; // a miss is black
             };
-            let object = &self.objects[hit.object];
+            let surface = &self.surfaces[hit.object];
             let m = ray.at(hit.t);
-            // Shading normal: world normal flipped to face the ray.
-            let mut n = (object.normal * hit.object_normal).normalize();
+            // Shading normal N: the geometric normal turned to face the ray.
+            let mut n = self.normal(&ray, &hit);
             if n.dot(ray.dir) > 0.0 {
                 n = -n;
             }
@@ -129,14 +298,17 @@ impl Prepared {
             let point = SurfacePoint { m, n, v };
             let local = local_color(
                 self.illumination,
-                object.color,
-                &object.material,
+                surface.color,
+                &surface.material,
                 &self.lights,
                 &point,
             );
             color += weight * local;
-            weight *= object.material.ks;
+            weight *= surface.material.ks;
             if bounce == self.depth || weight == 0.0 {
+                break;
+            }
+            if exact_stop && self.rest_is_invisible(color, weight, self.depth - bounce) {
                 break;
             }
             // Reflected ray R from just off the surface (contract section 5).
@@ -146,14 +318,35 @@ impl Prepared {
         color
     }
 
+    /// Whether `levels` more reflections, each adding at most
+    /// `weight · max_ks^k · max_local`, leave every channel's 8-bit value
+    /// where it is. Every term is ≥ 0, so the final colour lies between
+    /// `color` and `color + bound`; equal rounding at both ends settles it.
+    fn rest_is_invisible(&self, color: Color, weight: f64, levels: u32) -> bool {
+        let Some(&series) = self.tail.get(levels as usize) else {
+            return false;
+        };
+        // A hair of margin covers the rounding of the sums themselves.
+        let bound = weight * series * self.max_local * (1.0 + 1e-9) + DVec3::splat(1e-12);
+        let high = color + bound;
+        (0..3).all(|c| to_8bit(color[c]) == to_8bit(high[c]))
+    }
+
     /// The 8-bit colour of pixel (i, j): one ray through its centre, or the
     /// mean of `aa × aa` clamped samples on a regular grid.
     pub fn pixel(&self, i: u32, j: u32) -> [u8; 3] {
+        self.pixel_among(i, j, Candidates::All)
+    }
+
+    fn pixel_among(&self, i: u32, j: u32, candidates: Candidates) -> [u8; 3] {
         let (x, y) = (f64::from(i), f64::from(j));
         if self.aa == 1 {
-            let c = self.trace(self.camera.ray(x + 0.5, y + 0.5));
+            let ray = self.camera.ray(x + 0.5, y + 0.5);
+            let c = self.trace(ray, candidates, self.early_stop);
             return [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
         }
+        // Supersampled: a sample's own rounding says nothing about the
+        // mean's, so every chain runs to its end.
         let n = f64::from(self.aa);
         let mut sum = DVec3::ZERO;
         for b in 0..self.aa {
@@ -161,11 +354,79 @@ impl Prepared {
                 let ray = self
                     .camera
                     .ray(x + (f64::from(a) + 0.5) / n, y + (f64::from(b) + 0.5) / n);
-                sum += self.trace(ray).clamp(DVec3::ZERO, DVec3::ONE);
+                sum += self
+                    .trace(ray, candidates, false)
+                    .clamp(DVec3::ZERO, DVec3::ONE);
             }
         }
         let c = sum / (n * n);
         [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)]
+    }
+
+    /// Renders one tile as row-major RGB8 into `out` (cleared first),
+    /// checking `cancel` before every pixel; false when cancelled.
+    pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> bool {
+        out.clear();
+        let candidates = self.tile_candidates(tile);
+        let candidates = match &candidates {
+            Some(list) => {
+                if list.is_empty() && self.planes.is_empty() {
+                    // Nothing can be hit from this tile: every ray misses.
+                    out.resize(tile.width as usize * tile.height as usize * 3, 0);
+                    return !cancel.is_cancelled();
+                }
+                Candidates::Only(list)
+            }
+            None => Candidates::All,
+        };
+        for j in tile.y..tile.y + tile.height {
+            for i in tile.x..tile.x + tile.width {
+                if cancel.is_cancelled() {
+                    return false;
+                }
+                out.extend_from_slice(&self.pixel_among(i, j, candidates));
+            }
+        }
+        true
+    }
+
+    /// The bounded primitives whose bounding sphere reaches into the
+    /// tile's frustum (the four planes through the eye and the tile's
+    /// edges), or `None` when the scene has too many to cull.
+    fn tile_candidates(&self, tile: &Tile) -> Option<Vec<usize>> {
+        if self.cull_spheres.is_empty() && !self.bounded.is_empty() {
+            return None;
+        }
+        let (x0, y0) = (f64::from(tile.x), f64::from(tile.y));
+        let (x1, y1) = (x0 + f64::from(tile.width), y0 + f64::from(tile.height));
+        let eye = self.camera.ray(x0, y0).origin;
+        let corner = |x, y| self.camera.ray(x, y).dir;
+        let (a, b, c, d) = (
+            corner(x0, y0),
+            corner(x1, y0),
+            corner(x1, y1),
+            corner(x0, y1),
+        );
+        let centre = (a + b + c + d).normalize();
+        // Inward normals of the four side planes.
+        let planes = [a.cross(b), b.cross(c), c.cross(d), d.cross(a)].map(|n| {
+            let n = n.normalize();
+            if n.dot(centre) < 0.0 { -n } else { n }
+        });
+        let inside = |(centre, radius): &(DVec3, f64)| {
+            let to = *centre - eye;
+            // A relative hair covers the rounding of these few products.
+            let slack = radius * (1.0 + 1e-9) + 1e-9 * to.length();
+            planes.iter().all(|n| n.dot(to) >= -slack)
+        };
+        Some(
+            self.cull_spheres
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| inside(s))
+                .map(|(k, _)| k)
+                .collect(),
+        )
     }
 
     /// The object seen through image point (x, y) in pixels, if any: the

@@ -88,15 +88,9 @@ impl Cancel {
 /// before every pixel).
 pub fn render_tile(prepared: &Prepared, tile: &Tile, cancel: &Cancel) -> Option<Vec<u8>> {
     let mut pixels = Vec::with_capacity(tile.width as usize * tile.height as usize * 3);
-    for j in tile.y..tile.y + tile.height {
-        for i in tile.x..tile.x + tile.width {
-            if cancel.is_cancelled() {
-                return None;
-            }
-            pixels.extend_from_slice(&prepared.pixel(i, j));
-        }
-    }
-    Some(pixels)
+    prepared
+        .render_tile_into(tile, cancel, &mut pixels)
+        .then_some(pixels)
 }
 
 #[cfg(test)]

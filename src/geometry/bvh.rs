@@ -1,0 +1,388 @@
+//! A bounding volume hierarchy over bounded primitives: binned surface-area
+//! heuristic build, nearest-hit traversal front to back.
+//!
+//! Nodes live in one flat array; an interior node's children are adjacent
+//! (`first`, `first + 1`), a leaf holds `count` primitives from `first` in
+//! the hierarchy's own primitive order ([`Bvh::order`]).
+
+use super::Ray;
+use glam::DVec3;
+
+/// An axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    pub min: DVec3,
+    pub max: DVec3,
+}
+
+impl Aabb {
+    pub const EMPTY: Aabb = Aabb {
+        min: DVec3::splat(f64::INFINITY),
+        max: DVec3::splat(f64::NEG_INFINITY),
+    };
+
+    pub fn union(&self, other: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.min(other.min),
+            max: self.max.max(other.max),
+        }
+    }
+
+    pub fn centroid(&self) -> DVec3 {
+        0.5 * (self.min + self.max)
+    }
+
+    /// Half the surface area (the SAH only compares areas).
+    fn half_area(&self) -> f64 {
+        let d = (self.max - self.min).max(DVec3::ZERO);
+        d.x * d.y + d.y * d.z + d.z * d.x
+    }
+
+    /// Entry distance of the ray into the box if it enters before `t_max`.
+    #[inline]
+    fn entry(&self, origin: DVec3, inv_dir: DVec3, t_max: f64) -> Option<f64> {
+        let t1 = (self.min - origin) * inv_dir;
+        let t2 = (self.max - origin) * inv_dir;
+        let near = t1.min(t2).max_element().max(0.0);
+        let far = t1.max(t2).min_element().min(t_max);
+        (near <= far).then_some(near)
+    }
+}
+
+#[derive(Debug, Clone, Copy)]
+struct Node {
+    bounds: Aabb,
+    /// Leaf: first primitive; interior: index of the left child.
+    first: u32,
+    /// Primitives in a leaf; 0 for an interior node.
+    count: u32,
+}
+
+/// The hierarchy. Build it with [`Bvh::build`] over the primitives'
+/// boxes, then ask [`Bvh::nearest`].
+#[derive(Debug, Clone)]
+pub struct Bvh {
+    nodes: Vec<Node>,
+    order: Vec<u32>,
+}
+
+/// Primitives in a leaf at most, unless they cannot be told apart.
+const MAX_LEAF: usize = 4;
+/// SAH bins per split.
+const BINS: usize = 16;
+/// Below this depth splits follow the SAH; deeper, the median, which keeps
+/// the depth (and the traversal stack) bounded whatever the input.
+const SAH_DEPTH: usize = 48;
+/// Traversal stack size: at most one pending node per level.
+const STACK: usize = 128;
+
+struct Item {
+    bounds: Aabb,
+    centroid: DVec3,
+    index: u32,
+}
+
+impl Bvh {
+    /// Builds the hierarchy over `boxes` (primitive i has box i).
+    pub fn build(boxes: &[Aabb]) -> Bvh {
+        let mut items: Vec<Item> = boxes
+            .iter()
+            .enumerate()
+            .map(|(i, b)| {
+                // Pad by a relative hair so rounding in the slab test never
+                // loses a grazing hit on the primitive's own extent.
+                let pad = 1e-9
+                    * (b.max - b.min)
+                        .max_element()
+                        .max(b.centroid().abs().max_element())
+                    + 1e-300;
+                let bounds = Aabb {
+                    min: b.min - DVec3::splat(pad),
+                    max: b.max + DVec3::splat(pad),
+                };
+                Item {
+                    bounds,
+                    centroid: b.centroid(),
+                    index: i as u32,
+                }
+            })
+            .collect();
+        let mut nodes = Vec::with_capacity(2 * items.len().max(1));
+        nodes.push(Node {
+            bounds: Aabb::EMPTY,
+            first: 0,
+            count: 0,
+        });
+        build_node(&mut nodes, 0, &mut items, 0, 0);
+        Bvh {
+            nodes,
+            order: items.iter().map(|i| i.index).collect(),
+        }
+    }
+
+    /// Primitive indices in leaf order: leaf ranges index into this.
+    pub fn order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// The nearest hit below `t_max`. `hit(k)` intersects the primitive at
+    /// position `k` of [`Bvh::order`] and returns its t if any; the
+    /// result is the smallest t and its position (ties: the smaller
+    /// position).
+    #[inline]
+    pub fn nearest(
+        &self,
+        ray: &Ray,
+        t_max: f64,
+        mut hit: impl FnMut(usize) -> Option<f64>,
+    ) -> Option<(f64, usize)> {
+        let inv_dir = ray.dir.recip();
+        let mut best: Option<(f64, usize)> = None;
+        let mut best_t = t_max;
+        let mut stack = [0u32; STACK];
+        let mut top = 0;
+        let mut node = &self.nodes[0];
+        node.bounds.entry(ray.origin, inv_dir, best_t)?;
+        loop {
+            if node.count > 0 {
+                let start = node.first as usize;
+                for k in start..start + node.count as usize {
+                    if let Some(t) = hit(k)
+                        && (t < best_t || (t == best_t && best.is_some_and(|(_, b)| k < b)))
+                    {
+                        best_t = t;
+                        best = Some((t, k));
+                    }
+                }
+            } else {
+                let (l, r) = (node.first as usize, node.first as usize + 1);
+                let el = self.nodes[l].bounds.entry(ray.origin, inv_dir, best_t);
+                let er = self.nodes[r].bounds.entry(ray.origin, inv_dir, best_t);
+                match (el, er) {
+                    (Some(a), Some(b)) => {
+                        // Nearer child first; the other waits on the stack.
+                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
+                        stack[top] = far as u32;
+                        top += 1;
+                        node = &self.nodes[near];
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = &self.nodes[l];
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = &self.nodes[r];
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            // Next pending node still worth entering.
+            loop {
+                if top == 0 {
+                    return best;
+                }
+                top -= 1;
+                let candidate = &self.nodes[stack[top] as usize];
+                if candidate
+                    .bounds
+                    .entry(ray.origin, inv_dir, best_t)
+                    .is_some()
+                {
+                    node = candidate;
+                    break;
+                }
+            }
+        }
+    }
+}
+
+fn build_node(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize, depth: usize) {
+    let bounds = items.iter().fold(Aabb::EMPTY, |b, i| b.union(&i.bounds));
+    let leaf = Node {
+        bounds,
+        first: offset as u32,
+        count: items.len() as u32,
+    };
+    if items.len() <= MAX_LEAF {
+        nodes[at] = leaf;
+        return;
+    }
+    let centroids = items.iter().fold(Aabb::EMPTY, |b, i| Aabb {
+        min: b.min.min(i.centroid),
+        max: b.max.max(i.centroid),
+    });
+    let extent = centroids.max - centroids.min;
+    let axis = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    let split = if extent[axis] > 0.0 && depth < SAH_DEPTH {
+        sah_split(items, axis, centroids.min[axis], extent[axis], &bounds)
+    } else {
+        None
+    };
+    let mid = match split {
+        Some(SahSplit::Leaf) => {
+            nodes[at] = leaf;
+            return;
+        }
+        Some(SahSplit::At(mid)) => mid,
+        None => {
+            // Centroids all equal (or too deep): halve by the median.
+            let mid = items.len() / 2;
+            items.select_nth_unstable_by(mid, |a, b| a.centroid[axis].total_cmp(&b.centroid[axis]));
+            mid
+        }
+    };
+    let left = nodes.len();
+    let placeholder = Node {
+        bounds: Aabb::EMPTY,
+        first: 0,
+        count: 0,
+    };
+    nodes.push(placeholder);
+    nodes.push(placeholder);
+    nodes[at] = Node {
+        bounds,
+        first: left as u32,
+        count: 0,
+    };
+    let (a, b) = items.split_at_mut(mid);
+    build_node(nodes, left, a, offset, depth + 1);
+    build_node(nodes, left + 1, b, offset + mid, depth + 1);
+}
+
+enum SahSplit {
+    /// Splitting costs more than testing every primitive.
+    Leaf,
+    /// Items partitioned; the left part has this many.
+    At(usize),
+}
+
+fn sah_split(
+    items: &mut [Item],
+    axis: usize,
+    lo: f64,
+    extent: f64,
+    bounds: &Aabb,
+) -> Option<SahSplit> {
+    let scale = BINS as f64 / extent;
+    let bin_of = |c: DVec3| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
+    let mut bins = [(Aabb::EMPTY, 0usize); BINS];
+    for item in items.iter() {
+        let b = &mut bins[bin_of(item.centroid)];
+        b.0 = b.0.union(&item.bounds);
+        b.1 += 1;
+    }
+    // Sweep from the right, then from the left: cost of each of the
+    // BINS − 1 planes.
+    let mut right_area = [0.0; BINS];
+    let mut acc = (Aabb::EMPTY, 0usize);
+    for i in (1..BINS).rev() {
+        acc.0 = acc.0.union(&bins[i].0);
+        acc.1 += bins[i].1;
+        right_area[i] = acc.0.half_area() * acc.1 as f64;
+    }
+    let mut best: Option<(f64, usize)> = None;
+    let mut acc = (Aabb::EMPTY, 0usize);
+    for i in 0..BINS - 1 {
+        acc.0 = acc.0.union(&bins[i].0);
+        acc.1 += bins[i].1;
+        if acc.1 == 0 || acc.1 == items.len() {
+            continue;
+        }
+        let cost = acc.0.half_area() * acc.1 as f64 + right_area[i + 1];
+        if best.is_none_or(|(c, _)| cost < c) {
+            best = Some((cost, i));
+        }
+    }
+    let (cost, plane) = best?;
+    // Leaf cost: every primitive tested; a split also pays a box test.
+    let leaf_cost = bounds.half_area() * items.len() as f64;
+    if items.len() <= 2 * MAX_LEAF && cost >= leaf_cost {
+        return Some(SahSplit::Leaf);
+    }
+    let mut mid = 0;
+    for i in 0..items.len() {
+        if bin_of(items[i].centroid) <= plane {
+            items.swap(i, mid);
+            mid += 1;
+        }
+    }
+    Some(SahSplit::At(mid))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Unit boxes along a diagonal; "hit" is the box's entry distance.
+    fn boxes(n: usize) -> Vec<Aabb> {
+        (0..n)
+            .map(|i| {
+                let c = DVec3::new((i * 7 % 13) as f64, (i * 3 % 11) as f64, i as f64 * 0.5);
+                Aabb {
+                    min: c - 0.25,
+                    max: c + 0.25,
+                }
+            })
+            .collect()
+    }
+
+    #[test]
+    fn nearest_equals_brute_force() {
+        let b = boxes(500);
+        let bvh = Bvh::build(&b);
+        let mut sorted = bvh.order().to_vec();
+        sorted.sort();
+        assert_eq!(sorted, (0..500).collect::<Vec<u32>>());
+        for k in 0..200 {
+            let f = f64::from(k);
+            let ray = Ray::new(
+                DVec3::new(-5.0, -5.0, -5.0),
+                DVec3::new(
+                    1.0 + (f * 0.37).sin(),
+                    1.0 + (f * 0.71).cos(),
+                    1.0 + 0.01 * f,
+                )
+                .normalize(),
+            );
+            let hit = |i: usize| b[i].entry(ray.origin, ray.dir.recip(), f64::INFINITY);
+            let brute = (0..b.len())
+                .filter_map(|i| hit(i).map(|t| (t, i)))
+                .min_by(|x, y| x.0.total_cmp(&y.0));
+            let fast = bvh
+                .nearest(&ray, f64::INFINITY, |k| hit(bvh.order()[k] as usize))
+                .map(|(t, k)| (t, bvh.order()[k] as usize));
+            assert_eq!(brute.map(|x| x.0), fast.map(|x| x.0), "ray {k}");
+        }
+    }
+
+    #[test]
+    fn identical_boxes_still_build_a_shallow_tree() {
+        let b = vec![
+            Aabb {
+                min: DVec3::ZERO,
+                max: DVec3::ONE
+            };
+            10_000
+        ];
+        let bvh = Bvh::build(&b);
+        assert!(bvh.nodes.iter().all(|n| n.count as usize <= MAX_LEAF));
+        let ray = Ray::new(DVec3::splat(-1.0), DVec3::ONE.normalize());
+        let mut tested = 0;
+        // Every primitive "hit" beyond the boxes: nothing can be pruned, and
+        // the tie goes to the first position.
+        let found = bvh.nearest(&ray, f64::INFINITY, |_| {
+            tested += 1;
+            Some(100.0)
+        });
+        assert_eq!(found, Some((100.0, 0)));
+        assert_eq!(tested, 10_000, "all overlap, so all are tested");
+    }
+}
