@@ -13,6 +13,7 @@
 //! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
 //! - [`output`]: writing images atomically, format chosen by extension.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
+//! - [`bench`]: the benchmark scenes.
 //! - `gui` (feature `gui`): the desktop previewer, which uses only the
 //!   modules above.
 //!
@@ -20,6 +21,7 @@
 
 #![forbid(unsafe_code)]
 
+pub mod bench;
 pub mod geometry;
 #[cfg(feature = "gui")]
 pub mod gui;

@@ -18,6 +18,8 @@ pub enum Command {
         scene: PathBuf,
         out: Option<PathBuf>,
     },
+    /// `bench [--threads N] [--runs K] [--csv FILE] [--no-pov]`.
+    Bench(super::bench::BenchArgs),
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -60,6 +62,9 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
     let mut positionals: Vec<PathBuf> = Vec::new();
     let mut help = false;
     let mut version = false;
+    let mut runs: Option<usize> = None;
+    let mut csv: Option<PathBuf> = None;
+    let mut no_pov = false;
     let mut only_positionals = false;
 
     while let Some(arg) = args.next() {
@@ -96,6 +101,21 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
                 r.out = Some(PathBuf::from(value(flag)?));
             }
             "-time" | "--time" => r.time = true,
+            "--runs" => {
+                let v = value(flag)?;
+                runs = Some(
+                    v.parse()
+                        .ok()
+                        .filter(|&n: &usize| (1..=1000).contains(&n))
+                        .ok_or_else(|| {
+                            usage(format!(
+                                "--runs expects an integer from 1 to 1000, not {v:?}"
+                            ))
+                        })?,
+                );
+            }
+            "--csv" => csv = Some(PathBuf::from(value(flag)?)),
+            "--no-pov" => no_pov = true,
             "--no-gui" => r.no_gui = true,
             "--threads" => {
                 let v = value(flag)?;
@@ -129,6 +149,27 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
     }
     let mut positionals = positionals.into_iter();
     let first = positionals.next();
+    if first.as_deref() == Some(std::path::Path::new("bench")) {
+        if let Some(extra) = positionals.next() {
+            return Err(usage(format!("unexpected argument '{}'", extra.display())));
+        }
+        if r.time || r.aa.is_some() || (csv.is_some() && r.out.is_some()) {
+            return Err(usage(
+                "bench takes --threads, --runs, --csv (or -out) and --no-pov",
+            ));
+        }
+        return Ok(Command::Bench(super::bench::BenchArgs {
+            threads: r
+                .threads
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            runs: runs.unwrap_or(3),
+            csv: csv.or(r.out),
+            pov: !no_pov,
+        }));
+    }
+    if runs.is_some() || csv.is_some() || no_pov {
+        return Err(usage("--runs, --csv and --no-pov belong to 'bench'"));
+    }
     if first.as_deref() == Some(std::path::Path::new("export-pov")) {
         let scene = positionals
             .next()
@@ -197,6 +238,27 @@ mod tests {
             }
         );
         assert!(p(&["export-pov"]).is_err());
+    }
+
+    #[test]
+    fn bench_subcommand() {
+        let Ok(Command::Bench(b)) = p(&["bench", "--threads", "3", "--runs", "7", "-out", "b.csv"])
+        else {
+            panic!()
+        };
+        assert_eq!((b.threads, b.runs, b.pov), (3, 7, true));
+        assert_eq!(b.csv, Some(PathBuf::from("b.csv")));
+        let Ok(Command::Bench(b)) = p(&["bench", "--no-pov"]) else {
+            panic!()
+        };
+        assert!(!b.pov && b.runs == 3 && b.csv.is_none());
+        assert!(p(&["bench", "--runs", "0"]).is_err());
+        assert!(p(&["bench", "scene.xml"]).is_err());
+        assert!(p(&["bench", "--aa", "2"]).is_err());
+        assert!(
+            p(&["s.xml", "--runs", "2"]).is_err(),
+            "--runs belongs to bench"
+        );
     }
 
     #[test]

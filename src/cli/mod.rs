@@ -4,6 +4,7 @@
 //! render or output error, 2 a usage error).
 
 mod args;
+mod bench;
 
 use args::{Command, RenderArgs, UsageError};
 use rayoflight::{output, pov, render, scene};
@@ -15,6 +16,7 @@ use std::time::Instant;
 const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N]
        rayoflight export-pov scene.xml [-out scene.pov]
+       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
        rayoflight --help | --version";
 
 const HELP: &str = "\
@@ -34,6 +36,9 @@ Options:
 
 Subcommands:
   export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
+  bench              time the bench scenes (against POV-Ray when installed),
+                     thread scaling, cost against object count, peak memory;
+                     --runs K (default 3), --csv FILE, --no-pov
 
 Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
 
@@ -82,6 +87,11 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             Ok(())
         }
         Command::ExportPov { scene, out } => export_pov(&scene, out),
+        Command::Bench(args) => bench::run(&args, &mut |text| {
+            let _ = write!(std::io::stdout(), "{text}");
+            let _ = std::io::stdout().flush();
+        })
+        .map_err(Failure::Error),
         Command::Render(r) => render_scene(r),
     }
 }

@@ -198,6 +198,56 @@ impl Bvh {
     }
 }
 
+impl Bvh {
+    /// Collects into `out` the positions (in [`Bvh::order`]) of the
+    /// primitives whose boxes reach into the convex cone from `apex`
+    /// bounded by the planes through it with inward unit `normals`. Gives
+    /// up and returns false once more than `limit` are found.
+    pub fn collect_in_cone(
+        &self,
+        apex: DVec3,
+        normals: &[DVec3; 4],
+        limit: usize,
+        out: &mut Vec<usize>,
+    ) -> bool {
+        out.clear();
+        let mut stack = [0u32; STACK];
+        let mut top = 1;
+        while top > 0 {
+            top -= 1;
+            let node = &self.nodes[stack[top] as usize];
+            let b = &node.bounds;
+            // The box corner farthest along each normal (the "p-vertex"):
+            // if even it is outside a plane, the whole box is.
+            let reach = b
+                .centroid()
+                .abs()
+                .max_element()
+                .max(apex.abs().max_element());
+            let slack = 1e-9 * reach + 1e-9 * (b.max - b.min).max_element();
+            let outside = normals.iter().any(|n| {
+                let p = DVec3::select(n.cmpge(DVec3::ZERO), b.max, b.min);
+                n.dot(p - apex) < -slack
+            });
+            if outside {
+                continue;
+            }
+            if node.count > 0 {
+                let start = node.first as usize;
+                out.extend(start..start + node.count as usize);
+                if out.len() > limit {
+                    return false;
+                }
+            } else {
+                stack[top] = node.first;
+                stack[top + 1] = node.first + 1;
+                top += 2;
+            }
+        }
+        true
+    }
+}
+
 fn build_node(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize, depth: usize) {
     let bounds = items.iter().fold(Aabb::EMPTY, |b, i| b.union(&i.bounds));
     let leaf = Node {

@@ -17,10 +17,13 @@ pub fn intersect_plane(ray: &Ray) -> Option<f64> {
 #[inline]
 pub fn intersect_plane_world(ray: &Ray, point: glam::DVec3, normal: glam::DVec3) -> Option<f64> {
     let denom = normal.dot(ray.dir);
-    if denom == 0.0 {
+    let num = normal.dot(point - ray.origin);
+    // t = num / denom > 0 needs equal signs: most planes behind the ray are
+    // dismissed without the division.
+    if denom == 0.0 || (num > 0.0) != (denom > 0.0) {
         return None;
     }
-    let t = normal.dot(point - ray.origin) / denom;
+    let t = num / denom;
     (t > 0.0 && t.is_finite()).then_some(t)
 }
 

@@ -72,8 +72,24 @@ impl RenderOptions {
     }
 }
 
+/// What a render did, beside the image.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct RenderStats {
+    /// Rays traced: primary and reflected. Tiles that can hit nothing are
+    /// filled without tracing and count none.
+    pub rays: u64,
+}
+
 /// Prepares and renders the whole image. This is what `-time` measures.
 pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RgbImage, RenderError> {
+    render_with_stats(scene, options).map(|(image, _)| image)
+}
+
+/// Like [`render`], also counting the rays traced.
+pub fn render_with_stats(
+    scene: &Scene,
+    options: &RenderOptions,
+) -> Result<(RgbImage, RenderStats), RenderError> {
     options.validate()?;
     match options.threads {
         None => Ok(render_all(scene, options)),
@@ -87,7 +103,7 @@ pub fn render(scene: &Scene, options: &RenderOptions) -> Result<RgbImage, Render
     }
 }
 
-fn render_all(scene: &Scene, options: &RenderOptions) -> RgbImage {
+fn render_all(scene: &Scene, options: &RenderOptions) -> (RgbImage, RenderStats) {
     let prepared = prepare(scene, options);
     let (width, height) = (prepared.width(), prepared.height());
     // Bands of TILE_SIZE rows spread over the pool by rayon; each band is
@@ -95,13 +111,14 @@ fn render_all(scene: &Scene, options: &RenderOptions) -> RgbImage {
     let mut image = RgbImage::new(width, height);
     let row_bytes = width as usize * 3;
     let cancel = Cancel::never();
-    image
+    let rays = image
         .par_chunks_mut(row_bytes * TILE_SIZE as usize)
         .enumerate()
-        .for_each(|(band, rows)| {
+        .map(|(band, rows)| {
             let y = band as u32 * TILE_SIZE;
             let band_height = (rows.len() / row_bytes) as u32;
             let mut pixels = Vec::new();
+            let mut rays = 0;
             for x in (0..width).step_by(TILE_SIZE as usize) {
                 let tile = Tile {
                     x,
@@ -109,15 +126,19 @@ fn render_all(scene: &Scene, options: &RenderOptions) -> RgbImage {
                     width: TILE_SIZE.min(width - x),
                     height: band_height,
                 };
-                prepared.render_tile_into(&tile, &cancel, &mut pixels);
+                rays += prepared
+                    .render_tile_into(&tile, &cancel, &mut pixels)
+                    .unwrap_or(0);
                 let tile_row = tile.width as usize * 3;
                 for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
                     let start = r * row_bytes + x as usize * 3;
                     rows[start..start + tile_row].copy_from_slice(src);
                 }
             }
-        });
-    image
+            rays
+        })
+        .sum();
+    (image, RenderStats { rays })
 }
 
 /// Clamps a channel to [0, 1] and rounds it to 8 bits: floor(c·255 + 0.5).

@@ -20,9 +20,12 @@ use glam::DVec3;
 
 /// With fewer bounded primitives than this, a linear scan beats the BVH.
 const BVH_THRESHOLD: usize = 8;
-/// Up to this many bounded primitives, each tile culls them against its
-/// frustum for its primary rays (4 dot products each per tile).
+/// Up to this many bounded primitives, each tile culls them one by one
+/// against its frustum for its primary rays (4 dot products each per tile).
 const CULL_LIMIT: usize = 64;
+/// With a BVH, a tile whose frustum reaches at most this many primitives
+/// tests just those for its primary rays; more, and it uses the BVH.
+const TILE_CANDIDATES: usize = 24;
 
 /// What shading needs of an object.
 #[derive(Debug, Clone, Copy)]
@@ -273,7 +276,14 @@ impl Prepared {
     /// The colour of a primary ray, following whitted reflections as a loop.
     /// `exact_stop`: end the chain once the rest cannot change the 8-bit
     /// value of this ray's colour.
-    fn trace(&self, primary: Ray, candidates: Candidates, exact_stop: bool) -> Color {
+    /// `rays` counts the rays traced.
+    fn trace(
+        &self,
+        primary: Ray,
+        candidates: Candidates,
+        exact_stop: bool,
+        rays: &mut u64,
+    ) -> Color {
         let mut color = Color::ZERO;
         // Product of the ks of the surfaces met so far.
         let mut weight = 1.0;
@@ -284,6 +294,7 @@ impl Prepared {
             } else {
                 Candidates::All
             };
+            *rays += 1;
             let Some(hit) = self.nearest_hit_among(&ray, among) else {
                 break; // a miss is black
             };
@@ -335,14 +346,14 @@ impl Prepared {
     /// The 8-bit colour of pixel (i, j): one ray through its centre, or the
     /// mean of `aa × aa` clamped samples on a regular grid.
     pub fn pixel(&self, i: u32, j: u32) -> [u8; 3] {
-        self.pixel_among(i, j, Candidates::All)
+        self.pixel_among(i, j, Candidates::All, &mut 0)
     }
 
-    fn pixel_among(&self, i: u32, j: u32, candidates: Candidates) -> [u8; 3] {
+    fn pixel_among(&self, i: u32, j: u32, candidates: Candidates, rays: &mut u64) -> [u8; 3] {
         let (x, y) = (f64::from(i), f64::from(j));
         if self.aa == 1 {
             let ray = self.camera.ray(x + 0.5, y + 0.5);
-            let c = self.trace(ray, candidates, self.early_stop);
+            let c = self.trace(ray, candidates, self.early_stop, rays);
             return [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
         }
         // Supersampled: a sample's own rounding says nothing about the
@@ -355,7 +366,7 @@ impl Prepared {
                     .camera
                     .ray(x + (f64::from(a) + 0.5) / n, y + (f64::from(b) + 0.5) / n);
                 sum += self
-                    .trace(ray, candidates, false)
+                    .trace(ray, candidates, false, rays)
                     .clamp(DVec3::ZERO, DVec3::ONE);
             }
         }
@@ -364,8 +375,9 @@ impl Prepared {
     }
 
     /// Renders one tile as row-major RGB8 into `out` (cleared first),
-    /// checking `cancel` before every pixel; false when cancelled.
-    pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> bool {
+    /// checking `cancel` before every pixel. Returns the number of rays
+    /// traced, or `None` when cancelled.
+    pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> Option<u64> {
         out.clear();
         let candidates = self.tile_candidates(tile);
         let candidates = match &candidates {
@@ -373,30 +385,28 @@ impl Prepared {
                 if list.is_empty() && self.planes.is_empty() {
                     // Nothing can be hit from this tile: every ray misses.
                     out.resize(tile.width as usize * tile.height as usize * 3, 0);
-                    return !cancel.is_cancelled();
+                    return (!cancel.is_cancelled()).then_some(0);
                 }
                 Candidates::Only(list)
             }
             None => Candidates::All,
         };
+        let mut rays = 0;
         for j in tile.y..tile.y + tile.height {
             for i in tile.x..tile.x + tile.width {
                 if cancel.is_cancelled() {
-                    return false;
+                    return None;
                 }
-                out.extend_from_slice(&self.pixel_among(i, j, candidates));
+                out.extend_from_slice(&self.pixel_among(i, j, candidates, &mut rays));
             }
         }
-        true
+        Some(rays)
     }
 
     /// The bounded primitives whose bounding sphere reaches into the
     /// tile's frustum (the four planes through the eye and the tile's
     /// edges), or `None` when the scene has too many to cull.
     fn tile_candidates(&self, tile: &Tile) -> Option<Vec<usize>> {
-        if self.cull_spheres.is_empty() && !self.bounded.is_empty() {
-            return None;
-        }
         let (x0, y0) = (f64::from(tile.x), f64::from(tile.y));
         let (x1, y1) = (x0 + f64::from(tile.width), y0 + f64::from(tile.height));
         let eye = self.camera.ray(x0, y0).origin;
@@ -413,6 +423,14 @@ impl Prepared {
             let n = n.normalize();
             if n.dot(centre) < 0.0 { -n } else { n }
         });
+        if let Some(bvh) = &self.bvh
+            && self.cull_spheres.is_empty()
+        {
+            let mut found = Vec::new();
+            return bvh
+                .collect_in_cone(eye, &planes, TILE_CANDIDATES, &mut found)
+                .then_some(found);
+        }
         let inside = |(centre, radius): &(DVec3, f64)| {
             let to = *centre - eye;
             // A relative hair covers the rounding of these few products.

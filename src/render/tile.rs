@@ -90,7 +90,7 @@ pub fn render_tile(prepared: &Prepared, tile: &Tile, cancel: &Cancel) -> Option<
     let mut pixels = Vec::with_capacity(tile.width as usize * tile.height as usize * 3);
     prepared
         .render_tile_into(tile, cancel, &mut pixels)
-        .then_some(pixels)
+        .map(|_| pixels)
 }
 
 #[cfg(test)]

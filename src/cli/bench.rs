@@ -1,0 +1,391 @@
+//! `rayoflight bench`: render times of the bench scenes, against POV-Ray
+//! when it is installed, thread scaling, cost against object count and
+//! peak memory. Prints a table on stdout and optionally writes a CSV.
+
+use rayoflight::render::{self, RenderOptions, RenderStats};
+use rayoflight::scene::{self, Scene};
+use rayoflight::{bench, output, pov};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BenchArgs {
+    pub threads: usize,
+    pub runs: usize,
+    pub csv: Option<PathBuf>,
+    pub pov: bool,
+}
+
+/// One measured configuration: a CSV row.
+struct Row {
+    section: &'static str,
+    scene: String,
+    width: u32,
+    height: u32,
+    threads: usize,
+    objects: usize,
+    median: Duration,
+    stats: RenderStats,
+    pov: Option<PovRun>,
+    peak_mb: Option<f64>,
+}
+
+struct PovRun {
+    median: Duration,
+    within1: f64,
+    max_diff: u8,
+}
+
+/// Runs the whole bench; `out` receives the report as it goes.
+pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
+    let mut rows = Vec::new();
+    let pov_version = if args.pov { povray_version() } else { None };
+    out(&format!(
+        "RayOfLight bench: median of {} runs, {} threads ({} cores here); POV-Ray: {}\n",
+        args.runs,
+        args.threads,
+        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        pov_version
+            .as_deref()
+            .unwrap_or(if args.pov { "not found" } else { "skipped" }),
+    ));
+
+    out("\nScenes (same image, same thread count as POV-Ray's +WT)\n");
+    out(&format!(
+        "{:<14} {:>10} {:>10} {:>9} {:>11} {:>7} {:>9} {:>4}\n",
+        "scene", "size", "ours ms", "Mrays/s", "POV-Ray ms", "ratio", "within 1", "max"
+    ));
+    let mut sets: Vec<(String, Scene)> = Vec::new();
+    let example = scene::parse(rayoflight::EXAMPLE_SCENE, Path::new("scenes/example.xml"))
+        .map_err(|e| e.to_string())?;
+    sets.push(("example".into(), example));
+    for s in &bench::SCENES {
+        sets.push((s.name.into(), s.scene().map_err(|e| e.to_string())?));
+    }
+    for (name, scene) in &sets {
+        let (median, stats, image) = time_render(scene, args.threads, args.runs)?;
+        let pov = match pov_version {
+            Some(_) => Some(pov_render(scene, args.threads, args.runs, &image)?),
+            None => None,
+        };
+        let row = Row {
+            section: "scene",
+            scene: name.clone(),
+            width: scene.camera.width,
+            height: scene.camera.height,
+            threads: args.threads,
+            objects: scene.objects.len(),
+            median,
+            stats,
+            pov,
+            peak_mb: None,
+        };
+        out(&scene_line(&row));
+        rows.push(row);
+    }
+
+    out("\nThread scaling (ms, and speed-up over 1 thread)\n");
+    let counts = [1, 2, 4, 8, 16];
+    out(&format!("{:<14}", "scene"));
+    for t in counts {
+        out(&format!(
+            " {:>16}",
+            format!("{t} thread{}", if t == 1 { "" } else { "s" })
+        ));
+    }
+    out("\n");
+    for (name, scene) in sets.iter().skip(1) {
+        out(&format!("{name:<14}"));
+        let mut one = None;
+        for t in counts {
+            let (median, stats, _) = time_render(scene, t, args.runs)?;
+            let base = *one.get_or_insert(median);
+            out(&format!(
+                " {:>16}",
+                format!(
+                    "{:.1} ({:.2}x)",
+                    ms(median),
+                    base.as_secs_f64() / median.as_secs_f64()
+                )
+            ));
+            rows.push(Row {
+                section: "threads",
+                scene: name.clone(),
+                width: scene.camera.width,
+                height: scene.camera.height,
+                threads: t,
+                objects: scene.objects.len(),
+                median,
+                stats,
+                pov: None,
+                peak_mb: None,
+            });
+        }
+        out("\n");
+    }
+
+    out("\nCost against object count (n spheres on a floor, 800x600, phong)\n");
+    out(&format!(
+        "{:>8} {:>10} {:>12} {:>14}\n",
+        "spheres", "ms", "x n=10", "ms / log2(n)"
+    ));
+    let mut first = None;
+    for n in [10, 100, 1_000, 10_000, 100_000] {
+        let text = bench::spheres_on_floor(n, 800, 600);
+        let scene = scene::parse(&text, Path::new("generated.xml")).map_err(|e| e.to_string())?;
+        let (median, stats, _) = time_render(&scene, args.threads, args.runs)?;
+        let base = *first.get_or_insert(median);
+        out(&format!(
+            "{:>8} {:>10.2} {:>12.2} {:>14.3}\n",
+            n,
+            ms(median),
+            median.as_secs_f64() / base.as_secs_f64(),
+            ms(median) / (n as f64).log2()
+        ));
+        rows.push(Row {
+            section: "objects",
+            scene: format!("spheres-{n}"),
+            width: 800,
+            height: 600,
+            threads: args.threads,
+            objects: n + 1,
+            median,
+            stats,
+            pov: None,
+            peak_mb: None,
+        });
+    }
+
+    out("\nPeak memory, 100 000 spheres at 1600x1200 (XML text, parse, prepare, render)\n");
+    match peak_memory(100_000, 1600, 1200, args.threads)? {
+        Some((beyond, image_mb)) => {
+            out(&format!(
+                "{beyond:.1} MB beyond the image ({image_mb:.1} MB of pixels)\n"
+            ));
+            rows.push(Row {
+                section: "memory",
+                scene: "spheres-100000".into(),
+                width: 1600,
+                height: 1200,
+                threads: args.threads,
+                objects: 100_001,
+                median: Duration::ZERO,
+                stats: RenderStats::default(),
+                pov: None,
+                peak_mb: Some(beyond),
+            });
+        }
+        None => out("not measurable here (needs Linux /proc)\n"),
+    }
+
+    if let Some(path) = &args.csv {
+        output::write_atomic(path, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+        out(&format!("\nCSV written to {}\n", path.display()));
+    }
+    Ok(())
+}
+
+fn ms(d: Duration) -> f64 {
+    d.as_secs_f64() * 1e3
+}
+
+fn scene_line(row: &Row) -> String {
+    let mut line = format!(
+        "{:<14} {:>10} {:>10.2} {:>9.1}",
+        row.scene,
+        format!("{}x{}", row.width, row.height),
+        ms(row.median),
+        row.stats.rays as f64 / row.median.as_secs_f64() / 1e6
+    );
+    match &row.pov {
+        Some(p) => {
+            let _ = write!(
+                line,
+                " {:>11.1} {:>6.1}x {:>8.4}% {:>4}",
+                ms(p.median),
+                p.median.as_secs_f64() / row.median.as_secs_f64(),
+                p.within1 * 100.0,
+                p.max_diff
+            );
+        }
+        None => line.push_str("           -       -         -    -"),
+    }
+    line.push('\n');
+    line
+}
+
+fn csv(rows: &[Row]) -> String {
+    let mut text = String::from(
+        "section,scene,width,height,threads,objects,median_ms,rays,mrays_per_s,pov_ms,ratio,within1,max_diff,peak_mb\n",
+    );
+    for r in rows {
+        let secs = r.median.as_secs_f64();
+        let mrays = if secs > 0.0 {
+            format!("{:.2}", r.stats.rays as f64 / secs / 1e6)
+        } else {
+            String::new()
+        };
+        let (pov_ms, ratio, within1, max_diff) = match &r.pov {
+            Some(p) => (
+                format!("{:.2}", ms(p.median)),
+                format!("{:.2}", p.median.as_secs_f64() / secs),
+                format!("{:.6}", p.within1),
+                p.max_diff.to_string(),
+            ),
+            None => Default::default(),
+        };
+        let _ = writeln!(
+            text,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            r.section,
+            r.scene,
+            r.width,
+            r.height,
+            r.threads,
+            r.objects,
+            if secs > 0.0 {
+                format!("{:.3}", ms(r.median))
+            } else {
+                String::new()
+            },
+            r.stats.rays,
+            mrays,
+            pov_ms,
+            ratio,
+            within1,
+            max_diff,
+            r.peak_mb.map(|m| format!("{m:.1}")).unwrap_or_default()
+        );
+    }
+    text
+}
+
+/// Median render time over `runs` (prepare and trace, as `-time`).
+fn time_render(
+    scene: &Scene,
+    threads: usize,
+    runs: usize,
+) -> Result<(Duration, RenderStats, image::RgbImage), String> {
+    let options = RenderOptions {
+        threads: Some(threads),
+        ..RenderOptions::default()
+    };
+    // The pool is built once, outside the timing.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| e.to_string())?;
+    let mut times = Vec::with_capacity(runs);
+    let mut last = None;
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        let result = pool.install(|| {
+            render::render_with_stats(
+                scene,
+                &RenderOptions {
+                    threads: None,
+                    ..options.clone()
+                },
+            )
+        });
+        times.push(start.elapsed());
+        last = Some(result.map_err(|e| e.to_string())?);
+    }
+    times.sort();
+    let (image, stats) = last.ok_or("no run")?;
+    Ok((times[times.len() / 2], stats, image))
+}
+
+fn povray_version() -> Option<String> {
+    let out = Command::new("povray").arg("--version").output().ok()?;
+    let text =
+        String::from_utf8_lossy(&out.stderr).into_owned() + &String::from_utf8_lossy(&out.stdout);
+    text.lines()
+        .find(|l| l.contains("POV-Ray"))
+        .map(|l| l.trim().to_owned())
+}
+
+/// POV-Ray's own "Trace Time" for the exported scene (median of `runs`),
+/// and how its image agrees with ours.
+fn pov_render(
+    scene: &Scene,
+    threads: usize,
+    runs: usize,
+    ours: &image::RgbImage,
+) -> Result<PovRun, String> {
+    let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
+    std::fs::write(dir.path().join("scene.pov"), pov::export(scene)).map_err(|e| e.to_string())?;
+    let mut times = Vec::new();
+    for _ in 0..runs.max(1) {
+        let out = Command::new("povray")
+            .current_dir(dir.path())
+            .args([
+                format!("+WT{threads}"),
+                "-A".into(),
+                "+FN".into(),
+                "File_Gamma=1.0".into(),
+                "-D".into(),
+                format!("+W{}", scene.camera.width),
+                format!("+H{}", scene.camera.height),
+                "+Iscene.pov".into(),
+                "+Oscene.png".into(),
+            ])
+            .output()
+            .map_err(|e| format!("povray: {e}"))?;
+        let text = String::from_utf8_lossy(&out.stderr);
+        let seconds = text
+            .lines()
+            .find(|l| l.contains("Trace Time:"))
+            .and_then(|l| l.split('(').nth(1))
+            .and_then(|l| l.split_whitespace().next())
+            .and_then(|s| s.parse::<f64>().ok())
+            .ok_or_else(|| format!("povray gave no trace time: {}", text.trim()))?;
+        times.push(Duration::from_secs_f64(seconds));
+    }
+    times.sort();
+    let theirs = image::open(dir.path().join("scene.png"))
+        .map_err(|e| format!("POV-Ray's image: {e}"))?
+        .to_rgb8();
+    let (mut within, mut max) = (0usize, 0u8);
+    for (a, b) in ours.pixels().zip(theirs.pixels()) {
+        let d = (0..3).map(|c| a.0[c].abs_diff(b.0[c])).max().unwrap_or(0);
+        max = max.max(d);
+        within += usize::from(d <= 1);
+    }
+    Ok(PovRun {
+        median: times[times.len() / 2],
+        within1: within as f64 / ours.pixels().len().max(1) as f64,
+        max_diff: max,
+    })
+}
+
+/// Peak resident memory of loading, preparing and rendering `n` spheres,
+/// less the resident memory before and the image itself, in MB. Linux
+/// only: the peak is reset through /proc/self/clear_refs.
+fn peak_memory(
+    n: usize,
+    width: u32,
+    height: u32,
+    threads: usize,
+) -> Result<Option<(f64, f64)>, String> {
+    let read_kb = |key: &str| -> Option<f64> {
+        let status = std::fs::read_to_string("/proc/self/status").ok()?;
+        let line = status.lines().find(|l| l.starts_with(key))?;
+        line.split_whitespace().nth(1)?.parse().ok()
+    };
+    if std::fs::write("/proc/self/clear_refs", "5").is_err() {
+        return Ok(None);
+    }
+    let Some(before) = read_kb("VmRSS:") else {
+        return Ok(None);
+    };
+    let text = bench::spheres_on_floor(n, width, height);
+    let scene = scene::parse(&text, Path::new("generated.xml")).map_err(|e| e.to_string())?;
+    let (_, _, image) = time_render(&scene, threads, 1)?;
+    let peak = read_kb("VmHWM:").unwrap_or(before);
+    let image_mb = image.as_raw().len() as f64 / 1e6;
+    drop(image);
+    Ok(Some(((peak - before) / 1e3 - image_mb, image_mb)))
+}
