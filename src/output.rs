@@ -113,6 +113,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
             "is a directory",
         )));
     }
+    // Renaming over a file ignores the file's own permissions: refuse a
+    // read-only file here, as writing into it would fail.
+    if std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly()) {
+        return Err(io_error(std::io::Error::new(
+            std::io::ErrorKind::PermissionDenied,
+            "the file is read-only",
+        )));
+    }
     let mut builder = tempfile::Builder::new();
     builder.prefix(".rayoflight-").suffix(".tmp");
     // A new file gets the usual mode (0666 less the umask, as the kernel
@@ -185,6 +193,11 @@ mod tests {
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o640)).unwrap();
         write_atomic(&path, b"b").unwrap();
         assert_eq!(mode(&path), 0o640);
+        // A read-only file is not replaced.
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o444)).unwrap();
+        let err = write_atomic(&path, b"c").unwrap_err().to_string();
+        assert!(err.contains("read-only"), "{err}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"b");
     }
 
     #[test]

@@ -97,6 +97,10 @@ pub struct RayOfLightApp {
     hovered: Option<(u32, u32, [u8; 3])>,
     /// The window title last sent.
     title: String,
+    /// The window's close was held back for unsaved edits: ask.
+    confirm_close: bool,
+    /// The user chose to quit without saving.
+    allow_close: bool,
     /// Print the status figures to stderr once a second (RAYOFLIGHT_STATS).
     stats: bool,
     last_stats: Instant,
@@ -119,6 +123,8 @@ impl RayOfLightApp {
             background,
             background_tx,
             title: String::new(),
+            confirm_close: false,
+            allow_close: false,
             stats: std::env::var_os("RAYOFLIGHT_STATS").is_some(),
             last_stats: Instant::now(),
             path_prompt: None,
@@ -617,7 +623,42 @@ impl RayOfLightApp {
         });
     }
 
+    /// Holds back closing the window while the panel has unsaved edits.
+    fn guard_close(&mut self, ctx: &egui::Context) {
+        if ctx.input(|i| i.viewport().close_requested())
+            && self.doc.has_unsaved_edits()
+            && !self.allow_close
+        {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.confirm_close = true;
+        }
+    }
+
     fn modals(&mut self, ui: &mut egui::Ui) {
+        if self.confirm_close {
+            egui::Modal::new(egui::Id::unique("confirm-close")).show(ui.ctx(), |ui| {
+                ui.heading("Unsaved edits");
+                ui.label("The panel has edits that are not in the scene file.");
+                ui.horizontal(|ui| {
+                    if self.doc.path().is_some() && ui.button("Save and quit").clicked() {
+                        self.save();
+                        if !self.doc.has_unsaved_edits() {
+                            self.allow_close = true;
+                            ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                        }
+                        self.confirm_close = false;
+                    }
+                    if ui.button("Quit without saving").clicked() {
+                        self.allow_close = true;
+                        self.confirm_close = false;
+                        ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                    }
+                    if ui.button("Cancel").clicked() {
+                        self.confirm_close = false;
+                    }
+                });
+            });
+        }
         if self.doc.has_conflict() {
             egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
                 ui.heading("The file changed on disk");
@@ -718,6 +759,7 @@ impl RayOfLightApp {
         self.count_frame();
         self.drain_events();
         let ctx = ui.ctx().clone();
+        self.guard_close(&ctx);
         self.shortcuts(&ctx);
         let title = format!(
             "RayOfLight — {}{}",
