@@ -38,6 +38,19 @@ impl TransformStep {
             TransformStep::Scale(s) => DAffine3::from_scale(s),
         }
     }
+
+    /// The inverse step as a matrix: exact per step (negated translation
+    /// and angle, reciprocal scale), so no determinant is ever formed.
+    pub fn inverse_matrix(&self) -> DAffine3 {
+        match *self {
+            TransformStep::Translate(t) => DAffine3::from_translation(-t),
+            TransformStep::RotateX(a) => DAffine3::from_rotation_x(-a),
+            TransformStep::RotateY(a) => DAffine3::from_rotation_y(-a),
+            TransformStep::RotateZ(a) => DAffine3::from_rotation_z(-a),
+            TransformStep::UniformScale(f) => DAffine3::from_scale(DVec3::splat(f.recip())),
+            TransformStep::Scale(s) => DAffine3::from_scale(s.recip()),
+        }
+    }
 }
 
 /// The matrix had no finite inverse (a zero scale, or overflow).
@@ -70,16 +83,20 @@ impl Default for Transform {
 
 impl Transform {
     /// Composes the steps in document order: the first step is applied first.
+    ///
+    /// M = T_n · … · T_1, and its inverse is composed from the steps'
+    /// exact inverses, M⁻¹ = T_1⁻¹ · … · T_n⁻¹, rather than by inverting M:
+    /// a sphere of radius 1e-300 has a determinant that underflows to 0
+    /// but a perfectly finite inverse. A zero scale (or an overflow) makes
+    /// one of the two non-finite: singular.
     pub fn from_steps(steps: Vec<TransformStep>) -> Result<Transform, SingularTransform> {
         let to_world = steps
             .iter()
             .fold(DAffine3::IDENTITY, |m, step| step.matrix() * m);
-        let det = to_world.matrix3.determinant();
-        if !to_world.is_finite() || det == 0.0 || !det.is_finite() {
-            return Err(SingularTransform);
-        }
-        let to_object = to_world.inverse();
-        if !to_object.is_finite() {
+        let to_object = steps
+            .iter()
+            .fold(DAffine3::IDENTITY, |m, step| m * step.inverse_matrix());
+        if !to_world.is_finite() || !to_object.is_finite() {
             return Err(SingularTransform);
         }
         let normal = to_object.matrix3.transpose();
@@ -151,6 +168,18 @@ mod tests {
             .to_object()
             .transform_point3(t.to_world().transform_point3(p));
         assert!((p - q).length() < 1e-12);
+    }
+
+    #[test]
+    fn tiny_and_huge_scales_have_finite_inverses() {
+        for f in [1e-300, 1e300, -1e-150] {
+            let t = Transform::from_steps(vec![TransformStep::UniformScale(f)]).unwrap();
+            let p = DVec3::new(1.0, 2.0, 3.0);
+            let q = t
+                .to_world()
+                .transform_point3(t.to_object().transform_point3(p));
+            assert!((p - q).length() < 1e-12 * p.length(), "{f}: {q}");
+        }
     }
 
     #[test]
