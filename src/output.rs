@@ -98,11 +98,26 @@ pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::I
 /// Writes `bytes` to `path` through a temporary file in the same directory,
 /// synced, then renamed over `path`. On any failure the temporary file is
 /// removed and an existing `path` is left as it was.
+///
+/// An existing path that is not a regular file (`/dev/stdout`, a FIFO,
+/// `/dev/full`) is written directly: renaming over it would replace the
+/// device or pipe itself.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     let io_error = |source| OutputError::Io {
         path: path.to_owned(),
         source,
     };
+    if let Ok(meta) = std::fs::metadata(path)
+        && !meta.is_file()
+        && !meta.is_dir()
+    {
+        let mut file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(io_error)?;
+        file.write_all(bytes).map_err(io_error)?;
+        return file.flush().map_err(io_error);
+    }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
@@ -198,6 +213,20 @@ mod tests {
         let err = write_atomic(&path, b"c").unwrap_err().to_string();
         assert!(err.contains("read-only"), "{err}");
         assert_eq!(std::fs::read(&path).unwrap(), b"b");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn devices_are_written_not_replaced() {
+        // /dev/null takes the bytes and stays a device.
+        write_atomic(Path::new("/dev/null"), b"x").unwrap();
+        assert!(!std::fs::metadata("/dev/null").unwrap().is_file());
+        // /dev/full reports the full disk.
+        if Path::new("/dev/full").exists() {
+            let err = write_atomic(Path::new("/dev/full"), &[0; 100_000]).unwrap_err();
+            assert!(err.to_string().contains("/dev/full"), "{err}");
+            assert!(!std::fs::metadata("/dev/full").unwrap().is_file());
+        }
     }
 
     #[test]

@@ -1,0 +1,138 @@
+//! Output faults, driven through the built binary: a full disk, a
+//! read-only directory, a read-only image. Each must give a clear error
+//! (exit 1), leave no partial file and keep the old file as it was.
+//!
+//! Permission checks do not apply to root, so where the tests run as root
+//! the binary is run as `nobody` (util-linux `runuser`).
+#![cfg(unix)]
+
+use std::fs;
+use std::os::unix::fs::PermissionsExt;
+use std::path::Path;
+use std::process::{Command, Output};
+
+const TINY: &str = r#"<scene>
+  <sphere><transformation><translate z="3"/></transformation></sphere>
+  <light x="0" y="-3" z="-3"/>
+  <camera width="16" height="12" eyeDistance="2"/>
+</scene>
+"#;
+
+fn is_root() -> bool {
+    Command::new("id")
+        .arg("-u")
+        .output()
+        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
+}
+
+/// Runs the binary headless; as `nobody` when we are root, so that file
+/// permissions mean something.
+fn run(dir: &Path, args: &[&str], unprivileged: bool) -> Output {
+    let bin = env!("CARGO_BIN_EXE_rayoflight");
+    let mut command = if unprivileged && is_root() {
+        let mut c = Command::new("runuser");
+        c.args(["-u", "nobody", "--", bin]);
+        c
+    } else {
+        Command::new(bin)
+    };
+    command
+        .arg("--no-gui")
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .output()
+        .expect("the binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A directory anyone may enter, holding the tiny scene.
+fn workdir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).unwrap();
+    fs::write(dir.path().join("tiny.xml"), TINY).unwrap();
+    fs::set_permissions(
+        dir.path().join("tiny.xml"),
+        fs::Permissions::from_mode(0o644),
+    )
+    .unwrap();
+    dir
+}
+
+fn names(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+#[test]
+fn a_full_disk_is_reported_and_the_device_kept() {
+    if !Path::new("/dev/full").exists() {
+        panic!("/dev/full is missing on this machine");
+    }
+    let dir = workdir();
+    std::os::unix::fs::symlink("/dev/full", dir.path().join("full.png")).unwrap();
+    let o = run(dir.path(), &["tiny.xml", "-out", "full.png"], false);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("No space left on device"),
+        "{}",
+        stderr(&o)
+    );
+    let meta = fs::metadata("/dev/full").unwrap();
+    assert!(!meta.is_file(), "/dev/full is still a device");
+    assert_eq!(names(dir.path()), ["full.png", "tiny.xml"]);
+}
+
+#[test]
+fn a_read_only_directory_is_reported_without_leftovers() {
+    let dir = workdir();
+    let out = dir.path().join("ro");
+    fs::create_dir(&out).unwrap();
+    fs::set_permissions(&out, fs::Permissions::from_mode(0o555)).unwrap();
+    let o = run(dir.path(), &["tiny.xml", "-out", "ro/x.png"], true);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with("ro/x.png: ") && stderr(&o).contains("ermission denied"),
+        "{}",
+        stderr(&o)
+    );
+    assert!(names(&out).is_empty());
+}
+
+#[test]
+fn a_read_only_image_is_not_replaced() {
+    let dir = workdir();
+    let image = dir.path().join("tiny.png");
+    fs::write(&image, b"old").unwrap();
+    fs::set_permissions(&image, fs::Permissions::from_mode(0o444)).unwrap();
+    let o = run(dir.path(), &["tiny.xml"], false);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("read-only"), "{}", stderr(&o));
+    assert_eq!(fs::read(&image).unwrap(), b"old");
+    assert_eq!(names(dir.path()), ["tiny.png", "tiny.xml"]);
+}
+
+#[test]
+fn an_unreadable_scene_is_reported() {
+    let dir = workdir();
+    fs::set_permissions(
+        dir.path().join("tiny.xml"),
+        fs::Permissions::from_mode(0o000),
+    )
+    .unwrap();
+    let o = run(dir.path(), &["tiny.xml"], true);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).starts_with("tiny.xml: ") && stderr(&o).contains("ermission denied"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(names(dir.path()), ["tiny.xml"]);
+}
