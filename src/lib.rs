@@ -14,6 +14,7 @@
 //! - [`output`]: writing images atomically, format chosen by extension.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
+//! - [`study`]: speed against accuracy: methods, study scenes, measures.
 //! - `gui` (feature `gui`): the desktop previewer, which uses only the
 //!   modules above.
 //!
@@ -31,6 +32,7 @@ pub mod pov;
 pub mod render;
 pub mod scene;
 pub mod shading;
+pub mod study;
 
 /// The built-in example scene from the brief (`scenes/example.xml`).
 pub const EXAMPLE_SCENE: &str = include_str!("../scenes/example.xml");

@@ -276,3 +276,50 @@ fn without_a_display_the_app_names_no_gui() {
     }
     assert_eq!(files_in(dir.path()), ["tiny.xml"]);
 }
+
+#[test]
+fn study_writes_a_csv_row_per_method() {
+    let (dir, _) = workdir();
+    let o = rayoflight(
+        dir.path(),
+        &["study", "--out", "res", "--runs", "1", "tiny.xml"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = fs::read_to_string(dir.path().join("res/study.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("scene,method,time_ms,rays,max_diff,mean_diff,within1,failed")
+    );
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let methods = rayoflight::study::methods();
+    assert_eq!(rows.len(), methods.len());
+    for (row, method) in rows.iter().zip(&methods) {
+        assert_eq!(row.len(), 8, "{row:?}");
+        assert_eq!((row[0], row[1]), ("tiny", method.name));
+    }
+    // The default is its own reference.
+    assert_eq!(rows[0][4..], ["0", "0.0000", "1.000000", "false"]);
+    // The table names every method on stdout.
+    let out = stdout(&o);
+    assert!(methods.iter().all(|m| out.contains(m.name)), "{out}");
+}
+
+#[test]
+fn study_bad_usage_exits_2() {
+    let (dir, _) = workdir();
+    for args in [
+        &["study", "--aa", "2"][..],
+        &["study", "--frobnicate"],
+        &["study", "--runs", "0"],
+        &["study", "--out"],
+    ] {
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(!dir.path().join("study").exists());
+    }
+    // A scene that does not load is an error (1), named on stderr.
+    let o = rayoflight(dir.path(), &["study", "--out", "res", "missing.xml"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing.xml"), "{}", stderr(&o));
+}

@@ -20,6 +20,8 @@ pub enum Command {
     },
     /// `bench [--threads N] [--runs K] [--csv FILE] [--no-pov]`.
     Bench(super::bench::BenchArgs),
+    /// `study [--out DIR] [--runs K] [--threads N] [scene.xml…]`.
+    Study(super::study::StudyArgs),
 }
 
 #[derive(Debug, Clone, PartialEq, Eq, Default)]
@@ -36,7 +38,8 @@ pub struct RenderArgs {
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
     /// `--no-gui`, `--threads`, `--aa`. In the GUI build, anything else
-    /// opens the app.
+    /// opens the app (the headless build never asks).
+    #[cfg_attr(not(feature = "gui"), allow(dead_code))]
     pub fn headless(&self) -> bool {
         self.out.is_some()
             || self.time
@@ -167,6 +170,19 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             pov: !no_pov,
         }));
     }
+    if first.as_deref() == Some(std::path::Path::new("study")) {
+        if r.time || r.aa.is_some() || r.no_gui || csv.is_some() || no_pov {
+            return Err(usage(
+                "study takes --out DIR, --runs, --threads and scene files",
+            ));
+        }
+        return Ok(Command::Study(super::study::StudyArgs {
+            out: r.out.unwrap_or_else(|| PathBuf::from("study")),
+            runs: runs.unwrap_or(3),
+            threads: r.threads,
+            scenes: positionals.collect(),
+        }));
+    }
     if runs.is_some() || csv.is_some() || no_pov {
         return Err(usage("--runs, --csv and --no-pov belong to 'bench'"));
     }
@@ -259,6 +275,24 @@ mod tests {
             p(&["s.xml", "--runs", "2"]).is_err(),
             "--runs belongs to bench"
         );
+    }
+
+    #[test]
+    fn study_subcommand() {
+        let Ok(Command::Study(s)) = p(&["study", "--out", "d", "a.xml", "b.xml", "--runs=1"])
+        else {
+            panic!()
+        };
+        assert_eq!(s.out, PathBuf::from("d"));
+        assert_eq!(s.scenes, [PathBuf::from("a.xml"), PathBuf::from("b.xml")]);
+        assert_eq!((s.runs, s.threads), (1, None));
+        let Ok(Command::Study(s)) = p(&["study"]) else {
+            panic!()
+        };
+        assert_eq!((s.out, s.runs), (PathBuf::from("study"), 3));
+        assert!(s.scenes.is_empty());
+        assert!(p(&["study", "--aa", "2"]).is_err());
+        assert!(p(&["study", "--csv", "x.csv"]).is_err());
     }
 
     #[test]

@@ -5,6 +5,7 @@
 
 mod args;
 mod bench;
+mod study;
 
 use args::{Command, RenderArgs, UsageError};
 use rayoflight::{output, pov, render, scene};
@@ -17,6 +18,7 @@ const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N]
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
+       rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]
        rayoflight --help | --version";
 
 const HELP: &str = "\
@@ -39,6 +41,11 @@ Subcommands:
   bench              time the bench scenes (against POV-Ray when installed),
                      thread scaling, cost against object count, peak memory;
                      --runs K (default 3), --csv FILE, --no-pov
+  study              speed against accuracy: every method (f32, textbook
+                     quadratic, offsets, anti-aliasing, depth cut, early
+                     stop, draft) on the study scenes, or on the scene files
+                     given; a table on stdout and DIR/study.csv
+                     (--out DIR, default ./study; --runs K, default 3)
 
 Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
 
@@ -88,6 +95,11 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
         }
         Command::ExportPov { scene, out } => export_pov(&scene, out),
         Command::Bench(args) => bench::run(&args, &mut |text| {
+            let _ = write!(std::io::stdout(), "{text}");
+            let _ = std::io::stdout().flush();
+        })
+        .map_err(Failure::Error),
+        Command::Study(args) => study::run(&args, &mut |text| {
             let _ = write!(std::io::stdout(), "{text}");
             let _ = std::io::stdout().flush();
         })

@@ -15,10 +15,14 @@ mod bvh;
 mod plane;
 mod primitive;
 mod ray;
+mod single;
 mod sphere;
 
 pub use bvh::{Aabb, Bvh};
 pub use plane::{intersect_plane, intersect_plane_world};
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
-pub use sphere::{intersect_ball, intersect_sphere, intersect_sphere_textbook};
+pub use single::{Primitive32, Ray32};
+pub use sphere::{
+    intersect_ball, intersect_ball_textbook, intersect_sphere, intersect_sphere_textbook,
+};

@@ -9,7 +9,10 @@
 //! - A plane stays a plane under every affine map: a world point and unit
 //!   normal.
 
-use super::{Aabb, Ray, intersect_ball, intersect_plane_world, intersect_sphere};
+use super::{
+    Aabb, Ray, intersect_ball, intersect_ball_textbook, intersect_plane_world, intersect_sphere,
+    intersect_sphere_textbook,
+};
 use crate::math::Transform;
 use crate::scene::Shape;
 use glam::{DAffine3, DMat3, DVec3};
@@ -71,6 +74,20 @@ impl Primitive {
         match self {
             Primitive::Ball { center, radius } => intersect_ball(ray, *center, *radius),
             Primitive::Ellipsoid(e) => intersect_sphere(&Ray::new(
+                e.to_object.transform_point3(ray.origin),
+                e.to_object.transform_vector3(ray.dir),
+            )),
+            Primitive::Plane { point, normal } => intersect_plane_world(ray, *point, *normal),
+        }
+    }
+
+    /// Like [`Primitive::intersect`], with the textbook quadratic for
+    /// spheres (the study's method; planes are unchanged).
+    #[inline]
+    pub fn intersect_textbook(&self, ray: &Ray) -> Option<f64> {
+        match self {
+            Primitive::Ball { center, radius } => intersect_ball_textbook(ray, *center, *radius),
+            Primitive::Ellipsoid(e) => intersect_sphere_textbook(&Ray::new(
                 e.to_object.transform_point3(ray.origin),
                 e.to_object.transform_vector3(ray.dir),
             )),

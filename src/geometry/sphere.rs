@@ -72,6 +72,22 @@ pub fn intersect_sphere_textbook(ray: &Ray) -> Option<f64> {
     nearest_positive((-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a))
 }
 
+/// The textbook formula for a ball in world space (unit direction d):
+/// a = 1, b = 2 f·d, c = |f|² − r², roots (−b ± √(b² − 4c)) / 2. Kept for
+/// the study: it cancels when the origin is far from a small ball.
+#[inline]
+pub fn intersect_ball_textbook(ray: &Ray, center: glam::DVec3, radius: f64) -> Option<f64> {
+    let f = ray.origin - center;
+    let b = 2.0 * f.dot(ray.dir);
+    let c = f.length_squared() - radius * radius;
+    let disc = b * b - 4.0 * c;
+    if disc.is_nan() || disc < 0.0 {
+        return None;
+    }
+    let sq = disc.sqrt();
+    nearest_positive((-b - sq) / 2.0, (-b + sq) / 2.0)
+}
+
 fn nearest_positive(t0: f64, t1: f64) -> Option<f64> {
     let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
     if near > 0.0 {
@@ -93,6 +109,7 @@ mod tests {
         let r = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z);
         assert_eq!(intersect_sphere(&r), Some(4.0));
         assert_eq!(intersect_sphere_textbook(&r), Some(4.0));
+        assert_eq!(intersect_ball_textbook(&r, DVec3::ZERO, 1.0), Some(4.0));
     }
 
     #[test]

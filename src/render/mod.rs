@@ -21,6 +21,43 @@ use rayon::prelude::*;
 /// Largest `--aa` factor (N×N samples per pixel).
 pub const MAX_AA: u32 = 16;
 
+/// Floating-point precision of the geometry (rays, intersections, hit
+/// points, normals, reflected rays). Shading is always f64.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Precision {
+    /// f64 throughout: the contract's reference.
+    #[default]
+    F64,
+    /// Rays and primitives in f32 (the study's "f32 everywhere").
+    F32,
+}
+
+/// Which ray/sphere root formula.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum SphereTest {
+    /// The stable form (distance of the line to the centre, roots from q
+    /// and c/q): the reference.
+    #[default]
+    Stable,
+    /// The textbook (−b ± √(b² − 4ac)) / 2a, for the study.
+    Textbook,
+}
+
+/// How far a reflected ray starts off the surface it leaves, along N.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Offset {
+    /// ε = 1e-9 + 1e-12·|M| (contract section 5): the reference.
+    #[default]
+    Contract,
+    /// A fixed ε in world units.
+    Fixed(f64),
+    /// No offset at all: the reflected ray starts on the surface (acne).
+    None,
+}
+
+// The fixed ε is never NaN (the study's methods are constants).
+impl Eq for Offset {}
+
 /// How to render. `RenderOptions::default()` is the contract's reference:
 /// one ray through each pixel centre, f64 throughout.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -33,6 +70,17 @@ pub struct RenderOptions {
     /// End a whitted chain once the rest of it cannot change the pixel's
     /// 8-bit value (exact: the image is the same either way).
     pub early_stop: bool,
+    /// Precision of the geometry.
+    pub precision: Precision,
+    /// Ray/sphere root formula.
+    pub sphere: SphereTest,
+    /// Offset of reflected rays off the surface.
+    pub offset: Offset,
+    /// Follow one reflection fewer than the scene's depth (whitted).
+    pub depth_cut: bool,
+    /// Trace one pixel in four (the top-left of each 2×2 block) and copy
+    /// it to the other three: a draft preview.
+    pub draft: bool,
 }
 
 impl Default for RenderOptions {
@@ -41,6 +89,11 @@ impl Default for RenderOptions {
             threads: None,
             aa: 1,
             early_stop: true,
+            precision: Precision::F64,
+            sphere: SphereTest::Stable,
+            offset: Offset::Contract,
+            depth_cut: false,
+            draft: false,
         }
     }
 }

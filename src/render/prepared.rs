@@ -12,8 +12,8 @@
 //! - Whitted chains stop as soon as nothing the rest of the chain could add
 //!   can change the pixel's 8-bit value (exact: the image is unchanged).
 
-use super::{CameraRays, Cancel, RenderOptions, Tile, to_8bit};
-use crate::geometry::{Aabb, Bvh, Primitive, Ray};
+use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
+use crate::geometry::{Aabb, Bvh, Primitive, Primitive32, Ray, Ray32};
 use crate::scene::Scene;
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color, reflect};
 use glam::DVec3;
@@ -79,6 +79,15 @@ pub struct Prepared {
     camera: CameraRays,
     aa: u32,
     early_stop: bool,
+    /// The study's method choices (see [`RenderOptions`]); the defaults
+    /// are the reference path.
+    precision: Precision,
+    sphere: SphereTest,
+    offset: Offset,
+    draft: bool,
+    /// `bounded` and `planes` in f32, built only for [`Precision::F32`].
+    bounded32: Vec<Primitive32>,
+    planes32: Vec<Primitive32>,
 }
 
 /// Which bounded primitives a primary ray must test.
@@ -86,6 +95,169 @@ pub struct Prepared {
 enum Candidates<'a> {
     All,
     Only(&'a [usize]),
+}
+
+/// Runs `$body` with `$k` bound to the kernel of the prepared scene's
+/// method: one branch per call, and each kernel's trace loop compiled on
+/// its own, so the reference path pays nothing for the others.
+macro_rules! with_kernel {
+    ($p:expr, |$k:ident| $body:expr) => {{
+        let p: &Prepared = $p;
+        match (p.precision, p.sphere, p.offset) {
+            (Precision::F64, SphereTest::Stable, Offset::Contract) => {
+                let $k = &Exact::<false, OFFSET_CONTRACT> { fixed: 0.0 };
+                $body
+            }
+            (Precision::F64, SphereTest::Stable, Offset::Fixed(fixed)) => {
+                let $k = &Exact::<false, OFFSET_FIXED> { fixed };
+                $body
+            }
+            (Precision::F64, SphereTest::Stable, Offset::None) => {
+                let $k = &Exact::<false, OFFSET_NONE> { fixed: 0.0 };
+                $body
+            }
+            (Precision::F64, SphereTest::Textbook, Offset::Contract) => {
+                let $k = &Exact::<true, OFFSET_CONTRACT> { fixed: 0.0 };
+                $body
+            }
+            (Precision::F64, SphereTest::Textbook, Offset::Fixed(fixed)) => {
+                let $k = &Exact::<true, OFFSET_FIXED> { fixed };
+                $body
+            }
+            (Precision::F64, SphereTest::Textbook, Offset::None) => {
+                let $k = &Exact::<true, OFFSET_NONE> { fixed: 0.0 };
+                $body
+            }
+            (Precision::F32, SphereTest::Stable, offset) => {
+                let $k = &Single::<false> { offset };
+                $body
+            }
+            (Precision::F32, SphereTest::Textbook, offset) => {
+                let $k = &Single::<true> { offset };
+                $body
+            }
+        }
+    }};
+}
+
+/// The geometry of a method: how a ray is held, what it hits, the hit
+/// point and normal, and the reflected ray. Shading (f64) stays in
+/// [`Prepared::trace`].
+trait Kernel {
+    type Ray: Copy;
+    fn primary(&self, ray: Ray) -> Self::Ray;
+    fn nearest(&self, p: &Prepared, ray: &Self::Ray, among: Candidates) -> Option<Hit>;
+    /// The hit point M, the shading normal N (turned to face the ray) and V.
+    fn surface(&self, p: &Prepared, ray: &Self::Ray, hit: &Hit) -> SurfacePoint;
+    /// The reflected ray R leaving `point`, offset off the surface.
+    fn reflected(&self, point: &SurfacePoint) -> Self::Ray;
+}
+
+const OFFSET_CONTRACT: u8 = 0;
+const OFFSET_FIXED: u8 = 1;
+const OFFSET_NONE: u8 = 2;
+
+/// f64 geometry: the reference (stable test, contract offset) and its
+/// study variants.
+struct Exact<const TEXTBOOK: bool, const OFFSET: u8> {
+    fixed: f64,
+}
+
+impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> {
+    type Ray = Ray;
+
+    #[inline]
+    fn primary(&self, ray: Ray) -> Ray {
+        ray
+    }
+
+    #[inline]
+    fn nearest(&self, p: &Prepared, ray: &Ray, among: Candidates) -> Option<Hit> {
+        if TEXTBOOK {
+            p.nearest_with(ray, among, &p.bounded, &p.planes, |q| {
+                q.intersect_textbook(ray)
+            })
+        } else {
+            p.nearest_hit_among(ray, among)
+        }
+    }
+
+    #[inline]
+    fn surface(&self, p: &Prepared, ray: &Ray, hit: &Hit) -> SurfacePoint {
+        let m = ray.at(hit.t);
+        // Shading normal N: the geometric normal turned to face the ray.
+        let mut n = p.normal(ray, hit);
+        if n.dot(ray.dir) > 0.0 {
+            n = -n;
+        }
+        SurfacePoint { m, n, v: -ray.dir }
+    }
+
+    #[inline]
+    fn reflected(&self, point: &SurfacePoint) -> Ray {
+        let SurfacePoint { m, n, v } = *point;
+        // Reflected ray R from just off the surface (contract section 5).
+        let epsilon = match OFFSET {
+            OFFSET_CONTRACT => 1e-9 + 1e-12 * m.length(),
+            OFFSET_FIXED => self.fixed,
+            _ => 0.0,
+        };
+        Ray::new(m + epsilon * n, reflect(n, v).normalize())
+    }
+}
+
+/// f32 geometry: the ray, the intersections, the hit point, the normal and
+/// the reflected ray in single precision (the BVH's box tests read the
+/// same ray widened to f64, exactly).
+struct Single<const TEXTBOOK: bool> {
+    offset: Offset,
+}
+
+impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
+    type Ray = Ray32;
+
+    #[inline]
+    fn primary(&self, ray: Ray) -> Ray32 {
+        Ray32::from_f64(&ray)
+    }
+
+    #[inline]
+    fn nearest(&self, p: &Prepared, ray: &Ray32, among: Candidates) -> Option<Hit> {
+        p.nearest_with(&ray.to_f64(), among, &p.bounded32, &p.planes32, |q| {
+            q.intersect::<TEXTBOOK>(ray).map(f64::from)
+        })
+    }
+
+    #[inline]
+    fn surface(&self, p: &Prepared, ray: &Ray32, hit: &Hit) -> SurfacePoint {
+        // t came from f32: the narrowing is exact.
+        let t = hit.t as f32;
+        let m = ray.at(t);
+        let mut n = match hit.primitive {
+            PrimitiveRef::Bounded(k) => p.bounded32[k].normal_at(ray, t),
+            PrimitiveRef::Plane(k) => p.planes32[k].normal_at(ray, t),
+        };
+        if n.dot(ray.dir) > 0.0 {
+            n = -n;
+        }
+        SurfacePoint {
+            m: m.as_dvec3(),
+            n: n.as_dvec3(),
+            v: (-ray.dir).as_dvec3(),
+        }
+    }
+
+    #[inline]
+    fn reflected(&self, point: &SurfacePoint) -> Ray32 {
+        // The point's vectors hold f32 values: the narrowing is exact.
+        let (m, n, v) = (point.m.as_vec3(), point.n.as_vec3(), point.v.as_vec3());
+        let epsilon = match self.offset {
+            Offset::Contract => 1e-9 + 1e-12 * m.length(),
+            Offset::Fixed(e) => e as f32,
+            Offset::None => 0.0,
+        };
+        Ray32::new(m + epsilon * n, (2.0 * n.dot(v) * n - v).normalize())
+    }
 }
 
 /// Builds the prepared scene.
@@ -145,6 +317,11 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
     });
     let max_ks = surfaces.iter().map(|s| s.material.ks).fold(0.0, f64::max);
     let depth = scene.model.reflection_depth();
+    let depth = if options.depth_cut {
+        depth.saturating_sub(1)
+    } else {
+        depth
+    };
     let tail = if max_ks < 1.0 && depth > 0 {
         let mut tail = Vec::with_capacity(depth as usize + 1);
         let (mut sum, mut power) = (0.0, 1.0);
@@ -169,7 +346,21 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         Vec::new()
     };
 
+    let (bounded32, planes32) = match options.precision {
+        Precision::F64 => (Vec::new(), Vec::new()),
+        Precision::F32 => (
+            bounded.iter().map(Primitive32::new).collect(),
+            planes.iter().map(Primitive32::new).collect(),
+        ),
+    };
+
     Prepared {
+        bounded32,
+        planes32,
+        precision: options.precision,
+        sphere: options.sphere,
+        offset: options.offset,
+        draft: options.draft,
         bounded,
         bounded_objects,
         cull_spheres,
@@ -208,6 +399,23 @@ impl Prepared {
     }
 
     fn nearest_hit_among(&self, ray: &Ray, candidates: Candidates) -> Option<Hit> {
+        self.nearest_with(ray, candidates, &self.bounded, &self.planes, |p| {
+            p.intersect(ray)
+        })
+    }
+
+    /// The nearest hit among `bounded` and `planes` (the f64 primitives or
+    /// their f32 copies, in the same order), `intersect` testing one; `ray`
+    /// serves the BVH's box tests.
+    #[inline]
+    fn nearest_with<P>(
+        &self,
+        ray: &Ray,
+        candidates: Candidates,
+        bounded: &[P],
+        planes: &[P],
+        intersect: impl Fn(&P) -> Option<f64>,
+    ) -> Option<Hit> {
         let mut best: Option<Hit> = None;
         let consider = |best: &mut Option<Hit>, t: f64, object: usize, primitive| {
             if best.is_none_or(|b| t < b.t || (t == b.t && object < b.object)) {
@@ -218,15 +426,15 @@ impl Prepared {
                 });
             }
         };
-        for (k, plane) in self.planes.iter().enumerate() {
-            if let Some(t) = plane.intersect(ray) {
+        for (k, plane) in planes.iter().enumerate() {
+            if let Some(t) = intersect(plane) {
                 consider(&mut best, t, self.plane_objects[k], PrimitiveRef::Plane(k));
             }
         }
         match (&self.bvh, candidates) {
             (_, Candidates::Only(list)) => {
                 for &k in list {
-                    if let Some(t) = self.bounded[k].intersect(ray) {
+                    if let Some(t) = intersect(&bounded[k]) {
                         consider(
                             &mut best,
                             t,
@@ -240,7 +448,7 @@ impl Prepared {
                 let t_max = best.map_or(f64::INFINITY, |b| b.t);
                 // The BVH breaks ties by its own order; equal distances to
                 // two objects are rare enough to settle below.
-                if let Some((t, k)) = bvh.nearest(ray, t_max, |k| self.bounded[k].intersect(ray)) {
+                if let Some((t, k)) = bvh.nearest(ray, t_max, |k| intersect(&bounded[k])) {
                     consider(
                         &mut best,
                         t,
@@ -250,8 +458,8 @@ impl Prepared {
                 }
             }
             (None, Candidates::All) => {
-                for (k, primitive) in self.bounded.iter().enumerate() {
-                    if let Some(t) = primitive.intersect(ray) {
+                for (k, primitive) in bounded.iter().enumerate() {
+                    if let Some(t) = intersect(primitive) {
                         consider(
                             &mut best,
                             t,
@@ -277,8 +485,9 @@ impl Prepared {
     /// `exact_stop`: end the chain once the rest cannot change the 8-bit
     /// value of this ray's colour.
     /// `rays` counts the rays traced.
-    fn trace(
+    fn trace<K: Kernel>(
         &self,
+        kernel: &K,
         primary: Ray,
         candidates: Candidates,
         exact_stop: bool,
@@ -287,7 +496,7 @@ impl Prepared {
         let mut color = Color::ZERO;
         // Product of the ks of the surfaces met so far.
         let mut weight = 1.0;
-        let mut ray = primary;
+        let mut ray = kernel.primary(primary);
         for bounce in 0..=self.depth {
             let among = if bounce == 0 {
                 candidates
@@ -295,18 +504,11 @@ impl Prepared {
                 Candidates::All
             };
             *rays += 1;
-            let Some(hit) = self.nearest_hit_among(&ray, among) else {
+            let Some(hit) = kernel.nearest(self, &ray, among) else {
                 break; // a miss is black
             };
             let surface = &self.surfaces[hit.object];
-            let m = ray.at(hit.t);
-            // Shading normal N: the geometric normal turned to face the ray.
-            let mut n = self.normal(&ray, &hit);
-            if n.dot(ray.dir) > 0.0 {
-                n = -n;
-            }
-            let v = -ray.dir;
-            let point = SurfacePoint { m, n, v };
+            let point = kernel.surface(self, &ray, &hit);
             let local = local_color(
                 self.illumination,
                 surface.color,
@@ -322,9 +524,7 @@ impl Prepared {
             if exact_stop && self.rest_is_invisible(color, weight, self.depth - bounce) {
                 break;
             }
-            // Reflected ray R from just off the surface (contract section 5).
-            let epsilon = 1e-9 + 1e-12 * m.length();
-            ray = Ray::new(m + epsilon * n, reflect(n, v).normalize());
+            ray = kernel.reflected(&point);
         }
         color
     }
@@ -346,14 +546,21 @@ impl Prepared {
     /// The 8-bit colour of pixel (i, j): one ray through its centre, or the
     /// mean of `aa × aa` clamped samples on a regular grid.
     pub fn pixel(&self, i: u32, j: u32) -> [u8; 3] {
-        self.pixel_among(i, j, Candidates::All, &mut 0)
+        with_kernel!(self, |k| self.pixel_among(k, i, j, Candidates::All, &mut 0))
     }
 
-    fn pixel_among(&self, i: u32, j: u32, candidates: Candidates, rays: &mut u64) -> [u8; 3] {
+    fn pixel_among<K: Kernel>(
+        &self,
+        kernel: &K,
+        i: u32,
+        j: u32,
+        candidates: Candidates,
+        rays: &mut u64,
+    ) -> [u8; 3] {
         let (x, y) = (f64::from(i), f64::from(j));
         if self.aa == 1 {
             let ray = self.camera.ray(x + 0.5, y + 0.5);
-            let c = self.trace(ray, candidates, self.early_stop, rays);
+            let c = self.trace(kernel, ray, candidates, self.early_stop, rays);
             return [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
         }
         // Supersampled: a sample's own rounding says nothing about the
@@ -366,7 +573,7 @@ impl Prepared {
                     .camera
                     .ray(x + (f64::from(a) + 0.5) / n, y + (f64::from(b) + 0.5) / n);
                 sum += self
-                    .trace(ray, candidates, false, rays)
+                    .trace(kernel, ray, candidates, false, rays)
                     .clamp(DVec3::ZERO, DVec3::ONE);
             }
         }
@@ -378,6 +585,16 @@ impl Prepared {
     /// checking `cancel` before every pixel. Returns the number of rays
     /// traced, or `None` when cancelled.
     pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> Option<u64> {
+        with_kernel!(self, |k| self.tile_into(k, tile, cancel, out))
+    }
+
+    fn tile_into<K: Kernel>(
+        &self,
+        kernel: &K,
+        tile: &Tile,
+        cancel: &Cancel,
+        out: &mut Vec<u8>,
+    ) -> Option<u64> {
         out.clear();
         let candidates = self.tile_candidates(tile);
         let candidates = match &candidates {
@@ -392,12 +609,34 @@ impl Prepared {
             None => Candidates::All,
         };
         let mut rays = 0;
+        if self.draft {
+            // One pixel in four: the top-left of each 2×2 block of the
+            // tile is traced, the other three copy it.
+            for j in tile.y..tile.y + tile.height {
+                for i in tile.x..tile.x + tile.width {
+                    if cancel.is_cancelled() {
+                        return None;
+                    }
+                    let (di, dj) = ((i - tile.x) & !1, (j - tile.y) & !1);
+                    if (di, dj) == (i - tile.x, j - tile.y) {
+                        out.extend_from_slice(
+                            &self.pixel_among(kernel, i, j, candidates, &mut rays),
+                        );
+                    } else {
+                        let at = (dj as usize * tile.width as usize + di as usize) * 3;
+                        let source = [out[at], out[at + 1], out[at + 2]];
+                        out.extend_from_slice(&source);
+                    }
+                }
+            }
+            return Some(rays);
+        }
         for j in tile.y..tile.y + tile.height {
             for i in tile.x..tile.x + tile.width {
                 if cancel.is_cancelled() {
                     return None;
                 }
-                out.extend_from_slice(&self.pixel_among(i, j, candidates, &mut rays));
+                out.extend_from_slice(&self.pixel_among(kernel, i, j, candidates, &mut rays));
             }
         }
         Some(rays)

@@ -1,0 +1,74 @@
+//! `rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]`:
+//! every study method on every scene (the built-in study scenes when none
+//! are given), a table on stdout and DIR/study.csv.
+
+use rayoflight::{output, study};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct StudyArgs {
+    /// Where study.csv goes (created); default `study/`.
+    pub out: PathBuf,
+    pub runs: usize,
+    pub threads: Option<usize>,
+    /// User scenes; empty means the built-in ones.
+    pub scenes: Vec<PathBuf>,
+}
+
+/// Runs the study; `out` receives the report as it goes.
+pub fn run(args: &StudyArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
+    let scenes = if args.scenes.is_empty() {
+        study::builtin_scenes()
+    } else {
+        study::load_scenes(&args.scenes)
+    }
+    .map_err(|e| e.to_string())?;
+    // Fail on an unusable output folder before the long part.
+    std::fs::create_dir_all(&args.out)
+        .map_err(|e| format!("{}: cannot create the folder: {e}", args.out.display()))?;
+    let methods = study::methods();
+    out(&format!(
+        "RayOfLight study: {} methods × {} scenes, median of {} runs; reference: the default \
+         image (aa methods: the default supersampled 16×16); failed: within 1 < {}\n\n",
+        methods.len(),
+        scenes.len(),
+        args.runs,
+        study::FAIL_BELOW
+    ));
+    out(&format!(
+        "{:<18} {:<15} {:>10} {:>11} {:>4} {:>9} {:>9}  {}\n",
+        "scene", "method", "time ms", "rays", "max", "mean", "within 1", "failed"
+    ));
+    let start = Instant::now();
+    let rows = study::run(&scenes, &methods, args.runs, args.threads, &mut |r| {
+        out(&format!(
+            "{:<18} {:<15} {:>10.2} {:>11} {:>4} {:>9.4} {:>9.4}  {}\n",
+            r.scene,
+            r.method,
+            r.time.as_secs_f64() * 1e3,
+            r.rays,
+            r.max_diff,
+            r.mean_diff,
+            r.within1,
+            if r.failed { "FAILED" } else { "" }
+        ));
+    })
+    .map_err(|e| e.to_string())?;
+    let csv = args.out.join("study.csv");
+    output::write_atomic(&csv, study::csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+    let failed: Vec<String> = rows
+        .iter()
+        .filter(|r| r.failed)
+        .map(|r| format!("{} on {} ({:.4})", r.method, r.scene, r.within1))
+        .collect();
+    out(&format!(
+        "\n{} failures{}{}\nwrote {} in {:.1} s\n",
+        failed.len(),
+        if failed.is_empty() { "" } else { ": " },
+        failed.join(", "),
+        csv.display(),
+        start.elapsed().as_secs_f64()
+    ));
+    Ok(())
+}

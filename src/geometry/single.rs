@@ -1,0 +1,159 @@
+//! The same primitives in single precision (f32), for the study's "f32
+//! everywhere" method: the ray, the intersection, the hit point and the
+//! normal are all evaluated in f32, so the method fails where f32 fails
+//! (far from the origin, thin offsets).
+
+use super::Primitive;
+use glam::{Affine3A, Mat3, Vec3};
+
+/// A ray in f32: `origin + t · dir`, unit `dir` in world space.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ray32 {
+    pub origin: Vec3,
+    pub dir: Vec3,
+}
+
+impl Ray32 {
+    pub fn new(origin: Vec3, dir: Vec3) -> Ray32 {
+        Ray32 { origin, dir }
+    }
+
+    /// The f32 ray nearest to an f64 one.
+    pub fn from_f64(ray: &super::Ray) -> Ray32 {
+        Ray32::new(ray.origin.as_vec3(), ray.dir.as_vec3())
+    }
+
+    /// The same ray in f64 (exact), for the BVH's box tests.
+    pub fn to_f64(&self) -> super::Ray {
+        super::Ray::new(self.origin.as_dvec3(), self.dir.as_dvec3())
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+}
+
+/// A [`Primitive`] rounded to f32.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Primitive32 {
+    Ball { center: Vec3, radius: f32 },
+    Ellipsoid { to_object: Affine3A, normal: Mat3 },
+    Plane { point: Vec3, normal: Vec3 },
+}
+
+impl Primitive32 {
+    pub fn new(p: &Primitive) -> Primitive32 {
+        match p {
+            Primitive::Ball { center, radius } => Primitive32::Ball {
+                center: center.as_vec3(),
+                radius: *radius as f32,
+            },
+            Primitive::Ellipsoid(e) => Primitive32::Ellipsoid {
+                to_object: e.to_object.as_affine3a(),
+                normal: e.normal.as_mat3(),
+            },
+            Primitive::Plane { point, normal } => Primitive32::Plane {
+                point: point.as_vec3(),
+                normal: normal.as_vec3(),
+            },
+        }
+    }
+
+    /// The nearest t > 0, in f32; `TEXTBOOK` picks the root formula.
+    #[inline]
+    pub fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32> {
+        match self {
+            Primitive32::Ball { center, radius } => {
+                let f = ray.origin - *center;
+                quadratic::<TEXTBOOK>(f, ray.dir, *radius * *radius)
+            }
+            Primitive32::Ellipsoid { to_object, .. } => quadratic::<TEXTBOOK>(
+                to_object.transform_point3(ray.origin),
+                to_object.transform_vector3(ray.dir),
+                1.0,
+            ),
+            Primitive32::Plane { point, normal } => {
+                let denom = normal.dot(ray.dir);
+                let num = normal.dot(*point - ray.origin);
+                if denom == 0.0 || (num > 0.0) != (denom > 0.0) {
+                    return None;
+                }
+                let t = num / denom;
+                (t > 0.0 && t.is_finite()).then_some(t)
+            }
+        }
+    }
+
+    /// The unit geometric normal at `ray.at(t)`, in f32.
+    #[inline]
+    pub fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3 {
+        match self {
+            Primitive32::Ball { center, .. } => (ray.at(t) - *center).normalize(),
+            Primitive32::Ellipsoid { to_object, normal } => {
+                let local = to_object.transform_point3(ray.origin)
+                    + t * to_object.transform_vector3(ray.dir);
+                (*normal * local).normalize()
+            }
+            Primitive32::Plane { normal, .. } => *normal,
+        }
+    }
+}
+
+/// Nearest root t > 0 of |f + t d|² = r², in f32: the stable form of
+/// [`super::intersect_ball`] / [`super::intersect_sphere`], or the textbook
+/// formula.
+#[inline]
+fn quadratic<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
+    let a = d.length_squared();
+    let c = f.length_squared() - r2;
+    let (t0, t1) = if TEXTBOOK {
+        let b = 2.0 * f.dot(d);
+        let disc = b * b - 4.0 * a * c;
+        if disc.is_nan() || disc < 0.0 {
+            return None;
+        }
+        let sq = disc.sqrt();
+        ((-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a))
+    } else {
+        let b = f.dot(d);
+        let l = f - (b / a) * d;
+        let quarter_disc = a * (r2 - l.length_squared());
+        if quarter_disc.is_nan() || quarter_disc < 0.0 {
+            return None;
+        }
+        let q = -(b + quarter_disc.sqrt().copysign(b));
+        if q == 0.0 {
+            return None;
+        }
+        (q / a, c / q)
+    };
+    let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+    if near > 0.0 {
+        Some(near)
+    } else if far > 0.0 {
+        Some(far)
+    } else {
+        None
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DVec3;
+
+    #[test]
+    fn agrees_with_f64_near_the_origin() {
+        let ball = Primitive::Ball {
+            center: DVec3::new(0.5, 0.0, 5.0),
+            radius: 1.5,
+        };
+        let ray = super::super::Ray::new(DVec3::ZERO, DVec3::new(0.1, 0.05, 1.0).normalize());
+        let t64 = ball.intersect(&ray).unwrap();
+        let p = Primitive32::new(&ball);
+        let r = Ray32::from_f64(&ray);
+        for t in [p.intersect::<false>(&r), p.intersect::<true>(&r)] {
+            assert!((f64::from(t.unwrap()) - t64).abs() < 1e-5);
+        }
+    }
+}

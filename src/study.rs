@@ -1,0 +1,402 @@
+//! The study: speed against accuracy. Every [`Method`] (a [`RenderOptions`]
+//! variant) renders every study scene; each render is timed and compared
+//! with the scene's reference image, and the result is a [`Row`].
+//!
+//! The reference is the default method's image (its agreement with
+//! POV-Ray is tested elsewhere); for the anti-aliasing methods it is the
+//! default method supersampled 16×16, so that anti-aliasing shows as more
+//! accurate, and slower. A method *fails* on a scene when fewer than 99 %
+//! of the pixels are within one 8-bit level of the reference.
+//!
+//! The built-in scenes are those of `scenes/study/`, compiled into the
+//! binary; the command line prints and writes files, this module does not.
+
+use crate::render::{self, MAX_AA, Offset, Precision, RenderError, RenderOptions, SphereTest};
+use crate::scene::{self, LoadError, Scene};
+use image::RgbImage;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// A method: a name (the CSV's `method` column) and how it renders.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Method {
+    pub name: &'static str,
+    pub options: RenderOptions,
+}
+
+/// The methods compared, the reference (`default`) first.
+pub fn methods() -> Vec<Method> {
+    let d = RenderOptions::default;
+    let method = |name, options| Method { name, options };
+    vec![
+        method("default", d()),
+        method(
+            "f32",
+            RenderOptions {
+                precision: Precision::F32,
+                ..d()
+            },
+        ),
+        // f32 with an offset f32 can resolve near the origin (the contract's
+        // 1e-9 + 1e-12·|M| is below f32's spacing everywhere): it separates
+        // f32's failure far from the origin from its acne.
+        method(
+            "f32-eps-1e-3",
+            RenderOptions {
+                precision: Precision::F32,
+                offset: Offset::Fixed(1e-3),
+                ..d()
+            },
+        ),
+        method(
+            "textbook",
+            RenderOptions {
+                sphere: SphereTest::Textbook,
+                ..d()
+            },
+        ),
+        method(
+            "fixed-eps-1e-4",
+            RenderOptions {
+                offset: Offset::Fixed(1e-4),
+                ..d()
+            },
+        ),
+        method(
+            "no-offset",
+            RenderOptions {
+                offset: Offset::None,
+                ..d()
+            },
+        ),
+        method("aa2", RenderOptions { aa: 2, ..d() }),
+        method("aa4", RenderOptions { aa: 4, ..d() }),
+        method(
+            "depth-1",
+            RenderOptions {
+                depth_cut: true,
+                ..d()
+            },
+        ),
+        method(
+            "no-early-stop",
+            RenderOptions {
+                early_stop: false,
+                ..d()
+            },
+        ),
+        method("draft", RenderOptions { draft: true, ..d() }),
+    ]
+}
+
+/// A scene of the study and the name its rows carry.
+#[derive(Debug, Clone)]
+pub struct StudyScene {
+    pub name: String,
+    pub scene: Scene,
+}
+
+/// The built-in study scenes (`scenes/study/`), in the order reported.
+pub const SCENES: [(&str, &str); 9] = [
+    ("example", include_str!("../scenes/study/example.xml")),
+    (
+        "example-1e3",
+        include_str!("../scenes/study/example-1e3.xml"),
+    ),
+    (
+        "example-1e5",
+        include_str!("../scenes/study/example-1e5.xml"),
+    ),
+    (
+        "example-1e7",
+        include_str!("../scenes/study/example-1e7.xml"),
+    ),
+    (
+        "grazing-plane",
+        include_str!("../scenes/study/grazing-plane.xml"),
+    ),
+    (
+        "tiny-on-huge",
+        include_str!("../scenes/study/tiny-on-huge.xml"),
+    ),
+    (
+        "mirror-corridor",
+        include_str!("../scenes/study/mirror-corridor.xml"),
+    ),
+    (
+        "inside-sphere",
+        include_str!("../scenes/study/inside-sphere.xml"),
+    ),
+    (
+        "many-spheres",
+        include_str!("../scenes/study/many-spheres.xml"),
+    ),
+];
+
+/// Parses the built-in study scenes.
+pub fn builtin_scenes() -> Result<Vec<StudyScene>, LoadError> {
+    SCENES
+        .iter()
+        .map(|(name, text)| {
+            let path = format!("scenes/study/{name}.xml");
+            Ok(StudyScene {
+                name: (*name).to_owned(),
+                scene: scene::parse(text, Path::new(&path))?,
+            })
+        })
+        .collect()
+}
+
+/// Loads user scene files; each is named by its file stem.
+pub fn load_scenes<P: AsRef<Path>>(paths: &[P]) -> Result<Vec<StudyScene>, LoadError> {
+    paths
+        .iter()
+        .map(|path| {
+            let path = path.as_ref();
+            Ok(StudyScene {
+                name: path.file_stem().map_or_else(
+                    || path.display().to_string(),
+                    |s| s.to_string_lossy().into_owned(),
+                ),
+                scene: scene::load(path)?,
+            })
+        })
+        .collect()
+}
+
+/// The reference images of one scene.
+#[derive(Debug, Clone)]
+pub struct References {
+    /// The default method's image.
+    pub default: RgbImage,
+    /// The default method supersampled [`MAX_AA`]×[`MAX_AA`]: the
+    /// reference of the anti-aliasing methods. Rendered only when asked.
+    pub supersampled: Option<RgbImage>,
+}
+
+impl References {
+    /// Renders the references `methods` need (with `threads` threads,
+    /// `None` for one per core).
+    pub fn new(
+        scene: &Scene,
+        methods: &[Method],
+        threads: Option<usize>,
+    ) -> Result<References, RenderError> {
+        let default = render::render(
+            scene,
+            &RenderOptions {
+                threads,
+                ..RenderOptions::default()
+            },
+        )?;
+        let supersampled = if methods.iter().any(|m| m.options.aa > 1) {
+            Some(render::render(
+                scene,
+                &RenderOptions {
+                    threads,
+                    aa: MAX_AA,
+                    ..RenderOptions::default()
+                },
+            )?)
+        } else {
+            None
+        };
+        Ok(References {
+            default,
+            supersampled,
+        })
+    }
+
+    /// The image `method` is measured against.
+    pub fn for_method(&self, method: &Method) -> &RgbImage {
+        match &self.supersampled {
+            Some(image) if method.options.aa > 1 => image,
+            _ => &self.default,
+        }
+    }
+}
+
+/// One scene and method: a CSV row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    pub scene: String,
+    pub method: &'static str,
+    /// Median render time (prepare and trace) over the runs.
+    pub time: Duration,
+    /// Rays traced by one render.
+    pub rays: u64,
+    /// Largest difference of one channel from the reference, in levels.
+    pub max_diff: u8,
+    /// Mean difference over every channel of every pixel, in levels.
+    pub mean_diff: f64,
+    /// Share of pixels whose three channels are within one level.
+    pub within1: f64,
+    /// `within1 < 0.99`.
+    pub failed: bool,
+}
+
+/// The share of pixels within one level below which a method fails.
+pub const FAIL_BELOW: f64 = 0.99;
+
+/// How far an image is from a reference of the same size:
+/// (max_diff, mean_diff, within1).
+pub fn compare(image: &RgbImage, reference: &RgbImage) -> (u8, f64, f64) {
+    assert_eq!(image.dimensions(), reference.dimensions());
+    let (mut max, mut sum, mut within) = (0u8, 0u64, 0u64);
+    for (a, b) in image.pixels().zip(reference.pixels()) {
+        let mut worst = 0;
+        for c in 0..3 {
+            let d = a[c].abs_diff(b[c]);
+            worst = worst.max(d);
+            sum += u64::from(d);
+        }
+        max = max.max(worst);
+        within += u64::from(worst <= 1);
+    }
+    let pixels = u64::from(image.width()) * u64::from(image.height());
+    let pixels = pixels.max(1) as f64;
+    (max, sum as f64 / (3.0 * pixels), within as f64 / pixels)
+}
+
+/// Renders `scene` with `method` `runs` times (at least once) and measures
+/// it against `reference`: the median time, the rays, the error.
+pub fn measure(
+    scene: &StudyScene,
+    method: &Method,
+    reference: &RgbImage,
+    runs: usize,
+) -> Result<Row, RenderError> {
+    let mut times = Vec::with_capacity(runs.max(1));
+    let mut result = None;
+    for _ in 0..runs.max(1) {
+        let start = Instant::now();
+        let (image, stats) = render::render_with_stats(&scene.scene, &method.options)?;
+        times.push(start.elapsed());
+        result.get_or_insert((image, stats));
+    }
+    times.sort();
+    let (image, stats) = result.expect("at least one run");
+    let (max_diff, mean_diff, within1) = compare(&image, reference);
+    Ok(Row {
+        scene: scene.name.clone(),
+        method: method.name,
+        time: times[times.len() / 2],
+        rays: stats.rays,
+        max_diff,
+        mean_diff,
+        within1,
+        failed: within1 < FAIL_BELOW,
+    })
+}
+
+/// Runs every method on every scene, `runs` renders each, with `threads`
+/// threads (`None`: one per core); `progress` sees each row as it is done.
+pub fn run(
+    scenes: &[StudyScene],
+    methods: &[Method],
+    runs: usize,
+    threads: Option<usize>,
+    progress: &mut dyn FnMut(&Row),
+) -> Result<Vec<Row>, RenderError> {
+    let mut rows = Vec::new();
+    for scene in scenes {
+        let references = References::new(&scene.scene, methods, threads)?;
+        for method in methods {
+            let method = Method {
+                name: method.name,
+                options: RenderOptions {
+                    threads,
+                    ..method.options.clone()
+                },
+            };
+            let row = measure(scene, &method, references.for_method(&method), runs)?;
+            progress(&row);
+            rows.push(row);
+        }
+    }
+    Ok(rows)
+}
+
+/// The CSV header line (no newline).
+pub const CSV_HEADER: &str = "scene,method,time_ms,rays,max_diff,mean_diff,within1,failed";
+
+/// The rows as CSV text, header first.
+pub fn csv(rows: &[Row]) -> String {
+    let mut text = format!("{CSV_HEADER}\n");
+    for r in rows {
+        text.push_str(&format!(
+            "{},{},{:.3},{},{},{:.4},{:.6},{}\n",
+            csv_field(&r.scene),
+            r.method,
+            r.time.as_secs_f64() * 1e3,
+            r.rays,
+            r.max_diff,
+            r.mean_diff,
+            r.within1,
+            r.failed
+        ));
+    }
+    text
+}
+
+/// Quotes a field that holds a comma, a quote or a line break.
+fn csv_field(text: &str) -> String {
+    if text.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", text.replace('"', "\"\""))
+    } else {
+        text.to_owned()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_study_scene_loads_and_is_small() {
+        for s in builtin_scenes().unwrap() {
+            let c = &s.scene.camera;
+            assert!(c.width <= 320 && c.height <= 240, "{}", s.name);
+        }
+    }
+
+    #[test]
+    fn methods_are_named_once_and_default_first() {
+        let m = methods();
+        assert_eq!(m[0].name, "default");
+        assert_eq!(m[0].options, RenderOptions::default());
+        let mut names: Vec<_> = m.iter().map(|m| m.name).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), m.len());
+    }
+
+    #[test]
+    fn compare_counts_levels() {
+        let a = RgbImage::from_raw(2, 1, vec![10, 10, 10, 0, 0, 0]).unwrap();
+        let b = RgbImage::from_raw(2, 1, vec![11, 10, 10, 0, 9, 0]).unwrap();
+        let (max, mean, within) = compare(&a, &b);
+        assert_eq!(max, 9);
+        assert!((mean - 10.0 / 6.0).abs() < 1e-12);
+        assert_eq!(within, 0.5);
+    }
+
+    #[test]
+    fn csv_quotes_odd_names() {
+        let row = Row {
+            scene: "a,b".into(),
+            method: "default",
+            time: Duration::from_millis(2),
+            rays: 5,
+            max_diff: 0,
+            mean_diff: 0.0,
+            within1: 1.0,
+            failed: false,
+        };
+        let text = csv(&[row]);
+        assert_eq!(
+            text,
+            format!("{CSV_HEADER}\n\"a,b\",default,2.000,5,0,0.0000,1.000000,false\n")
+        );
+    }
+}
