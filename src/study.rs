@@ -10,6 +10,9 @@
 //!
 //! The built-in scenes are those of `scenes/study/`, compiled into the
 //! binary; the command line prints and writes files, this module does not.
+//! [`chart`] draws the study's pictures (the chart, the failure pictures).
+
+pub mod chart;
 
 use crate::render::{self, MAX_AA, Offset, Precision, RenderError, RenderOptions, SphereTest};
 use crate::scene::{self, LoadError, Scene};
@@ -266,6 +269,16 @@ pub fn measure(
     reference: &RgbImage,
     runs: usize,
 ) -> Result<Row, RenderError> {
+    measure_image(scene, method, reference, runs).map(|(row, _)| row)
+}
+
+/// [`measure`], and the image the method rendered (its first run).
+pub fn measure_image(
+    scene: &StudyScene,
+    method: &Method,
+    reference: &RgbImage,
+    runs: usize,
+) -> Result<(Row, RgbImage), RenderError> {
     let mut times = Vec::with_capacity(runs.max(1));
     let mut result = None;
     for _ in 0..runs.max(1) {
@@ -277,7 +290,7 @@ pub fn measure(
     times.sort();
     let (image, stats) = result.expect("at least one run");
     let (max_diff, mean_diff, within1) = compare(&image, reference);
-    Ok(Row {
+    let row = Row {
         scene: scene.name.clone(),
         method: method.name,
         time: times[times.len() / 2],
@@ -286,17 +299,20 @@ pub fn measure(
         mean_diff,
         within1,
         failed: within1 < FAIL_BELOW,
-    })
+    };
+    Ok((row, image))
 }
 
 /// Runs every method on every scene, `runs` renders each, with `threads`
-/// threads (`None`: one per core); `progress` sees each row as it is done.
+/// threads (`None`: one per core); `progress` sees each row as it is done,
+/// with the method's image and the reference it was measured against (to
+/// picture a failure).
 pub fn run(
     scenes: &[StudyScene],
     methods: &[Method],
     runs: usize,
     threads: Option<usize>,
-    progress: &mut dyn FnMut(&Row),
+    progress: &mut dyn FnMut(&Row, &RgbImage, &RgbImage),
 ) -> Result<Vec<Row>, RenderError> {
     let mut rows = Vec::new();
     for scene in scenes {
@@ -309,8 +325,9 @@ pub fn run(
                     ..method.options.clone()
                 },
             };
-            let row = measure(scene, &method, references.for_method(&method), runs)?;
-            progress(&row);
+            let reference = references.for_method(&method);
+            let (row, image) = measure_image(scene, &method, reference, runs)?;
+            progress(&row, &image, reference);
             rows.push(row);
         }
     }

@@ -323,3 +323,48 @@ fn study_bad_usage_exits_2() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("missing.xml"), "{}", stderr(&o));
 }
+
+#[test]
+fn study_draws_the_chart_and_a_picture_per_failure() {
+    use rayoflight::study::chart::{CHART_SIZE, GAP};
+    let (dir, _) = workdir();
+    let o = rayoflight(
+        dir.path(),
+        &["study", "--out", "res", "--runs", "1", "tiny.xml"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let res = dir.path().join("res");
+    let chart = image::open(res.join("study.png")).unwrap();
+    assert_eq!((chart.width(), chart.height()), CHART_SIZE);
+    let csv = fs::read_to_string(res.join("study.csv")).unwrap();
+    let failed: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|row| row[7] == "true")
+        .map(|row| row[1].to_owned())
+        .collect();
+    // The draft preview copies every second pixel: it misses the edge of
+    // the sphere on a 16×12 image.
+    assert!(failed.iter().any(|m| m == "draft"), "{csv}");
+    let mut pictures: Vec<String> = files_in(&res)
+        .into_iter()
+        .filter(|f| f.starts_with("fail-"))
+        .collect();
+    pictures.sort();
+    let mut expected: Vec<String> = failed
+        .iter()
+        .map(|m| format!("fail-tiny-{m}.png"))
+        .collect();
+    expected.sort();
+    assert_eq!(pictures, expected);
+    for name in &pictures {
+        let picture = image::open(res.join(name)).unwrap();
+        // Method | reference | difference, 16×12 each.
+        assert_eq!(
+            (picture.width(), picture.height()),
+            (3 * 16 + 2 * GAP, 12),
+            "{name}"
+        );
+    }
+}

@@ -1,14 +1,18 @@
 //! `rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]`:
 //! every study method on every scene (the built-in study scenes when none
-//! are given), a table on stdout and DIR/study.csv.
+//! are given), a table on stdout, DIR/study.csv, the chart DIR/study.png
+//! and, for each failing case, DIR/fail-<scene>-<method>.png (method |
+//! reference | difference ×8).
 
+use rayoflight::study::chart;
 use rayoflight::{output, study};
 use std::path::PathBuf;
 use std::time::Instant;
 
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct StudyArgs {
-    /// Where study.csv goes (created); default `study/`.
+    /// Where study.csv, study.png and the failure pictures go (created);
+    /// default `study/`.
     pub out: PathBuf,
     pub runs: usize,
     pub threads: Option<usize>,
@@ -41,33 +45,54 @@ pub fn run(args: &StudyArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         "scene", "method", "time ms", "rays", "max", "mean", "within 1", "failed"
     ));
     let start = Instant::now();
-    let rows = study::run(&scenes, &methods, args.runs, args.threads, &mut |r| {
-        out(&format!(
-            "{:<18} {:<15} {:>10.2} {:>11} {:>4} {:>9.4} {:>9.4}  {}\n",
-            r.scene,
-            r.method,
-            r.time.as_secs_f64() * 1e3,
-            r.rays,
-            r.max_diff,
-            r.mean_diff,
-            r.within1,
-            if r.failed { "FAILED" } else { "" }
-        ));
-    })
+    let mut picture_error = None;
+    let rows = study::run(
+        &scenes,
+        &methods,
+        args.runs,
+        args.threads,
+        &mut |r, image, reference| {
+            if r.failed && picture_error.is_none() {
+                let path = args.out.join(chart::failure_file_name(r));
+                if let Err(e) = output::save(&chart::side_by_side(image, reference), &path) {
+                    picture_error = Some(e.to_string());
+                }
+            }
+            out(&format!(
+                "{:<18} {:<15} {:>10.2} {:>11} {:>4} {:>9.4} {:>9.4}  {}\n",
+                r.scene,
+                r.method,
+                r.time.as_secs_f64() * 1e3,
+                r.rays,
+                r.max_diff,
+                r.mean_diff,
+                r.within1,
+                if r.failed { "FAILED" } else { "" }
+            ));
+        },
+    )
     .map_err(|e| e.to_string())?;
+    if let Some(e) = picture_error {
+        return Err(e);
+    }
     let csv = args.out.join("study.csv");
     output::write_atomic(&csv, study::csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+    let png = args.out.join("study.png");
+    let picture = chart::chart(&rows).map_err(|e| e.to_string())?;
+    output::save(&picture, &png).map_err(|e| e.to_string())?;
     let failed: Vec<String> = rows
         .iter()
         .filter(|r| r.failed)
         .map(|r| format!("{} on {} ({:.4})", r.method, r.scene, r.within1))
         .collect();
     out(&format!(
-        "\n{} failures{}{}\nwrote {} in {:.1} s\n",
+        "\n{} failures{}{}\nwrote {}, {} and {} failure pictures in {:.1} s\n",
         failed.len(),
         if failed.is_empty() { "" } else { ": " },
         failed.join(", "),
         csv.display(),
+        png.display(),
+        failed.len(),
         start.elapsed().as_secs_f64()
     ));
     Ok(())

@@ -1,0 +1,394 @@
+//! The study's pictures: the chart of time against error (`study.png`)
+//! and the side-by-side picture of a failing case (method | reference |
+//! amplified difference).
+//!
+//! The chart is drawn with `plotters` into an RGB buffer, its text with
+//! DejaVu Sans compiled into the binary (`assets/fonts/`, licence beside
+//! it), so it needs no system font and no window: it works in the
+//! headless build. The caller saves the image with [`crate::output`].
+
+use super::{FAIL_BELOW, Row};
+use image::{Rgb, RgbImage};
+use plotters::coord::Shift;
+use plotters::element::{Drawable, PointCollection};
+use plotters::prelude::*;
+use plotters::style::FontStyle;
+use plotters_backend::DrawingErrorKind;
+use std::sync::Once;
+
+/// DejaVu Sans (assets/fonts/LICENSE-DejaVu.txt).
+const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
+
+/// The chart's size in pixels.
+pub const CHART_SIZE: (u32, u32) = (1200, 760);
+
+/// How much the difference panel of a failure picture amplifies.
+pub const DIFF_GAIN: u16 = 8;
+
+/// The gap between the panels of a failure picture, in pixels.
+pub const GAP: u32 = 4;
+
+/// The error plotted: the share of pixels off by more than one level.
+/// Exact rows (0) sit on the floor of the log axis, [`ERROR_FLOOR`].
+pub fn error(row: &Row) -> f64 {
+    (1.0 - row.within1).max(ERROR_FLOOR)
+}
+
+/// The bottom of the error axis: exact rows are drawn here.
+pub const ERROR_FLOOR: f64 = 1e-5;
+
+/// Why the chart could not be drawn.
+#[derive(Debug, thiserror::Error)]
+#[error("cannot draw the study chart: {0}")]
+pub struct ChartError(String);
+
+fn err<E: std::fmt::Display>(e: E) -> ChartError {
+    ChartError(e.to_string())
+}
+
+/// Makes DejaVu Sans plotters' `sans-serif` font (once).
+fn register_font() -> Result<(), ChartError> {
+    static ONCE: Once = Once::new();
+    let mut result = Ok(());
+    ONCE.call_once(|| {
+        result = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
+            .map_err(|_| ChartError("the embedded font is not a valid TrueType font".into()));
+    });
+    result
+}
+
+/// The fastest row of each scene that did not fail (ties: the first), in
+/// the order the scenes first appear.
+pub fn fastest_accurate(rows: &[Row]) -> Vec<&Row> {
+    let mut best: Vec<&Row> = Vec::new();
+    for row in rows.iter().filter(|r| !r.failed) {
+        match best.iter_mut().find(|b| b.scene == row.scene) {
+            Some(b) if row.time < b.time => *b = row,
+            Some(_) => {}
+            None => best.push(row),
+        }
+    }
+    best
+}
+
+/// Eleven colours that stay apart (Tableau 10 and black).
+const COLOURS: [RGBColor; 11] = [
+    RGBColor(0, 0, 0),
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+/// The marker of method number `i` at `coord`: the colour changes with
+/// every method and the shape with every one of five, so that no two of
+/// 55 methods look alike.
+struct Marker<C> {
+    coord: C,
+    i: usize,
+}
+
+fn marker<C>(i: usize, coord: C) -> Marker<C> {
+    Marker { coord, i }
+}
+
+impl<'a, C> PointCollection<'a, C> for &'a Marker<C> {
+    type Point = &'a C;
+    type IntoIter = std::iter::Once<&'a C>;
+    fn point_iter(self) -> Self::IntoIter {
+        std::iter::once(&self.coord)
+    }
+}
+
+impl<C, DB: DrawingBackend> Drawable<DB> for Marker<C> {
+    fn draw<I: Iterator<Item = BackendCoordinate>>(
+        &self,
+        mut points: I,
+        backend: &mut DB,
+        _: (u32, u32),
+    ) -> Result<(), DrawingErrorKind<DB::ErrorType>> {
+        let Some((x, y)) = points.next() else {
+            return Ok(());
+        };
+        let colour = COLOURS[self.i % COLOURS.len()];
+        let filled = colour.filled();
+        match self.i % 5 {
+            0 => backend.draw_circle((x, y), 5, &filled, true),
+            1 => backend.draw_rect((x - 4, y - 4), (x + 4, y + 4), &filled, true),
+            2 => backend.fill_polygon([(x, y - 6), (x + 6, y + 5), (x - 6, y + 5)], &filled),
+            3 => {
+                let line = colour.stroke_width(2);
+                backend.draw_line((x - 5, y - 5), (x + 5, y + 5), &line)?;
+                backend.draw_line((x - 5, y + 5), (x + 5, y - 5), &line)
+            }
+            _ => backend.fill_polygon([(x, y - 6), (x + 6, y), (x, y + 6), (x - 6, y)], &filled),
+        }
+    }
+}
+
+/// Pixel coordinates on the backend.
+type BackendCoordinate = (i32, i32);
+
+/// Draws the chart of `rows`: median time (ms, log) against the share of
+/// pixels off by more than one level (log, exact rows on the floor), one
+/// mark per scene and method, methods told apart by colour and shape, the
+/// fail threshold dashed, and the fastest accurate method of each scene
+/// circled and labelled with the scene's name.
+pub fn chart(rows: &[Row]) -> Result<RgbImage, ChartError> {
+    register_font()?;
+    let (w, h) = CHART_SIZE;
+    let mut buffer = vec![0u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buffer, (w, h)).into_drawing_area();
+        draw(&root, rows)?;
+        root.present().map_err(err)?;
+    }
+    RgbImage::from_raw(w, h, buffer).ok_or_else(|| ChartError("buffer size".into()))
+}
+
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Result<(), ChartError> {
+    root.fill(&WHITE).map_err(err)?;
+    let times = rows.iter().map(|r| r.time.as_secs_f64() * 1e3);
+    let (lo, hi) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| {
+        (lo.min(t), hi.max(t))
+    });
+    let (lo, hi) = if lo.is_finite() && lo > 0.0 {
+        (lo / 1.6, hi * 1.6)
+    } else {
+        (0.01, 10.0)
+    };
+    let mut chart = ChartBuilder::on(root)
+        .caption(
+            "RayOfLight study: speed against accuracy (circled: fastest method that passes, per scene)",
+            ("sans-serif", 20),
+        )
+        .margin(12)
+        .x_label_area_size(48)
+        .y_label_area_size(90)
+        .build_cartesian_2d((lo..hi).log_scale(), (ERROR_FLOOR / 1.5..1.5).log_scale())
+        .map_err(err)?;
+    chart
+        .configure_mesh()
+        .x_desc("median render time, ms (log)")
+        .y_desc("pixels off by more than 1 level (1 − within1, log; bottom: exact)")
+        .axis_desc_style(("sans-serif", 16))
+        .label_style(("sans-serif", 14))
+        .x_label_formatter(&|t| format_number(*t))
+        .y_label_formatter(&|e| {
+            if *e <= ERROR_FLOOR * 1.01 {
+                "exact".to_owned()
+            } else {
+                format!("{}%", format_number(*e * 100.0))
+            }
+        })
+        .light_line_style(RGBColor(235, 235, 235))
+        .draw()
+        .map_err(err)?;
+
+    // The fail threshold.
+    let threshold = 1.0 - FAIL_BELOW;
+    chart
+        .draw_series(DashedLineSeries::new(
+            [(lo, threshold), (hi, threshold)],
+            8,
+            6,
+            RED.mix(0.6).stroke_width(2),
+        ))
+        .map_err(err)?
+        .label(format!("fails above {}%", format_number(threshold * 100.0)))
+        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.mix(0.6).stroke_width(2)));
+
+    // One series per method, in the order the rows name them.
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method) {
+            methods.push(r.method);
+        }
+    }
+    for (i, method) in methods.iter().enumerate() {
+        let points = rows
+            .iter()
+            .filter(|r| r.method == *method)
+            .map(move |r| marker(i, (r.time.as_secs_f64() * 1e3, error(r))));
+        chart
+            .draw_series(points)
+            .map_err(err)?
+            .label(*method)
+            .legend(move |(x, y)| marker(i, (x + 9, y)));
+    }
+
+    // The fastest accurate choice of each scene: circled and named.
+    // Names of scenes whose marks nearly coincide are stacked upwards.
+    let mut best = fastest_accurate(rows);
+    best.sort_by_key(|r| r.time);
+    let at = |r: &Row| (r.time.as_secs_f64() * 1e3, error(r));
+    let mut placed: Vec<(f64, f64)> = Vec::new();
+    let mut labels = Vec::new();
+    for r in &best {
+        let (t, e) = at(r);
+        let near = placed
+            .iter()
+            .filter(|(pt, pe)| (t / pt).max(pt / t) < 2.5 && (e / pe).max(pe / e) < 3.0)
+            .count();
+        placed.push((t, e));
+        labels.push(-26 - 16 * near as i32);
+    }
+    chart
+        .draw_series(best.iter().zip(labels).map(|(r, dy)| {
+            EmptyElement::at(at(r))
+                + Circle::new((0, 0), 11, BLACK.stroke_width(2))
+                + Text::new(r.scene.clone(), (8, dy), ("sans-serif", 14))
+        }))
+        .map_err(err)?;
+
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.9))
+        .border_style(BLACK.mix(0.4))
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(err)?;
+    Ok(())
+}
+
+/// A number for a tick label: no trailing zeros, no exponent for the
+/// ranges the study meets.
+fn format_number(x: f64) -> String {
+    let text = if x >= 1.0 {
+        format!("{x:.0}")
+    } else {
+        let digits = (-x.log10()).ceil().max(1.0) as usize;
+        format!("{x:.digits$}")
+    };
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        text
+    }
+}
+
+/// A failing case side by side: `image` | `reference` | their absolute
+/// difference times [`DIFF_GAIN`] (clamped), on a grey background with a
+/// [`GAP`]-pixel gap between the panels.
+///
+/// # Panics
+/// If the two images differ in size.
+pub fn side_by_side(image: &RgbImage, reference: &RgbImage) -> RgbImage {
+    assert_eq!(image.dimensions(), reference.dimensions());
+    let (w, h) = image.dimensions();
+    let mut out = RgbImage::from_pixel(3 * w + 2 * GAP, h, Rgb([128, 128, 128]));
+    for (x, y, a) in image.enumerate_pixels() {
+        let b = reference.get_pixel(x, y);
+        out.put_pixel(x, y, *a);
+        out.put_pixel(w + GAP + x, y, *b);
+        let diff = |c: usize| (u16::from(a[c].abs_diff(b[c])) * DIFF_GAIN).min(255) as u8;
+        out.put_pixel(2 * (w + GAP) + x, y, Rgb([diff(0), diff(1), diff(2)]));
+    }
+    out
+}
+
+/// A scene or method name made safe for a file name: letters, digits,
+/// `-`, `_` and `.` kept, anything else `_`.
+pub fn file_safe(name: &str) -> String {
+    name.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The failure picture's file name for a row: `fail-<scene>-<method>.png`.
+pub fn failure_file_name(row: &Row) -> String {
+    format!(
+        "fail-{}-{}.png",
+        file_safe(&row.scene),
+        file_safe(row.method)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::time::Duration;
+
+    fn row(scene: &str, method: &'static str, ms: u64, within1: f64) -> Row {
+        Row {
+            scene: scene.into(),
+            method,
+            time: Duration::from_millis(ms),
+            rays: 1,
+            max_diff: 0,
+            mean_diff: 0.0,
+            within1,
+            failed: within1 < FAIL_BELOW,
+        }
+    }
+
+    #[test]
+    fn fastest_accurate_skips_failures() {
+        let rows = [
+            row("a", "default", 10, 1.0),
+            row("a", "draft", 2, 0.5),
+            row("a", "textbook", 8, 1.0),
+            row("b", "default", 5, 1.0),
+        ];
+        let best: Vec<_> = fastest_accurate(&rows)
+            .iter()
+            .map(|r| (r.scene.as_str(), r.method))
+            .collect();
+        assert_eq!(best, [("a", "textbook"), ("b", "default")]);
+    }
+
+    #[test]
+    fn chart_draws_text_and_marks() {
+        let rows = [
+            row("a", "default", 10, 1.0),
+            row("a", "f32", 3, 0.9),
+            row("b", "default", 100, 1.0),
+        ];
+        let image = chart(&rows).unwrap();
+        assert_eq!(image.dimensions(), CHART_SIZE);
+        // Not blank: text, axes and marks in several colours.
+        let dark = image.pixels().filter(|p| p[0] < 64 && p[1] < 64).count();
+        assert!(dark > 1000, "{dark} dark pixels");
+        // The chart of no rows still draws (empty axes).
+        chart(&[]).unwrap();
+    }
+
+    #[test]
+    fn side_by_side_amplifies_the_difference() {
+        let a = RgbImage::from_pixel(2, 1, Rgb([10, 20, 30]));
+        let b = RgbImage::from_pixel(2, 1, Rgb([12, 20, 100]));
+        let s = side_by_side(&a, &b);
+        assert_eq!(s.dimensions(), (6 + 2 * GAP, 1));
+        assert_eq!(*s.get_pixel(0, 0), Rgb([10, 20, 30]));
+        assert_eq!(*s.get_pixel(2 + GAP, 0), Rgb([12, 20, 100]));
+        assert_eq!(*s.get_pixel(2 * (2 + GAP), 0), Rgb([16, 0, 255]));
+    }
+
+    #[test]
+    fn file_names_are_safe() {
+        assert_eq!(file_safe("a b/c..d-1e7"), "a_b_c..d-1e7");
+        let r = row("x/y", "f32", 1, 0.5);
+        assert_eq!(failure_file_name(&r), "fail-x_y-f32.png");
+    }
+
+    #[test]
+    fn tick_numbers_are_short() {
+        assert_eq!(format_number(100.0), "100");
+        assert_eq!(format_number(0.1), "0.1");
+        assert_eq!(format_number(0.001), "0.001");
+        assert_eq!(format_number(1.0), "1");
+    }
+}
