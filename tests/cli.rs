@@ -3,6 +3,9 @@
 //! Every render runs with `--no-gui`, which the GUI build needs to stay
 //! headless and the headless build accepts.
 
+mod common;
+
+use common::{TINY, files_in, stderr, stdout};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -17,36 +20,12 @@ fn rayoflight(dir: &Path, args: &[&str]) -> Output {
         .expect("the binary runs")
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn stdout(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stdout).into_owned()
-}
-
-const TINY: &str = r#"<scene>
-  <sphere><transformation><translate z="3"/></transformation></sphere>
-  <light x="0" y="-3" z="-3"/>
-  <camera width="16" height="12" eyeDistance="2"/>
-</scene>
-"#;
-
 /// A temporary directory holding `tiny.xml`.
 fn workdir() -> (tempfile::TempDir, PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("tiny.xml");
     fs::write(&scene, TINY).unwrap();
     (dir, scene)
-}
-
-fn files_in(dir: &Path) -> Vec<String> {
-    let mut names: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 #[test]

@@ -6,17 +6,13 @@
 //! the binary is run as `nobody` (util-linux `runuser`).
 #![cfg(unix)]
 
+mod common;
+
+use common::{TINY, files_in, stderr};
 use std::fs;
 use std::os::unix::fs::PermissionsExt;
 use std::path::Path;
 use std::process::{Command, Output};
-
-const TINY: &str = r#"<scene>
-  <sphere><transformation><translate z="3"/></transformation></sphere>
-  <light x="0" y="-3" z="-3"/>
-  <camera width="16" height="12" eyeDistance="2"/>
-</scene>
-"#;
 
 fn is_root() -> bool {
     Command::new("id")
@@ -45,10 +41,6 @@ fn run(dir: &Path, args: &[&str], unprivileged: bool) -> Output {
         .expect("the binary runs")
 }
 
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
 /// A directory anyone may enter, holding the tiny scene.
 fn workdir() -> tempfile::TempDir {
     let dir = tempfile::tempdir().unwrap();
@@ -60,15 +52,6 @@ fn workdir() -> tempfile::TempDir {
     )
     .unwrap();
     dir
-}
-
-fn names(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    v.sort();
-    v
 }
 
 #[test]
@@ -87,7 +70,7 @@ fn a_full_disk_is_reported_and_the_device_kept() {
     );
     let meta = fs::metadata("/dev/full").unwrap();
     assert!(!meta.is_file(), "/dev/full is still a device");
-    assert_eq!(names(dir.path()), ["full.png", "tiny.xml"]);
+    assert_eq!(files_in(dir.path()), ["full.png", "tiny.xml"]);
 }
 
 #[test]
@@ -103,7 +86,7 @@ fn a_read_only_directory_is_reported_without_leftovers() {
         "{}",
         stderr(&o)
     );
-    assert!(names(&out).is_empty());
+    assert!(files_in(&out).is_empty());
 }
 
 #[test]
@@ -116,7 +99,7 @@ fn a_read_only_image_is_not_replaced() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("read-only"), "{}", stderr(&o));
     assert_eq!(fs::read(&image).unwrap(), b"old");
-    assert_eq!(names(dir.path()), ["tiny.png", "tiny.xml"]);
+    assert_eq!(files_in(dir.path()), ["tiny.png", "tiny.xml"]);
 }
 
 #[test]
@@ -134,5 +117,5 @@ fn an_unreadable_scene_is_reported() {
         "{}",
         stderr(&o)
     );
-    assert_eq!(names(dir.path()), ["tiny.xml"]);
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
 }

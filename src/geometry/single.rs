@@ -127,14 +127,7 @@ fn quadratic<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
         }
         (q / a, c / q)
     };
-    let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-    if near > 0.0 {
-        Some(near)
-    } else if far > 0.0 {
-        Some(far)
-    } else {
-        None
-    }
+    super::sphere::nearest_positive(t0, t1)
 }
 
 #[cfg(test)]

@@ -88,11 +88,15 @@ pub fn intersect_ball_textbook(ray: &Ray, center: glam::DVec3, radius: f64) -> O
     nearest_positive((-b - sq) / 2.0, (-b + sq) / 2.0)
 }
 
-fn nearest_positive(t0: f64, t1: f64) -> Option<f64> {
+/// The smaller of two roots that is > 0, in f64 or f32 (`T::default()` is
+/// zero). NaN roots are never chosen.
+#[inline]
+pub(super) fn nearest_positive<T: PartialOrd + Copy + Default>(t0: T, t1: T) -> Option<T> {
+    let zero = T::default();
     let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-    if near > 0.0 {
+    if near > zero {
         Some(near)
-    } else if far > 0.0 {
+    } else if far > zero {
         Some(far)
     } else {
         None
