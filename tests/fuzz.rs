@@ -1,0 +1,204 @@
+//! A seeded mutation fuzzer for the scene parser and for parse-then-render
+//! of tiny images (see fuzz/README.md). Time-bounded: RAYOFLIGHT_FUZZ_SECONDS
+//! (default 5, CI 60); repeatable: RAYOFLIGHT_FUZZ_SEED (default 1).
+
+use rayoflight::render::{self, RenderOptions};
+use rayoflight::scene;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        // xorshift64*
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
+
+const NUMBERS: &[&str] = &[
+    "1e308",
+    "-1e308",
+    "1e-320",
+    "-0",
+    "0",
+    "nan",
+    "inf",
+    "1e400",
+    "4294967296",
+    "18446744073709551616",
+    "10001",
+    "+1",
+    ".5",
+    "1,5",
+    "0x10",
+    "",
+    " ",
+    "-1",
+    "2.5e-300",
+];
+
+const SNIPPETS: &[&str] = &[
+    "<sphere/>",
+    "<plane/>",
+    "<camera width=\"3\" height=\"2\" eyeDistance=\"1\"/>",
+    "<model type=\"whitted\" depth=\"10000\"/>",
+    "<light x=\"0\" y=\"0\" z=\"0\"/>",
+    "<scale factor=\"0\"/>",
+    "<scale x=\"1e-300\"/>",
+    "<translate x=\"1e308\"/>",
+    "<!-- -->",
+    "<![CDATA[x]]>",
+    "&amp;",
+    "&#0;",
+    "&#x110000;",
+    "<?pi?>",
+    "<!DOCTYPE x>",
+    "</scene>",
+    "<scene>",
+    "\u{feff}",
+    "\t",
+    "é",
+    "\u{1F600}",
+    ">",
+    "<",
+    "\"",
+    "'",
+    "=",
+];
+
+fn corpus() -> Vec<Vec<u8>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .expect("fuzz/corpus exists")
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    let inputs: Vec<Vec<u8>> = files.iter().map(|f| std::fs::read(f).unwrap()).collect();
+    assert!(inputs.len() >= 50, "the corpus is there");
+    inputs
+}
+
+fn mutate(rng: &mut Rng, input: &[u8], corpus: &[Vec<u8>]) -> Vec<u8> {
+    let mut data = input.to_vec();
+    for _ in 0..1 + rng.below(4) {
+        let at = rng.below(data.len() + 1);
+        match rng.below(8) {
+            0 if !data.is_empty() => {
+                let i = rng.below(data.len());
+                data[i] ^= 1 << rng.below(8);
+            }
+            1 if !data.is_empty() => {
+                let end = (at + 1 + rng.below(16)).min(data.len());
+                data.drain(at.min(end)..end);
+            }
+            2 => {
+                let byte = rng.next() as u8;
+                data.insert(at, byte);
+            }
+            3 => {
+                let s = SNIPPETS[rng.below(SNIPPETS.len())].as_bytes();
+                data.splice(at..at, s.iter().copied());
+            }
+            4 => {
+                // Replace the next quoted value by an extreme number.
+                if let Some(q) = data[at..].iter().position(|&b| b == b'"') {
+                    let start = at + q + 1;
+                    if let Some(len) = data[start..].iter().position(|&b| b == b'"') {
+                        let n = NUMBERS[rng.below(NUMBERS.len())].as_bytes();
+                        data.splice(start..start + len, n.iter().copied());
+                    }
+                }
+            }
+            5 => {
+                // Splice with another corpus entry.
+                let other = &corpus[rng.below(corpus.len())];
+                let from = rng.below(other.len() + 1);
+                let to = (from + rng.below(200)).min(other.len());
+                data.splice(at..at, other[from..to].iter().copied());
+            }
+            6 if !data.is_empty() => {
+                // Duplicate a chunk (repeated elements and attributes).
+                let end = (at + rng.below(80)).min(data.len());
+                let chunk = data[at.min(end)..end].to_vec();
+                data.splice(end..end, chunk);
+            }
+            _ => data.truncate(at),
+        }
+    }
+    data
+}
+
+/// Parses and, where it parses, renders a tiny version: must not panic.
+fn exercise(data: &[u8]) {
+    let Ok(text) = std::str::from_utf8(data) else {
+        return; // load() refuses non-UTF-8 before parsing
+    };
+    if let Ok(mut s) = scene::parse(text, Path::new("fuzz.xml")) {
+        s.camera.width = s.camera.width.min(24);
+        s.camera.height = s.camera.height.min(24);
+        s.model.depth = s.model.depth.min(50);
+        s.objects.truncate(200);
+        s.lights.truncate(50);
+        render::render(
+            &s,
+            &RenderOptions {
+                threads: Some(1),
+                ..RenderOptions::default()
+            },
+        )
+        .expect("valid options");
+        let _ = scene::edit::to_xml(&s);
+    }
+}
+
+fn env_or(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+#[test]
+fn fuzz_parse_and_render() {
+    let seconds = env_or("RAYOFLIGHT_FUZZ_SECONDS", 5);
+    let mut rng = Rng(env_or("RAYOFLIGHT_FUZZ_SEED", 1).max(1));
+    let corpus = corpus();
+    let start = Instant::now();
+    let mut runs = 0u64;
+    let crashes = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-crashes");
+    // Quiet the default panic message: a crash is reported below.
+    std::panic::set_hook(Box::new(|_| {}));
+    while start.elapsed() < Duration::from_secs(seconds) {
+        let seed = &corpus[rng.below(corpus.len())];
+        let input = mutate(&mut rng, seed, &corpus);
+        runs += 1;
+        if catch_unwind(AssertUnwindSafe(|| exercise(&input))).is_err() {
+            let _ = std::panic::take_hook();
+            std::fs::create_dir_all(&crashes).unwrap();
+            let file = crashes.join(format!("crash-{runs}.xml"));
+            std::fs::write(&file, &input).unwrap();
+            panic!("input {runs} panicked; saved to {}", file.display());
+        }
+    }
+    let _ = std::panic::take_hook();
+    eprintln!("fuzz: {runs} inputs in {seconds} s, no panic");
+    assert!(runs > 0);
+}
+
+#[test]
+fn fuzz_regressions_stay_fixed() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fuzz_regressions");
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        exercise(&std::fs::read(&path).unwrap());
+    }
+}
