@@ -370,3 +370,41 @@ fn a_panel_edit_renders_the_edited_scene() {
         std::thread::sleep(Duration::from_millis(10));
     }
 }
+
+#[test]
+fn watcher_survives_a_rename_away_and_a_directory_in_place() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, scene_text(0.1, 8)).unwrap();
+    let (tx, rx) = mpsc::channel();
+    let _watcher = SceneWatcher::new(&path, move |e| {
+        let _ = tx.send(e);
+    })
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+
+    // Renamed away: missing.
+    std::fs::rename(&path, dir.path().join("elsewhere.xml")).unwrap();
+    assert!(matches!(next(&rx), FileEvent::Missing));
+
+    // A directory where the file was: an error that says so.
+    std::fs::create_dir(&path).unwrap();
+    match next(&rx) {
+        FileEvent::Broken(e) => assert!(e.to_string().contains("directory"), "{e}"),
+        other => panic!("expected an error, got {other:?}"),
+    }
+
+    // A good file again: back to normal (a Missing may come first, between
+    // the directory's removal and the new file).
+    std::fs::remove_dir(&path).unwrap();
+    std::fs::write(&path, scene_text(0.6, 8)).unwrap();
+    loop {
+        match next(&rx) {
+            FileEvent::Missing => continue,
+            event => {
+                assert_loaded_red(event, 0.6);
+                break;
+            }
+        }
+    }
+}

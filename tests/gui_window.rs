@@ -5,9 +5,13 @@
 //! save keeps the old picture and shows the error banner; a fix recovers.
 //! Screenshots are kept in target/tmp/gui-screenshots/ for people to see.
 //!
-//! Needs Xvfb and ImageMagick (`apt-get install xvfb imagemagick
-//! libgl1-mesa-dri`); `.ci/run` installs them. Fails, never skips, when
-//! they are missing.
+//! Finally a render of whitted depth 10 000 between two mirrors at 4K is
+//! started and the window closed with Ctrl+Q: the process must exit within
+//! 1 s (3x allowed).
+//!
+//! Needs Xvfb, ImageMagick and xdotool (`apt-get install xvfb imagemagick
+//! xdotool libgl1-mesa-dri`); `.ci/run` installs them. Fails, never skips,
+//! when they are missing.
 #![cfg(feature = "gui")]
 
 use std::path::{Path, PathBuf};
@@ -201,4 +205,54 @@ fn the_window_follows_saves_of_the_scene_file() {
         app.0.try_wait().unwrap().is_none(),
         "the app is still running"
     );
+
+    // A long render (whitted depth 10 000 between two perfect mirrors,
+    // 3840×2160), then Ctrl+Q: the window closes within 1 s (3x allowed).
+    atomic_save(&path, MIRRORS);
+    std::thread::sleep(Duration::from_millis(800));
+    assert!(
+        app.0.try_wait().unwrap().is_none(),
+        "rendering, still running"
+    );
+    let xdotool = |args: &[&str]| {
+        Command::new("xdotool")
+            .args(args)
+            .env("DISPLAY", &display)
+            .output()
+            .expect("xdotool runs (apt-get install xdotool)")
+    };
+    let found = xdotool(&["search", "--name", "RayOfLight"]);
+    let window = String::from_utf8_lossy(&found.stdout)
+        .lines()
+        .next()
+        .expect("the app's window is found")
+        .to_owned();
+    xdotool(&["windowfocus", "--sync", &window]);
+    let start = Instant::now();
+    xdotool(&["key", "--window", &window, "ctrl+q"]);
+    loop {
+        if let Some(status) = app.0.try_wait().unwrap() {
+            let took = start.elapsed();
+            eprintln!("window closed during a long render in {took:?} ({status})");
+            assert!(status.success(), "clean exit");
+            assert!(took < Duration::from_secs(3), "closing took {took:?}");
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(3),
+            "the app did not exit within 3 s of Ctrl+Q"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
 }
+
+/// Two facing perfect mirrors with the camera between them, whitted depth
+/// 10 000 at 3840×2160: every pixel bounces until the depth runs out.
+const MIRRORS: &str = r#"<scene>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
+  <light x="0" y="-1" z="0"/>
+  <camera width="3840" height="2160" eyeDistance="1"/>
+  <model type="whitted" depth="10000"/>
+</scene>
+"#;

@@ -21,6 +21,7 @@ use std::time::{Duration, Instant};
 const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
 const EXPORT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::E);
+const QUIT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Q);
 
 /// How the picture is placed in the central area.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -338,6 +339,10 @@ impl RayOfLightApp {
         if ctx.input_mut(|i| i.consume_shortcut(&EXPORT)) {
             self.start_dialog(DialogKind::Export);
         }
+        if ctx.input_mut(|i| i.consume_shortcut(&QUIT)) {
+            // Through the close request, so unsaved edits are asked about.
+            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+        }
         let dropped: Vec<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files
@@ -424,7 +429,7 @@ impl RayOfLightApp {
                     self.path_prompt = Some(PathPrompt::new(DialogKind::Export));
                 }
                 ui.separator();
-                if ui.button("Quit").clicked() {
+                if ui.button("Quit  Ctrl+Q").clicked() {
                     ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
                 }
             });
