@@ -190,17 +190,29 @@ fn quiet(rx: &mpsc::Receiver<FileEvent>) {
     }
 }
 
-#[test]
-fn watcher_sees_renames_writes_deletes_and_recreates() {
+/// A temporary scene file (red 0.1) under a watcher whose events arrive on
+/// the returned channel; the watcher is running when this returns.
+fn watched_scene() -> (
+    tempfile::TempDir,
+    std::path::PathBuf,
+    mpsc::Receiver<FileEvent>,
+    SceneWatcher,
+) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("scene.xml");
     std::fs::write(&path, scene_text(0.1, 8)).unwrap();
     let (tx, rx) = mpsc::channel();
-    let _watcher = SceneWatcher::new(&path, move |e| {
+    let watcher = SceneWatcher::new(&path, move |e| {
         let _ = tx.send(e);
     })
     .unwrap();
     std::thread::sleep(Duration::from_millis(100));
+    (dir, path, rx, watcher)
+}
+
+#[test]
+fn watcher_sees_renames_writes_deletes_and_recreates() {
+    let (dir, path, rx, _watcher) = watched_scene();
 
     // Atomic rename, as vim, VS Code and sed -i save.
     let tmp = dir.path().join(".scene.xml.swp");
@@ -373,15 +385,7 @@ fn a_panel_edit_renders_the_edited_scene() {
 
 #[test]
 fn watcher_survives_a_rename_away_and_a_directory_in_place() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    std::fs::write(&path, scene_text(0.1, 8)).unwrap();
-    let (tx, rx) = mpsc::channel();
-    let _watcher = SceneWatcher::new(&path, move |e| {
-        let _ = tx.send(e);
-    })
-    .unwrap();
-    std::thread::sleep(Duration::from_millis(100));
+    let (dir, path, rx, _watcher) = watched_scene();
 
     // Renamed away: missing.
     std::fs::rename(&path, dir.path().join("elsewhere.xml")).unwrap();

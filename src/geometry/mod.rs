@@ -19,7 +19,7 @@ mod single;
 mod sphere;
 
 pub use bvh::{Aabb, Bvh};
-pub use plane::{intersect_plane, intersect_plane_world};
+pub use plane::intersect_plane_world;
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
 pub use single::{Primitive32, Ray32};

@@ -1,16 +1,7 @@
-//! Ray against the plane z = 0.
+//! Ray against a plane (the object-space plane z = 0 placed in the world:
+//! a point and a unit normal).
 
 use super::Ray;
-
-/// t > 0 where o.z + t d.z = 0, or `None` when the ray is parallel to the
-/// plane or moving away from it.
-pub fn intersect_plane(ray: &Ray) -> Option<f64> {
-    if ray.dir.z == 0.0 {
-        return None;
-    }
-    let t = -ray.origin.z / ray.dir.z;
-    (t > 0.0 && t.is_finite()).then_some(t)
-}
 
 /// t > 0 where the ray meets the plane through `point` with unit `normal`
 /// (world space), or `None` when parallel or moving away.
@@ -31,6 +22,11 @@ pub fn intersect_plane_world(ray: &Ray, point: glam::DVec3, normal: glam::DVec3)
 mod tests {
     use super::*;
     use glam::DVec3;
+
+    /// The plane z = 0.
+    fn intersect_plane(ray: &Ray) -> Option<f64> {
+        intersect_plane_world(ray, DVec3::ZERO, DVec3::Z)
+    }
 
     #[test]
     fn hits_from_either_side() {

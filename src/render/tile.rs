@@ -1,7 +1,6 @@
 //! Tiles of the image and the cancellation token checked inside them.
 
 use super::Prepared;
-use image::RgbImage;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -15,22 +14,6 @@ pub struct Tile {
     pub y: u32,
     pub width: u32,
     pub height: u32,
-}
-
-impl Tile {
-    /// Copies this tile's pixels (row-major RGB8) into the image.
-    pub fn copy_into(&self, pixels: &[u8], image: &mut RgbImage) {
-        let row_bytes = self.width as usize * 3;
-        for (row, chunk) in pixels.chunks_exact(row_bytes).enumerate() {
-            for (col, rgb) in chunk.chunks_exact(3).enumerate() {
-                image.put_pixel(
-                    self.x + col as u32,
-                    self.y + row as u32,
-                    image::Rgb([rgb[0], rgb[1], rgb[2]]),
-                );
-            }
-        }
-    }
 }
 
 /// Cuts a width × height image into tiles of at most `size` × `size`, in
