@@ -24,15 +24,49 @@ use std::time::{Duration, Instant};
 #[derive(Debug, Clone, PartialEq)]
 pub struct Method {
     pub name: &'static str,
-    pub options: RenderOptions,
+    pub options: Options,
 }
 
-/// The methods compared, the reference (`default`) first.
+/// How a method renders: the same options for every scene, or the options
+/// [`render::auto`] plans for each scene.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Options {
+    Fixed(RenderOptions),
+    Auto,
+}
+
+impl Method {
+    /// The options this method renders `scene` with.
+    pub fn options_for(&self, scene: &Scene) -> RenderOptions {
+        match &self.options {
+            Options::Fixed(options) => options.clone(),
+            Options::Auto => render::auto(scene).options,
+        }
+    }
+
+    /// Whether the method supersamples (and is measured against the
+    /// supersampled reference).
+    pub fn supersamples(&self) -> bool {
+        matches!(&self.options, Options::Fixed(o) if o.aa > 1)
+    }
+}
+
+/// The methods compared: `default` (the reference: the contract's method
+/// done plainly, every ray against every object, every chain to its
+/// depth) first, then `auto`, then variations of the exact fast path
+/// ([`RenderOptions::default`]), one change each.
 pub fn methods() -> Vec<Method> {
     let d = RenderOptions::default;
-    let method = |name, options| Method { name, options };
+    let method = |name, options| Method {
+        name,
+        options: Options::Fixed(options),
+    };
     vec![
-        method("default", d()),
+        method("default", RenderOptions::reference()),
+        Method {
+            name: "auto",
+            options: Options::Auto,
+        },
         method(
             "f32",
             RenderOptions {
@@ -100,7 +134,7 @@ pub struct StudyScene {
 }
 
 /// The built-in study scenes (`scenes/study/`), in the order reported.
-pub const SCENES: [(&str, &str); 9] = [
+pub const SCENES: [(&str, &str); 10] = [
     ("example", include_str!("../scenes/study/example.xml")),
     (
         "example-1e3",
@@ -122,6 +156,7 @@ pub const SCENES: [(&str, &str); 9] = [
         "tiny-on-huge",
         include_str!("../scenes/study/tiny-on-huge.xml"),
     ),
+    ("tiny-far", include_str!("../scenes/study/tiny-far.xml")),
     (
         "mirror-corridor",
         include_str!("../scenes/study/mirror-corridor.xml"),
@@ -170,10 +205,12 @@ pub fn load_scenes<P: AsRef<Path>>(paths: &[P]) -> Result<Vec<StudyScene>, LoadE
 /// The reference images of one scene.
 #[derive(Debug, Clone)]
 pub struct References {
-    /// The default method's image.
+    /// The default method's image ([`RenderOptions::reference`]).
     pub default: RgbImage,
-    /// The default method supersampled [`MAX_AA`]×[`MAX_AA`]: the
-    /// reference of the anti-aliasing methods. Rendered only when asked.
+    /// The default image supersampled [`MAX_AA`]×[`MAX_AA`]: the
+    /// reference of the anti-aliasing methods. Rendered only when asked,
+    /// on the exact fast path (256 plain renders would dominate the study;
+    /// the fast path's image is the plain one, see tests/exact_shortcuts.rs).
     pub supersampled: Option<RgbImage>,
 }
 
@@ -189,10 +226,10 @@ impl References {
             scene,
             &RenderOptions {
                 threads,
-                ..RenderOptions::default()
+                ..RenderOptions::reference()
             },
         )?;
-        let supersampled = if methods.iter().any(|m| m.options.aa > 1) {
+        let supersampled = if methods.iter().any(Method::supersamples) {
             Some(render::render(
                 scene,
                 &RenderOptions {
@@ -213,7 +250,7 @@ impl References {
     /// The image `method` is measured against.
     pub fn for_method(&self, method: &Method) -> &RgbImage {
         match &self.supersampled {
-            Some(image) if method.options.aa > 1 => image,
+            Some(image) if method.supersamples() => image,
             _ => &self.default,
         }
     }
@@ -269,21 +306,28 @@ pub fn measure(
     reference: &RgbImage,
     runs: usize,
 ) -> Result<Row, RenderError> {
-    measure_image(scene, method, reference, runs).map(|(row, _)| row)
+    measure_image(scene, method, reference, runs, None).map(|(row, _)| row)
 }
 
-/// [`measure`], and the image the method rendered (its first run).
+/// [`measure`] with `threads` threads (`None`: one per core), and the image
+/// the method rendered (its first run). The time includes `auto`'s
+/// planning.
 pub fn measure_image(
     scene: &StudyScene,
     method: &Method,
     reference: &RgbImage,
     runs: usize,
+    threads: Option<usize>,
 ) -> Result<(Row, RgbImage), RenderError> {
     let mut times = Vec::with_capacity(runs.max(1));
     let mut result = None;
     for _ in 0..runs.max(1) {
         let start = Instant::now();
-        let (image, stats) = render::render_with_stats(&scene.scene, &method.options)?;
+        let options = RenderOptions {
+            threads,
+            ..method.options_for(&scene.scene)
+        };
+        let (image, stats) = render::render_with_stats(&scene.scene, &options)?;
         times.push(start.elapsed());
         result.get_or_insert((image, stats));
     }
@@ -318,15 +362,8 @@ pub fn run(
     for scene in scenes {
         let references = References::new(&scene.scene, methods, threads)?;
         for method in methods {
-            let method = Method {
-                name: method.name,
-                options: RenderOptions {
-                    threads,
-                    ..method.options.clone()
-                },
-            };
-            let reference = references.for_method(&method);
-            let (row, image) = measure_image(scene, &method, reference, runs)?;
+            let reference = references.for_method(method);
+            let (row, image) = measure_image(scene, method, reference, runs, threads)?;
             progress(&row, &image, reference);
             rows.push(row);
         }
@@ -381,7 +418,7 @@ mod tests {
     fn methods_are_named_once_and_default_first() {
         let m = methods();
         assert_eq!(m[0].name, "default");
-        assert_eq!(m[0].options, RenderOptions::default());
+        assert_eq!(m[0].options, Options::Fixed(RenderOptions::reference()));
         let mut names: Vec<_> = m.iter().map(|m| m.name).collect();
         names.sort();
         names.dedup();

@@ -1,7 +1,8 @@
 //! The work the renderer skips must never show: the per-tile frustum culling
-//! of primary rays, the black tiles, the BVH and the early end of whitted
-//! chains all give exactly the image of the plain path (every pixel through
-//! `Prepared::pixel`, every chain to its full depth).
+//! of primary rays, the black tiles, the BVH, the early end of whitted
+//! chains and the options `auto` plans all give exactly the image of the
+//! plain path (every pixel through `Prepared::pixel`, every ray against
+//! every object, every chain to its full depth).
 
 use rayoflight::render::{self, RenderOptions};
 use rayoflight::scene::{self, Scene};
@@ -11,13 +12,9 @@ fn load(relative: &str) -> Scene {
     scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)).unwrap()
 }
 
-/// Every pixel through the un-culled path, without early stop.
+/// Every pixel through the un-culled path, without BVH or early stop.
 fn plain(scene: &Scene) -> image::RgbImage {
-    let options = RenderOptions {
-        early_stop: false,
-        ..RenderOptions::default()
-    };
-    let prepared = render::prepare(scene, &options);
+    let prepared = render::prepare(scene, &RenderOptions::reference());
     image::RgbImage::from_fn(prepared.width(), prepared.height(), |i, j| {
         image::Rgb(prepared.pixel(i, j))
     })
@@ -48,14 +45,17 @@ fn scenes() -> Vec<(String, Scene)> {
 #[test]
 fn shortcuts_never_change_a_pixel() {
     for (name, scene) in scenes() {
-        let fast = render::render(&scene, &RenderOptions::default()).unwrap();
         let reference = plain(&scene);
-        let differing = fast
-            .pixels()
-            .zip(reference.pixels())
-            .filter(|(a, b)| a != b)
-            .count();
-        assert_eq!(differing, 0, "{name}: {differing} pixels differ");
+        let auto = render::auto(&scene).options;
+        for (method, options) in [("default", RenderOptions::default()), ("auto", auto)] {
+            let fast = render::render(&scene, &options).unwrap();
+            let differing = fast
+                .pixels()
+                .zip(reference.pixels())
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differing, 0, "{name}, {method}: {differing} pixels differ");
+        }
     }
 }
 

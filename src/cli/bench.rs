@@ -268,9 +268,10 @@ fn time_render(
     threads: usize,
     runs: usize,
 ) -> Result<(Duration, RenderStats, image::RgbImage), String> {
+    // What the CLI renders: the options `auto` plans for the scene.
     let options = RenderOptions {
         threads: Some(threads),
-        ..RenderOptions::default()
+        ..render::auto(scene).options
     };
     // The pool is built once, outside the timing.
     let pool = rayon::ThreadPoolBuilder::new()

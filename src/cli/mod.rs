@@ -131,12 +131,13 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     output::format_for(&out).map_err(fail)?;
 
     let scene = scene::load(&scene_path).map_err(fail)?;
+    let start = Instant::now();
+    // `auto`: the exact options this scene needs (the reference image).
     let options = render::RenderOptions {
         threads: r.threads,
         aa: r.aa.unwrap_or(1),
-        ..render::RenderOptions::default()
+        ..render::auto(&scene).options
     };
-    let start = Instant::now();
     let image = render::render(&scene, &options).map_err(fail)?;
     let elapsed = start.elapsed();
     output::save(&image, &out).map_err(fail)?;

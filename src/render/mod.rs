@@ -6,10 +6,12 @@
 //! rayon pool. [`RenderOptions`] holds every method choice; its default is
 //! the contract's reference image.
 
+mod auto;
 mod camera;
 mod prepared;
 mod tile;
 
+pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
 pub use prepared::{Hit, Prepared, prepare};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
@@ -58,8 +60,10 @@ pub enum Offset {
 // The fixed ε is never NaN (the study's methods are constants).
 impl Eq for Offset {}
 
-/// How to render. `RenderOptions::default()` is the contract's reference:
-/// one ray through each pixel centre, f64 throughout.
+/// How to render. `RenderOptions::default()` gives the contract's image:
+/// one ray through each pixel centre, f64 throughout, with every exact
+/// shortcut allowed; [`RenderOptions::reference`] is the same image
+/// without shortcuts, and [`auto`] the options a given scene needs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RenderOptions {
     /// Worker threads; `None` uses rayon's global pool (one per core).
@@ -70,6 +74,10 @@ pub struct RenderOptions {
     /// End a whitted chain once the rest of it cannot change the pixel's
     /// 8-bit value (exact: the image is the same either way).
     pub early_stop: bool,
+    /// Use the BVH and the per-tile culling of primary rays where the
+    /// scene's object count pays for them (exact). `false`: every ray
+    /// tests every object.
+    pub accelerate: bool,
     /// Precision of the geometry.
     pub precision: Precision,
     /// Ray/sphere root formula.
@@ -89,11 +97,25 @@ impl Default for RenderOptions {
             threads: None,
             aa: 1,
             early_stop: true,
+            accelerate: true,
             precision: Precision::F64,
             sphere: SphereTest::Stable,
             offset: Offset::Contract,
             depth_cut: false,
             draft: false,
+        }
+    }
+}
+
+impl RenderOptions {
+    /// The contract's method done plainly: every ray tests every object
+    /// and every whitted chain runs to its depth. The study's `default`
+    /// row; its image is the one every exact shortcut must reproduce.
+    pub fn reference() -> Self {
+        RenderOptions {
+            early_stop: false,
+            accelerate: false,
+            ..RenderOptions::default()
         }
     }
 }

@@ -19,13 +19,13 @@ use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_c
 use glam::DVec3;
 
 /// With fewer bounded primitives than this, a linear scan beats the BVH.
-const BVH_THRESHOLD: usize = 8;
+pub(super) const BVH_THRESHOLD: usize = 8;
 /// Up to this many bounded primitives, each tile culls them one by one
 /// against its frustum for its primary rays (4 dot products each per tile).
-const CULL_LIMIT: usize = 64;
+pub(super) const CULL_LIMIT: usize = 64;
 /// With a BVH, a tile whose frustum reaches at most this many primitives
 /// tests just those for its primary rays; more, and it uses the BVH.
-const TILE_CANDIDATES: usize = 24;
+pub(super) const TILE_CANDIDATES: usize = 24;
 
 /// What shading needs of an object.
 #[derive(Debug, Clone, Copy)]
@@ -79,6 +79,8 @@ pub struct Prepared {
     camera: CameraRays,
     aa: u32,
     early_stop: bool,
+    /// Primary rays of a tile test only what its frustum reaches.
+    cull: bool,
     /// The study's method choices (see [`RenderOptions`]); the defaults
     /// are the reference path.
     precision: Precision,
@@ -276,7 +278,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
             plane_objects.push(index);
         }
     }
-    let bvh = (bounded.len() >= BVH_THRESHOLD).then(|| {
+    let bvh = (options.accelerate && bounded.len() >= BVH_THRESHOLD).then(|| {
         let boxes: Vec<Aabb> = bounded
             .iter()
             .map(|p| p.bounds().unwrap_or(Aabb::EMPTY))
@@ -336,7 +338,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         Vec::new()
     };
 
-    let cull_spheres = if bounded.len() <= CULL_LIMIT {
+    let cull_spheres = if options.accelerate && bounded.len() <= CULL_LIMIT {
         bounded
             .iter()
             .filter_map(|p| p.bounds())
@@ -376,6 +378,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         camera: CameraRays::new(&scene.camera),
         aa: options.aa.max(1),
         early_stop: options.early_stop,
+        cull: options.accelerate,
     }
 }
 
@@ -644,8 +647,12 @@ impl Prepared {
 
     /// The bounded primitives whose bounding sphere reaches into the
     /// tile's frustum (the four planes through the eye and the tile's
-    /// edges), or `None` when the scene has too many to cull.
+    /// edges), or `None` when the scene has too many to cull or culling
+    /// is off.
     fn tile_candidates(&self, tile: &Tile) -> Option<Vec<usize>> {
+        if !self.cull {
+            return None;
+        }
         let (x0, y0) = (f64::from(tile.x), f64::from(tile.y));
         let (x1, y1) = (x0 + f64::from(tile.width), y0 + f64::from(tile.height));
         let eye = self.camera.ray(x0, y0).origin;
