@@ -14,11 +14,31 @@
 
 pub mod chart;
 
-use crate::render::{self, MAX_AA, Offset, Precision, RenderError, RenderOptions, SphereTest};
+use crate::render::{
+    self, Cancel, MAX_AA, Offset, Precision, RenderError, RenderOptions, SphereTest,
+};
 use crate::scene::{self, LoadError, Scene};
 use image::RgbImage;
 use std::path::Path;
 use std::time::{Duration, Instant};
+
+/// Why a study stopped.
+#[derive(Debug, thiserror::Error)]
+pub enum StudyError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    #[error("the study was cancelled")]
+    Cancelled,
+}
+
+/// Renders, or says the study was cancelled.
+fn render_or_stop(
+    scene: &Scene,
+    options: &RenderOptions,
+    cancel: &Cancel,
+) -> Result<(RgbImage, render::RenderStats), StudyError> {
+    render::render_cancellable(scene, options, cancel)?.ok_or(StudyError::Cancelled)
+}
 
 /// A method: a name (the CSV's `method` column) and how it renders.
 #[derive(Debug, Clone, PartialEq)]
@@ -216,28 +236,28 @@ pub struct References {
 
 impl References {
     /// Renders the references `methods` need (with `threads` threads,
-    /// `None` for one per core).
+    /// `None` for one per core), unless cancelled.
     pub fn new(
         scene: &Scene,
         methods: &[Method],
         threads: Option<usize>,
-    ) -> Result<References, RenderError> {
-        let default = render::render(
+        cancel: &Cancel,
+    ) -> Result<References, StudyError> {
+        let (default, _) = render_or_stop(
             scene,
             &RenderOptions {
                 threads,
                 ..RenderOptions::reference()
             },
+            cancel,
         )?;
         let supersampled = if methods.iter().any(Method::supersamples) {
-            Some(render::render(
-                scene,
-                &RenderOptions {
-                    threads,
-                    aa: MAX_AA,
-                    ..RenderOptions::default()
-                },
-            )?)
+            let options = RenderOptions {
+                threads,
+                aa: MAX_AA,
+                ..RenderOptions::default()
+            };
+            Some(render_or_stop(scene, &options, cancel)?.0)
         } else {
             None
         };
@@ -305,20 +325,21 @@ pub fn measure(
     method: &Method,
     reference: &RgbImage,
     runs: usize,
-) -> Result<Row, RenderError> {
-    measure_image(scene, method, reference, runs, None).map(|(row, _)| row)
+) -> Result<Row, StudyError> {
+    measure_image(scene, method, reference, runs, None, &Cancel::never()).map(|(row, _)| row)
 }
 
 /// [`measure`] with `threads` threads (`None`: one per core), and the image
-/// the method rendered (its first run). The time includes `auto`'s
-/// planning.
+/// the method rendered (its first run), unless cancelled. The time
+/// includes `auto`'s planning.
 pub fn measure_image(
     scene: &StudyScene,
     method: &Method,
     reference: &RgbImage,
     runs: usize,
     threads: Option<usize>,
-) -> Result<(Row, RgbImage), RenderError> {
+    cancel: &Cancel,
+) -> Result<(Row, RgbImage), StudyError> {
     let mut times = Vec::with_capacity(runs.max(1));
     let mut result = None;
     for _ in 0..runs.max(1) {
@@ -327,7 +348,7 @@ pub fn measure_image(
             threads,
             ..method.options_for(&scene.scene)
         };
-        let (image, stats) = render::render_with_stats(&scene.scene, &options)?;
+        let (image, stats) = render_or_stop(&scene.scene, &options, cancel)?;
         times.push(start.elapsed());
         result.get_or_insert((image, stats));
     }
@@ -348,7 +369,8 @@ pub fn measure_image(
 }
 
 /// Runs every method on every scene, `runs` renders each, with `threads`
-/// threads (`None`: one per core); `progress` sees each row as it is done,
+/// threads (`None`: one per core, or the pool it runs in), stopping within
+/// a pixel once `cancel` is set; `progress` sees each row as it is done,
 /// with the method's image and the reference it was measured against (to
 /// picture a failure).
 pub fn run(
@@ -356,14 +378,15 @@ pub fn run(
     methods: &[Method],
     runs: usize,
     threads: Option<usize>,
+    cancel: &Cancel,
     progress: &mut dyn FnMut(&Row, &RgbImage, &RgbImage),
-) -> Result<Vec<Row>, RenderError> {
+) -> Result<Vec<Row>, StudyError> {
     let mut rows = Vec::new();
     for scene in scenes {
-        let references = References::new(&scene.scene, methods, threads)?;
+        let references = References::new(&scene.scene, methods, threads, cancel)?;
         for method in methods {
             let reference = references.for_method(method);
-            let (row, image) = measure_image(scene, method, reference, runs, threads)?;
+            let (row, image) = measure_image(scene, method, reference, runs, threads, cancel)?;
             progress(&row, &image, reference);
             rows.push(row);
         }

@@ -412,3 +412,183 @@ fn watcher_survives_a_rename_away_and_a_directory_in_place() {
         }
     }
 }
+
+/// Events of `generation` until its study ends (finished or stopped).
+fn until_study_ends(worker: &Worker, generation: u64, limit: Duration) -> (Vec<Event>, Duration) {
+    let start = Instant::now();
+    let mut events = Vec::new();
+    while start.elapsed() < limit {
+        if let Some(e) = worker.next_event(Duration::from_millis(10)) {
+            let end = e.generation() == generation
+                && matches!(e, Event::StudyFinished { .. } | Event::StudyStopped { .. });
+            events.push(e);
+            if end {
+                return (events, start.elapsed());
+            }
+        }
+    }
+    panic!("study {generation} did not end within {limit:?}");
+}
+
+#[test]
+fn the_worker_runs_the_study_row_by_row() {
+    let scene = rayoflight::study::StudyScene {
+        name: "small".into(),
+        scene: parse(&scene_text(1.0, 64)),
+    };
+    let worker = Worker::spawn(1, || {});
+    let generation = worker.study(scene, 1);
+    let (events, _) = until_study_ends(&worker, generation, Duration::from_secs(60));
+    let methods = rayoflight::study::methods();
+    assert!(matches!(events[0], Event::StudyStarted { total, .. } if total == methods.len()));
+    let rows: Vec<_> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::StudyRow { row, failure, .. } => Some((row, failure)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(rows.len(), methods.len());
+    for ((row, failure), method) in rows.iter().zip(&methods) {
+        assert_eq!(row.method, method.name);
+        assert_eq!(row.failed, failure.is_some(), "{}", row.method);
+    }
+    for exact in ["default", "auto"] {
+        let row = rows.iter().find(|(r, _)| r.method == exact).unwrap().0;
+        assert_eq!((row.max_diff, row.within1), (0, 1.0), "{exact}");
+    }
+    match events.last() {
+        Some(Event::StudyFinished {
+            chart: Ok(chart), ..
+        }) => {
+            assert_eq!(chart.dimensions(), rayoflight::study::chart::CHART_SIZE)
+        }
+        other => panic!("the study did not finish with a chart: {other:?}"),
+    }
+}
+
+#[test]
+fn a_study_is_cancelled_within_100_ms() {
+    // The plain reference of a depth-10 000 mirror pair at 3840×2160:
+    // minutes of work.
+    let scene = rayoflight::study::StudyScene {
+        name: "heavy".into(),
+        scene: mirrors(10_000, 3840, 2160),
+    };
+    let worker = Worker::spawn(Worker::default_threads(), || {});
+    let generation = worker.study(scene, 1);
+    std::thread::sleep(Duration::from_millis(300));
+    let asked = Instant::now();
+    worker.cancel();
+    let (events, _) = until_study_ends(&worker, generation, Duration::from_secs(10));
+    let took = asked.elapsed();
+    eprintln!("the study stopped {took:?} after the cancel");
+    assert!(
+        took < Duration::from_millis(300),
+        "cancel took {took:?} (promise 100 ms, 3x allowed on a noisy CI machine)"
+    );
+    assert!(
+        matches!(events.last(), Some(Event::StudyStopped { message, .. }) if message == "cancelled")
+    );
+}
+
+#[test]
+fn the_study_window_runs_the_study_and_picks_the_preview_method() {
+    let app = RayOfLightApp::new(&egui::Context::default(), Document::builtin());
+    let mut harness = egui_kittest::Harness::builder()
+        .with_size(egui::vec2(1400.0, 1000.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    harness.run_steps(2);
+    assert_eq!(harness.state().preview_methods().exact.name, "auto");
+    harness.get_by_label("View").click();
+    harness.run_steps(2);
+    harness.get_by_label("Study…").click();
+    harness.run_steps(2);
+    // auto's plan is shown with its numbers (every glyph must exist in
+    // egui's font).
+    harness.get_by_label("auto's plan for this scene").click();
+    harness.run_steps(2);
+    harness.get_by_label("Run the study").click();
+    harness.run_steps(2);
+    let start = Instant::now();
+    while !harness.state().study_window().has_chart() {
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "the study did not finish: {:?}",
+            harness.state().study_window().state()
+        );
+        harness.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    harness.run_steps(2);
+    let methods = rayoflight::study::methods();
+    assert_eq!(harness.state().study_window().rows().len(), methods.len());
+
+    // The rows offer their method for the live preview: pick draft (the
+    // eleventh row; auto is "previewing", so the ninth button from the top).
+    let buttons = harness.get_all_by_label("preview with it").count();
+    assert_eq!(buttons, methods.len() - 1);
+    let draft_row = methods.iter().position(|m| m.name == "draft").unwrap();
+    let auto_row = methods.iter().position(|m| m.name == "auto").unwrap();
+    let button = draft_row - usize::from(draft_row > auto_row);
+    harness
+        .get_all_by_label("preview with it")
+        .nth(button)
+        .unwrap()
+        .scroll_to_me();
+    harness.run_steps(3);
+    harness
+        .get_all_by_label("preview with it")
+        .nth(button)
+        .unwrap()
+        .click();
+    harness.run_steps(2);
+    assert_eq!(harness.state().preview_methods().exact.name, "draft");
+    // …and the picture becomes the draft render.
+    let scene = harness.state().document().scene.clone();
+    let expected = render::render(
+        &scene,
+        &RenderOptions {
+            draft: true,
+            ..RenderOptions::default()
+        },
+    )
+    .unwrap();
+    let start = Instant::now();
+    loop {
+        harness.step();
+        let app = harness.state();
+        if matches!(app.preview().state(), RenderState::Done { .. })
+            && app.preview().image() == &expected
+        {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the draft preview never showed"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
+#[test]
+fn the_dragging_method_applies_only_while_dragging() {
+    use rayoflight::gui::study::{PreviewMethods, by_name};
+    let scene = parse(&scene_text(1.0, 32));
+    let methods = PreviewMethods {
+        exact: by_name("auto").unwrap(),
+        dragging: by_name("f32"),
+    };
+    let auto = render::auto(&scene).options;
+    assert_eq!(methods.options(&scene, false, 1), auto);
+    let fast = methods.options(&scene, true, 1);
+    assert_eq!(fast.precision, render::Precision::F32);
+    // The preview's anti-aliasing applies to a method that does not
+    // supersample.
+    assert_eq!(methods.options(&scene, false, 3).aa, 3);
+    let aa4 = PreviewMethods {
+        exact: by_name("aa4").unwrap(),
+        dragging: None,
+    };
+    assert_eq!(aa4.options(&scene, true, 1).aa, 4);
+}

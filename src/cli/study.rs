@@ -51,6 +51,7 @@ pub fn run(args: &StudyArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         &methods,
         args.runs,
         args.threads,
+        &rayoflight::render::Cancel::never(),
         &mut |r, image, reference| {
             if r.failed && picture_error.is_none() {
                 let path = args.out.join(chart::failure_file_name(r));

@@ -8,8 +8,9 @@
 use super::document::{Document, FileState, Reload};
 use super::panel;
 use super::preview::{Preview, RenderState};
+use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
-use super::worker::Worker;
+use super::worker::{Event, Worker};
 use crate::render::{self, RenderOptions};
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, Pos2, Rect, Sense, TextureOptions, Vec2};
 use std::collections::VecDeque;
@@ -89,6 +90,13 @@ pub struct RayOfLightApp {
     selected: Option<usize>,
     /// Anti-aliasing of the preview and of exports.
     aa: u32,
+    /// The live preview's method (auto unless chosen in the Study window)
+    /// and the one while a value is dragged.
+    methods: PreviewMethods,
+    /// The newest render used the while-dragging method: render again
+    /// with the exact one on release.
+    rendered_dragging: bool,
+    study: StudyWindow,
     /// A transient message for the status bar (export done, save failed).
     notice: Option<(String, Instant)>,
     recent: Vec<PathBuf>,
@@ -132,6 +140,9 @@ impl RayOfLightApp {
             view: View::default(),
             selected: None,
             aa: 1,
+            methods: PreviewMethods::default(),
+            rendered_dragging: false,
+            study: StudyWindow::default(),
             notice: None,
             recent: super::recent::load(),
             frames: VecDeque::new(),
@@ -178,13 +189,60 @@ impl RayOfLightApp {
         self.notice = Some((message, Instant::now()));
     }
 
+    /// Asks the worker for the preview of the current scene, with the
+    /// while-dragging method when one is set and a button is held.
     fn request_render(&mut self) {
-        let options = RenderOptions {
-            aa: self.aa,
-            ..RenderOptions::default()
-        };
-        self.worker
+        let dragging = self.methods.dragging.is_some() && self.ctx.input(|i| i.pointer.any_down());
+        let options = self.methods.options(&self.doc.scene, dragging, self.aa);
+        self.rendered_dragging = dragging;
+        let generation = self
+            .worker
             .request(Arc::new(self.doc.scene.clone()), options);
+        self.study.superseded(generation);
+        if self.study.open {
+            self.study.set_plan(&self.doc.scene);
+        }
+    }
+
+    /// The live preview's methods (for tests).
+    pub fn preview_methods(&self) -> &PreviewMethods {
+        &self.methods
+    }
+
+    pub fn study_window(&self) -> &StudyWindow {
+        &self.study
+    }
+
+    /// Runs the study of the current scene in the worker.
+    pub fn run_study(&mut self) {
+        let name = self.doc.path().and_then(Path::file_stem).map_or_else(
+            || "example".to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        let scene = crate::study::StudyScene {
+            name: name.clone(),
+            scene: self.doc.scene.clone(),
+        };
+        let generation = self.worker.study(scene, self.study.runs);
+        self.study.started(generation, name);
+        self.study.set_plan(&self.doc.scene);
+    }
+
+    /// Does what the Study window asked.
+    pub fn study_action(&mut self, action: study::Action) {
+        match action {
+            study::Action::Run => self.run_study(),
+            study::Action::Cancel => self.worker.cancel(),
+            study::Action::Preview(name) => {
+                if let Some(method) = study::by_name(name) {
+                    self.methods.exact = method;
+                    self.request_render();
+                }
+            }
+            study::Action::WhileDragging(name) => {
+                self.methods.dragging = name.and_then(study::by_name);
+            }
+        }
     }
 
     /// Replaces the document by the file at `path`.
@@ -233,10 +291,11 @@ impl RayOfLightApp {
             return;
         }
         let scene = self.doc.scene.clone();
+        // Exports are exact whatever the preview uses: auto's options.
         let options = RenderOptions {
             threads: Some(Worker::default_threads()),
             aa: self.aa,
-            ..RenderOptions::default()
+            ..render::auto(&scene).options
         };
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
@@ -300,8 +359,21 @@ impl RayOfLightApp {
     fn drain_events(&mut self) {
         let newest = self.worker.newest();
         let events: Vec<_> = self.worker.events().collect();
+        let mut study_ended = false;
         for event in events {
-            self.preview.apply(newest, event);
+            match event {
+                Event::StudyStarted { .. }
+                | Event::StudyRow { .. }
+                | Event::StudyFinished { .. }
+                | Event::StudyStopped { .. } => study_ended |= self.study.apply(event),
+                _ => {
+                    self.preview.apply(newest, event);
+                }
+            }
+        }
+        // The study took the worker from an unfinished preview: finish it.
+        if study_ended && !matches!(self.preview.state(), RenderState::Done { .. }) {
+            self.request_render();
         }
         while let Ok(message) = self.background.try_recv() {
             match message {
@@ -443,6 +515,10 @@ impl RayOfLightApp {
                         ..View::default()
                     };
                 }
+                if ui.button("Study…").clicked() {
+                    self.study.open = true;
+                    self.study.set_plan(&self.doc.scene);
+                }
                 ui.separator();
                 ui.label("Anti-aliasing");
                 for aa in [1, 2, 3, 4] {
@@ -498,6 +574,12 @@ impl RayOfLightApp {
                     RenderState::Done { .. } => ui.label("done"),
                     RenderState::Failed(message) => ui.colored_label(Color32::RED, message),
                 };
+                ui.label(if self.rendered_dragging {
+                    self.methods.dragging.as_ref().map_or("", |m| m.name)
+                } else {
+                    self.methods.exact.name
+                })
+                .on_hover_text("the live preview's method (View › Study…)");
                 if let Some((elapsed, rays)) = self.preview.last_render() {
                     let secs = elapsed.as_secs_f64().max(1e-9);
                     ui.separator();
@@ -785,6 +867,18 @@ impl RayOfLightApp {
         self.side_panel(ui);
         self.picture(ui);
         self.modals(ui);
+        if self.study.open {
+            for action in self.study.show(&ctx, &self.methods) {
+                self.study_action(action);
+            }
+        }
+        // A value was dragged with the cheaper method: exact on release.
+        if self.rendered_dragging && !ctx.input(|i| i.pointer.any_down()) {
+            self.request_render();
+        }
+        if self.study.is_running() {
+            ctx.request_repaint_after(Duration::from_millis(100));
+        }
         if matches!(self.preview.state(), RenderState::Rendering { .. }) || self.stats {
             // Keep the progress bar moving between tiles.
             ctx.request_repaint_after(Duration::from_millis(16));

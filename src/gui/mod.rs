@@ -8,14 +8,17 @@
 //! - [`worker`]: the background render thread, coarse to fine, newest wins.
 //! - [`preview`]: the picture assembled from the worker's tiles.
 //! - [`watcher`]: the file watcher (notify), debounced.
+//! - [`study`]: the Study window and the live preview's choice of method.
 //!
-//! It reaches the core only through `scene`, `render` and `output`.
+//! It reaches the core only through `scene`, `render`, `study` and
+//! `output`.
 
 pub mod app;
 pub mod document;
 mod panel;
 pub mod preview;
 mod recent;
+pub mod study;
 pub mod watcher;
 pub mod worker;
 

@@ -141,6 +141,11 @@ impl Preview {
                 }
             }
             Event::Failed { message, .. } => self.state = RenderState::Failed(message),
+            // The study's events belong to the study window.
+            Event::StudyStarted { .. }
+            | Event::StudyRow { .. }
+            | Event::StudyFinished { .. }
+            | Event::StudyStopped { .. } => return false,
         }
         true
     }

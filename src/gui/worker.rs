@@ -8,9 +8,16 @@
 //! Each request is rendered coarse to fine (1/8, 1/2, then full
 //! resolution for large images) and every finished tile is sent to the UI
 //! at once, with a wake-up call so it repaints.
+//!
+//! The worker also runs the study of the current scene ([`Worker::study`]):
+//! it is a request like a render, with a generation, cancelled the same way
+//! (by a newer request or [`Worker::cancel`]), reporting each row as it is
+//! measured.
 
 use crate::render::{self, Cancel, RenderOptions, Tile};
 use crate::scene::Scene;
+use crate::study::{self, Row, StudyError, StudyScene, chart};
+use image::RgbImage;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
@@ -52,6 +59,23 @@ pub enum Event {
     },
     /// The render could not run (bad options).
     Failed { generation: u64, message: String },
+    /// A study began: `total` methods to measure.
+    StudyStarted { generation: u64, total: usize },
+    /// One method of the study is measured; `failure` is its side-by-side
+    /// picture (method, reference, difference) when it failed.
+    StudyRow {
+        generation: u64,
+        row: Row,
+        failure: Option<RgbImage>,
+    },
+    /// The study is complete: its chart (or why it could not be drawn).
+    StudyFinished {
+        generation: u64,
+        chart: Result<RgbImage, String>,
+        elapsed: Duration,
+    },
+    /// The study stopped before its end: cancelled, or a render failed.
+    StudyStopped { generation: u64, message: String },
 }
 
 impl Event {
@@ -60,7 +84,11 @@ impl Event {
             Event::PassStarted { generation, .. }
             | Event::Tile { generation, .. }
             | Event::PassFinished { generation, .. }
-            | Event::Failed { generation, .. } => *generation,
+            | Event::Failed { generation, .. }
+            | Event::StudyStarted { generation, .. }
+            | Event::StudyRow { generation, .. }
+            | Event::StudyFinished { generation, .. }
+            | Event::StudyStopped { generation, .. } => *generation,
         }
     }
 }
@@ -70,6 +98,11 @@ enum Message {
         generation: u64,
         scene: Arc<Scene>,
         options: RenderOptions,
+    },
+    Study {
+        generation: u64,
+        scene: Box<StudyScene>,
+        runs: usize,
     },
     Quit,
 }
@@ -132,6 +165,18 @@ impl Worker {
         generation
     }
 
+    /// Asks for the study of `scene` (every method, `runs` renders each);
+    /// cancels any older request. Returns its generation.
+    pub fn study(&self, scene: StudyScene, runs: usize) -> u64 {
+        let generation = self.newest.fetch_add(1, Ordering::Relaxed) + 1;
+        let _ = self.to_worker.send(Message::Study {
+            generation,
+            scene: Box::new(scene),
+            runs,
+        });
+        generation
+    }
+
     /// Cancels whatever is rendering, without starting anything new.
     pub fn cancel(&self) {
         self.newest.fetch_add(1, Ordering::Relaxed);
@@ -190,6 +235,16 @@ impl WorkerThread {
                     let cancel = Cancel::new(self.newest.clone(), generation);
                     if !cancel.is_cancelled() {
                         self.render(generation, &scene, &options, &cancel);
+                    }
+                }
+                Message::Study {
+                    generation,
+                    scene,
+                    runs,
+                } => {
+                    let cancel = Cancel::new(self.newest.clone(), generation);
+                    if !cancel.is_cancelled() {
+                        self.study(generation, &scene, runs, &cancel);
                     }
                 }
             }
@@ -269,6 +324,56 @@ impl WorkerThread {
                 since_start: render_start.elapsed(),
                 rays,
             });
+        }
+    }
+}
+
+impl WorkerThread {
+    /// Runs the study on the worker's pool, one row at a time.
+    fn study(&self, generation: u64, scene: &StudyScene, runs: usize, cancel: &Cancel) {
+        let methods = study::methods();
+        self.send(Event::StudyStarted {
+            generation,
+            total: methods.len(),
+        });
+        let start = Instant::now();
+        let scenes = std::slice::from_ref(scene);
+        let (events, wake) = (&self.events, &self.wake);
+        let run = || {
+            study::run(
+                scenes,
+                &methods,
+                runs,
+                None,
+                cancel,
+                &mut |row, image, reference| {
+                    let _ = events.send(Event::StudyRow {
+                        generation,
+                        row: row.clone(),
+                        failure: row.failed.then(|| chart::side_by_side(image, reference)),
+                    });
+                    wake();
+                },
+            )
+        };
+        let result = match &self.pool {
+            Some(pool) => pool.install(run),
+            None => run(),
+        };
+        match result {
+            Ok(rows) => self.send(Event::StudyFinished {
+                generation,
+                chart: chart::chart(&rows).map_err(|e| e.to_string()),
+                elapsed: start.elapsed(),
+            }),
+            Err(StudyError::Cancelled) => self.send(Event::StudyStopped {
+                generation,
+                message: "cancelled".into(),
+            }),
+            Err(e) => self.send(Event::StudyStopped {
+                generation,
+                message: e.to_string(),
+            }),
         }
     }
 }

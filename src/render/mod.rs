@@ -165,27 +165,41 @@ pub fn render_with_stats(
     scene: &Scene,
     options: &RenderOptions,
 ) -> Result<(RgbImage, RenderStats), RenderError> {
+    let done = render_cancellable(scene, options, &Cancel::never())?;
+    Ok(done.expect("a render that cannot be cancelled finishes"))
+}
+
+/// Like [`render_with_stats`], stopping within a pixel once `cancel` is
+/// set: `Ok(None)`.
+pub fn render_cancellable(
+    scene: &Scene,
+    options: &RenderOptions,
+    cancel: &Cancel,
+) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
     options.validate()?;
     match options.threads {
-        None => Ok(render_all(scene, options)),
+        None => Ok(render_all(scene, options, cancel)),
         Some(threads) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .map_err(|source| RenderError::ThreadPool { threads, source })?;
-            Ok(pool.install(|| render_all(scene, options)))
+            Ok(pool.install(|| render_all(scene, options, cancel)))
         }
     }
 }
 
-fn render_all(scene: &Scene, options: &RenderOptions) -> (RgbImage, RenderStats) {
+fn render_all(
+    scene: &Scene,
+    options: &RenderOptions,
+    cancel: &Cancel,
+) -> Option<(RgbImage, RenderStats)> {
     let prepared = prepare(scene, options);
     let (width, height) = (prepared.width(), prepared.height());
     // Bands of TILE_SIZE rows spread over the pool by rayon; each band is
     // traced tile by tile (so each tile culls once) and copied in place.
     let mut image = RgbImage::new(width, height);
     let row_bytes = width as usize * 3;
-    let cancel = Cancel::never();
     let rays = image
         .par_chunks_mut(row_bytes * TILE_SIZE as usize)
         .enumerate()
@@ -201,19 +215,17 @@ fn render_all(scene: &Scene, options: &RenderOptions) -> (RgbImage, RenderStats)
                     width: TILE_SIZE.min(width - x),
                     height: band_height,
                 };
-                rays += prepared
-                    .render_tile_into(&tile, &cancel, &mut pixels)
-                    .unwrap_or(0);
+                rays += prepared.render_tile_into(&tile, cancel, &mut pixels)?;
                 let tile_row = tile.width as usize * 3;
                 for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
                     let start = r * row_bytes + x as usize * 3;
                     rows[start..start + tile_row].copy_from_slice(src);
                 }
             }
-            rays
+            Some(rays)
         })
-        .sum();
-    (image, RenderStats { rays })
+        .sum::<Option<u64>>()?;
+    Some((image, RenderStats { rays }))
 }
 
 /// Clamps a channel to [0, 1] and rounds it to 8 bits: floor(c·255 + 0.5).
