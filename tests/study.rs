@@ -126,12 +126,16 @@ fn draft_and_depth_cut_trace_fewer_rays() {
             .unwrap()
             .rays
     };
-    // The exact fast path (auto here: early stop on, ks < 1).
-    let fast = rays("auto");
-    assert!(rays("draft") * 3 < fast);
-    assert!(rays("depth-1") < fast);
-    assert!(rays("no-early-stop") > fast);
+    let auto = rays("auto");
+    assert!(rays("draft") * 3 < auto);
+    assert!(rays("depth-1") < auto);
+    // auto leaves the early stop off here (ks 0.75 at depth 12: the rest
+    // of a chain stays above half a level), so it traces the plain rays;
+    // the fast path with the early stop ends a few chains sooner.
+    assert_eq!(auto, rays("default"));
     assert_eq!(rays("no-early-stop"), rays("default"));
+    let (_, stats) = render::render_with_stats(&s.scene, &RenderOptions::default()).unwrap();
+    assert!(stats.rays < auto);
 }
 
 #[test]

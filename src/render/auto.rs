@@ -15,14 +15,17 @@
 //!   (below that a scan is cheaper), per-tile culling of primary rays, black
 //!   tiles without a ray.
 //! - **Early stop.** Only where a whitted chain can end early: some surface
-//!   reflects, and every ks is below 1 (otherwise there is no bound on what
-//!   the rest of a chain adds, and the test would run for nothing).
+//!   reflects, every ks is below 1 (otherwise nothing bounds what the rest
+//!   of a chain adds), and the depth goes past the bounce where the rest of
+//!   a chain through the most reflective surfaces falls below half a
+//!   level (before it, the test costs and ends nothing: the study measured
+//!   the mirror corridor, ks 0.75 at depth 12, 6 % slower with it).
 //! - **Zero terms.** The ambient model evaluates no light, lambert no
 //!   specular term, and no reflected ray leaves a surface with ks = 0; the
 //!   tracer does this for every method, the plan reports it.
 
 use super::RenderOptions;
-use super::prepared::{BVH_THRESHOLD, CULL_LIMIT, TILE_CANDIDATES};
+use super::prepared::{BVH_THRESHOLD, CULL_LIMIT, TILE_CANDIDATES, max_local_color};
 use crate::geometry::Primitive;
 use crate::scene::{Illumination, Scene, Shape};
 
@@ -154,14 +157,31 @@ pub fn auto(scene: &Scene) -> Plan {
             ),
         )
     } else {
-        (
-            true,
-            format!(
-                "largest ks = {max_ks}: after k bounces the rest of a chain adds at most \
-                 ks^k/(1 − ks) of the brightest local colour, so chains of up to {depth} \
-                 reflections end once that cannot change the 8-bit value"
-            ),
-        )
+        // A chain can end once the most the rest can add (weight ≤ ks^k,
+        // then Σ ks^j ≤ 1/(1 − ks), each hit ≤ the brightest local colour)
+        // is below half a level; chains through the most reflective
+        // surfaces get there at bounce k. Before that the test only costs.
+        let brightest = max_local_color(scene).max_element();
+        let k = first_stoppable_bounce(max_ks, brightest);
+        if k < depth {
+            (
+                true,
+                format!(
+                    "largest ks = {max_ks}: from bounce {k} on, the rest of a chain adds \
+                     less than half a level (ks^k/(1 − ks) × {} × 255 < 0.5), and the depth is \
+                     {depth}: chains end there, or earlier",
+                    number(brightest)
+                ),
+            )
+        } else {
+            (
+                false,
+                format!(
+                    "largest ks = {max_ks}: the rest of a chain can add half a level or more \
+                     until bounce {k}, and the depth is {depth}: the test would only cost"
+                ),
+            )
+        }
     };
     decide(
         "early stop",
@@ -222,6 +242,21 @@ fn extent(scene: &Scene) -> f64 {
     eye.max(lights).max(objects)
 }
 
+/// The first bounce k ≥ 1 at which ks^k/(1 − ks) × brightest × 255 is
+/// at most half a level (0 < ks < 1), saturating at `u32::MAX`.
+fn first_stoppable_bounce(ks: f64, brightest: f64) -> u32 {
+    let target = 0.5 * (1.0 - ks) / (255.0 * brightest);
+    if target >= ks || !target.is_finite() {
+        return 1;
+    }
+    let k = (target.ln() / ks.ln()).ceil();
+    if k >= f64::from(u32::MAX) {
+        u32::MAX
+    } else {
+        (k as u32).max(1)
+    }
+}
+
 /// A magnitude as people write it: 20, 0.5, 1.0e7.
 fn number(x: f64) -> String {
     if (1e-3..1e5).contains(&x) {
@@ -272,12 +307,24 @@ mod tests {
 
     #[test]
     fn early_stop_only_where_a_chain_can_end_early() {
-        let whitted = r#"<model type="whitted" depth="3"/>"#;
-        assert!(plan(&scene_with(whitted, "0.3", 1)).options.early_stop);
-        assert!(!plan(&scene_with(whitted, "0", 1)).options.early_stop);
-        assert!(!plan(&scene_with(whitted, "1", 1)).options.early_stop);
-        let depth0 = r#"<model type="whitted" depth="0"/>"#;
-        assert!(!plan(&scene_with(depth0, "0.3", 1)).options.early_stop);
+        let whitted = |depth| format!(r#"<model type="whitted" depth="{depth}"/>"#);
+        // ks 0.3, brightest local colour 1: 0.3^k / 0.7 × 255 < 0.5 from
+        // k = 6 on.
+        assert_eq!(first_stoppable_bounce(0.3, 1.0), 6);
+        assert!(!plan(&scene_with(&whitted(6), "0.3", 1)).options.early_stop);
+        assert!(plan(&scene_with(&whitted(7), "0.3", 1)).options.early_stop);
+        // ks 0.9 needs 82 bounces at brightness 1 (86 at this scene's 1.6).
+        assert_eq!(first_stoppable_bounce(0.9, 1.0), 82);
+        assert!(!plan(&scene_with(&whitted(80), "0.9", 1)).options.early_stop);
+        assert!(
+            plan(&scene_with(&whitted(10_000), "0.9", 1))
+                .options
+                .early_stop
+        );
+        // Nothing to stop.
+        assert!(!plan(&scene_with(&whitted(100), "0", 1)).options.early_stop);
+        assert!(!plan(&scene_with(&whitted(100), "1", 1)).options.early_stop);
+        assert!(!plan(&scene_with(&whitted(0), "0.3", 1)).options.early_stop);
         let phong = r#"<model type="phong"/>"#;
         assert!(!plan(&scene_with(phong, "0.3", 1)).options.early_stop);
     }

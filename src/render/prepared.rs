@@ -262,6 +262,22 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
     }
 }
 
+/// Per channel, the most any one hit can add before weighting: the
+/// largest ka C + Σ I (kd + ks) over the objects (the terms the model
+/// uses).
+pub(super) fn max_local_color(scene: &Scene) -> Color {
+    let light_sum = scene.lights.iter().fold(Color::ZERO, |s, l| s + l.color);
+    scene.objects.iter().fold(Color::ZERO, |acc, o| {
+        let Material { ka, kd, ks, .. } = o.material;
+        let direct = match scene.model.illumination {
+            Illumination::Ambient => 0.0,
+            Illumination::Lambert => kd,
+            Illumination::Phong | Illumination::Whitted => kd + ks,
+        };
+        acc.max(ka * o.color + direct * light_sum)
+    })
+}
+
 /// Builds the prepared scene.
 pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
     let mut bounded = Vec::new();
@@ -299,7 +315,6 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
     });
 
     let illumination = scene.model.illumination;
-    let light_sum = scene.lights.iter().fold(Color::ZERO, |s, l| s + l.color);
     let surfaces: Vec<Surface> = scene
         .objects
         .iter()
@@ -308,15 +323,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
             material: o.material,
         })
         .collect();
-    let max_local = surfaces.iter().fold(Color::ZERO, |acc, s| {
-        let Material { ka, kd, ks, .. } = s.material;
-        let direct = match illumination {
-            Illumination::Ambient => 0.0,
-            Illumination::Lambert => kd,
-            Illumination::Phong | Illumination::Whitted => kd + ks,
-        };
-        acc.max(ka * s.color + direct * light_sum)
-    });
+    let max_local = max_local_color(scene);
     let max_ks = surfaces.iter().map(|s| s.material.ks).fold(0.0, f64::max);
     let depth = scene.model.reflection_depth();
     let depth = if options.depth_cut {
