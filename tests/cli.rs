@@ -347,3 +347,25 @@ fn study_draws_the_chart_and_a_picture_per_failure() {
         );
     }
 }
+
+#[test]
+fn plan_prints_what_auto_decides_and_writes_nothing() {
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["plan", "tiny.xml"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    for topic in [
+        "precision: f64",
+        "acceleration: ",
+        "early stop: ",
+        "terms: ",
+    ] {
+        assert!(text.contains(topic), "{topic} missing from:\n{text}");
+    }
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+    let o = rayoflight(dir.path(), &["plan", "missing.xml"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("missing.xml"), "{}", stderr(&o));
+    let o = rayoflight(dir.path(), &["plan"]);
+    assert_eq!(o.status.code(), Some(2));
+}

@@ -18,6 +18,10 @@ pub enum Command {
         scene: PathBuf,
         out: Option<PathBuf>,
     },
+    /// `plan scene.xml`: print what `auto` decides for the scene.
+    Plan {
+        scene: PathBuf,
+    },
     /// `bench [--threads N] [--runs K] [--csv FILE] [--no-pov]`.
     Bench(super::bench::BenchArgs),
     /// `study [--out DIR] [--runs K] [--threads N] [scene.xml…]`.
@@ -198,6 +202,18 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         }
         return Ok(Command::ExportPov { scene, out: r.out });
     }
+    if first.as_deref() == Some(std::path::Path::new("plan")) {
+        let scene = positionals
+            .next()
+            .ok_or_else(|| usage("plan needs a scene file"))?;
+        if let Some(extra) = positionals.next() {
+            return Err(usage(format!("unexpected argument '{}'", extra.display())));
+        }
+        if r.out.is_some() || r.time || r.no_gui || r.threads.is_some() || r.aa.is_some() {
+            return Err(usage("plan takes only a scene file"));
+        }
+        return Ok(Command::Plan { scene });
+    }
     if let Some(extra) = positionals.next() {
         return Err(usage(format!(
             "unexpected argument '{}' (one scene at a time)",
@@ -275,6 +291,19 @@ mod tests {
             p(&["s.xml", "--runs", "2"]).is_err(),
             "--runs belongs to bench"
         );
+    }
+
+    #[test]
+    fn plan_subcommand() {
+        assert_eq!(
+            p(&["plan", "s.xml"]).unwrap(),
+            Command::Plan {
+                scene: PathBuf::from("s.xml")
+            }
+        );
+        assert!(p(&["plan"]).is_err());
+        assert!(p(&["plan", "a.xml", "b.xml"]).is_err());
+        assert!(p(&["plan", "a.xml", "-out", "x.png"]).is_err());
     }
 
     #[test]

@@ -17,6 +17,7 @@ use std::time::Instant;
 const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N]
        rayoflight export-pov scene.xml [-out scene.pov]
+       rayoflight plan scene.xml
        rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
        rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]
        rayoflight --help | --version";
@@ -38,13 +39,16 @@ Options:
 
 Subcommands:
   export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
+  plan               what 'auto' will do for the scene, and why (renders
+                     use it: precision, BVH and culling, early stop, terms)
   bench              time the bench scenes (against POV-Ray when installed),
                      thread scaling, cost against object count, peak memory;
                      --runs K (default 3), --csv FILE, --no-pov
   study              speed against accuracy: every method (f32, textbook
                      quadratic, offsets, anti-aliasing, depth cut, early
-                     stop, draft) on the study scenes, or on the scene files
-                     given; a table on stdout and DIR/study.csv
+                     stop, draft, auto) on the study scenes, or on the scene
+                     files given; a table on stdout, DIR/study.csv, the chart
+                     DIR/study.png and a picture of each failure
                      (--out DIR, default ./study; --runs K, default 3)
 
 Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
@@ -94,6 +98,13 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             Ok(())
         }
         Command::ExportPov { scene, out } => export_pov(&scene, out),
+        Command::Plan { scene } => {
+            let scene = scene::load(&scene).map_err(fail)?;
+            for d in render::auto(&scene).decisions {
+                print_line(&format!("{}: {}\n  {}", d.topic, d.choice, d.reason));
+            }
+            Ok(())
+        }
         Command::Bench(args) => bench::run(&args, &mut |text| {
             let _ = write!(std::io::stdout(), "{text}");
             let _ = std::io::stdout().flush();

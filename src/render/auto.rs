@@ -196,7 +196,7 @@ pub fn auto(scene: &Scene) -> Plan {
         Illumination::Whitted => {
             let mirrors = scene.objects.iter().filter(|o| o.material.ks > 0.0).count();
             format!(
-                "whitted: reflected rays leave only the {mirrors} of {} objects with ks > 0",
+                "whitted: reflected rays leave the {mirrors} of {} objects with ks > 0, none the others",
                 scene.objects.len()
             )
         }
