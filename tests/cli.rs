@@ -369,3 +369,26 @@ fn plan_prints_what_auto_decides_and_writes_nothing() {
     let o = rayoflight(dir.path(), &["plan"]);
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn method_renders_with_a_study_method() {
+    let (dir, _) = workdir();
+    let render = |method: &str| {
+        let out = format!("{method}.png");
+        let o = rayoflight(
+            dir.path(),
+            &["--no-gui", "tiny.xml", "--method", method, "-out", &out],
+        );
+        assert!(o.status.success(), "{}", stderr(&o));
+        image::open(dir.path().join(out)).unwrap().to_rgb8()
+    };
+    let plain = render("default");
+    assert!(render("auto") == plain, "auto is the default image");
+    let draft = render("draft");
+    for (i, j, p) in draft.enumerate_pixels() {
+        assert_eq!(p, plain.get_pixel(i & !1, j & !1), "draft at ({i}, {j})");
+    }
+    let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml", "--method", "fastest"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("auto"), "{}", stderr(&o));
+}

@@ -37,12 +37,14 @@ pub struct RenderArgs {
     pub no_gui: bool,
     pub threads: Option<usize>,
     pub aa: Option<u32>,
+    /// A study method to render with instead of `auto` (`--method`).
+    pub method: Option<&'static str>,
 }
 
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
-    /// `--no-gui`, `--threads`, `--aa`. In the GUI build, anything else
-    /// opens the app (the headless build never asks).
+    /// `--no-gui`, `--threads`, `--aa`, `--method`. In the GUI build,
+    /// anything else opens the app (the headless build never asks).
     #[cfg_attr(not(feature = "gui"), allow(dead_code))]
     pub fn headless(&self) -> bool {
         self.out.is_some()
@@ -50,6 +52,7 @@ impl RenderArgs {
             || self.no_gui
             || self.threads.is_some()
             || self.aa.is_some()
+            || self.method.is_some()
     }
 }
 
@@ -144,6 +147,23 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
                         })?,
                 );
             }
+            "--method" => {
+                let v = value(flag)?;
+                let methods = rayoflight::study::methods();
+                r.method = Some(
+                    methods
+                        .iter()
+                        .find(|m| m.name == v)
+                        .map(|m| m.name)
+                        .ok_or_else(|| {
+                            let names: Vec<_> = methods.iter().map(|m| m.name).collect();
+                            usage(format!(
+                                "--method expects one of {}, not {v:?}",
+                                names.join(", ")
+                            ))
+                        })?,
+                );
+            }
             _ => return Err(usage(format!("unknown flag '{text}'"))),
         }
     }
@@ -156,6 +176,15 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
     }
     let mut positionals = positionals.into_iter();
     let first = positionals.next();
+    let subcommand = first
+        .as_deref()
+        .and_then(|p| p.to_str())
+        .filter(|p| ["bench", "study", "export-pov", "plan"].contains(p));
+    if let (Some(name), Some(_)) = (subcommand, r.method) {
+        return Err(usage(format!(
+            "--method belongs to rendering, not to '{name}'"
+        )));
+    }
     if first.as_deref() == Some(std::path::Path::new("bench")) {
         if let Some(extra) = positionals.next() {
             return Err(usage(format!("unexpected argument '{}'", extra.display())));
@@ -291,6 +320,18 @@ mod tests {
             p(&["s.xml", "--runs", "2"]).is_err(),
             "--runs belongs to bench"
         );
+    }
+
+    #[test]
+    fn method_names_a_study_method() {
+        let Ok(Command::Render(r)) = p(&["s.xml", "--method", "f32"]) else {
+            panic!()
+        };
+        assert_eq!(r.method, Some("f32"));
+        assert!(r.headless());
+        assert!(p(&["s.xml", "--method", "fast"]).is_err());
+        assert!(p(&["s.xml", "--method"]).is_err());
+        assert!(p(&["study", "--method", "auto"]).is_err());
     }
 
     #[test]

@@ -33,6 +33,8 @@ Options:
   -time, --time      print the render time (prepare + trace) as 'render: N ns'
   --threads N        render threads (default: one per core)
   --aa N             N×N rays per pixel, 1 to 16 (default 1: the pixel centre)
+  --method NAME      render with a study method instead of auto (default,
+                     auto, f32, textbook, draft, …; see docs/study.md)
   --no-gui           never open a window (the headless build never does)
   -h, --help         this help
   -V, --version      the version
@@ -143,11 +145,20 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
 
     let scene = scene::load(&scene_path).map_err(fail)?;
     let start = Instant::now();
-    // `auto`: the exact options this scene needs (the reference image).
+    // `auto`: the exact options this scene needs (the reference image),
+    // unless a study method is asked for.
+    let options = match r.method.and_then(|name| {
+        rayoflight::study::methods()
+            .into_iter()
+            .find(|m| m.name == name)
+    }) {
+        Some(method) => method.options_for(&scene),
+        None => render::auto(&scene).options,
+    };
     let options = render::RenderOptions {
         threads: r.threads,
-        aa: r.aa.unwrap_or(1),
-        ..render::auto(&scene).options
+        aa: r.aa.unwrap_or(options.aa),
+        ..options
     };
     let image = render::render(&scene, &options).map_err(fail)?;
     let elapsed = start.elapsed();
