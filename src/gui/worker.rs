@@ -68,12 +68,8 @@ pub enum Event {
         row: Row,
         failure: Option<RgbImage>,
     },
-    /// The study is complete: its chart (or why it could not be drawn).
-    StudyFinished {
-        generation: u64,
-        chart: Result<RgbImage, String>,
-        elapsed: Duration,
-    },
+    /// The study is complete (every row was sent).
+    StudyFinished { generation: u64, elapsed: Duration },
     /// The study stopped before its end: cancelled, or a render failed.
     StudyStopped { generation: u64, message: String },
 }
@@ -361,9 +357,8 @@ impl WorkerThread {
             None => run(),
         };
         match result {
-            Ok(rows) => self.send(Event::StudyFinished {
+            Ok(_) => self.send(Event::StudyFinished {
                 generation,
-                chart: chart::chart(&rows).map_err(|e| e.to_string()),
                 elapsed: start.elapsed(),
             }),
             Err(StudyError::Cancelled) => self.send(Event::StudyStopped {

@@ -86,6 +86,19 @@ const COLOURS: [RGBColor; 11] = [
     RGBColor(23, 190, 207),
 ];
 
+/// The colour of method number `i` (as RGB), the same in the chart and in
+/// the app's plot.
+pub fn method_colour(i: usize) -> (u8, u8, u8) {
+    let RGBColor(r, g, b) = COLOURS[i % COLOURS.len()];
+    (r, g, b)
+}
+
+/// The marker shape of method number `i` in the chart: 0 circle,
+/// 1 square, 2 triangle, 3 cross, 4 diamond.
+pub fn method_shape(i: usize) -> usize {
+    i % 5
+}
+
 /// The marker of method number `i` at `coord`: the colour changes with
 /// every method and the shape with every one of five, so that no two of
 /// 55 methods look alike.
@@ -118,7 +131,7 @@ impl<C, DB: DrawingBackend> Drawable<DB> for Marker<C> {
         };
         let colour = COLOURS[self.i % COLOURS.len()];
         let filled = colour.filled();
-        match self.i % 5 {
+        match method_shape(self.i) {
             0 => backend.draw_circle((x, y), 5, &filled, true),
             1 => backend.draw_rect((x - 4, y - 4), (x + 4, y + 4), &filled, true),
             2 => backend.fill_polygon([(x, y - 6), (x + 6, y + 5), (x - 6, y + 5)], &filled),
