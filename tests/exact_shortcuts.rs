@@ -81,3 +81,33 @@ fn deep_mirror_chains_stop_early_with_the_same_image() {
     assert_eq!(fast, reference);
     eprintln!("early stop {fast_time:?}, full chains {plain_time:?}");
 }
+
+#[test]
+fn coincident_objects_resolve_to_the_first_listed_with_every_shortcut() {
+    // Forty spheres in the same place, each its own colour, and thirty
+    // more elsewhere: too many to cull one by one, and more than a tile's
+    // candidate list holds, so primary rays go through the BVH. Ties go to
+    // the object listed first, whichever path finds them.
+    let mut objects = String::new();
+    for k in 0..40 {
+        let red = f64::from(k) / 39.0;
+        objects.push_str(&format!(
+            r#"<sphere><color red="{red}" green="0.5" blue="0.2"/><transformation><translate z="4"/></transformation></sphere>"#
+        ));
+    }
+    for k in 0..30 {
+        objects.push_str(&format!(
+            r#"<sphere><transformation><scale factor="0.2"/><translate x="{}" y="-2" z="6"/></transformation></sphere>"#,
+            f64::from(k) / 3.0 - 5.0
+        ));
+    }
+    let text = format!(
+        r#"<scene>{objects}<light x="0" y="-4" z="0"/><camera width="48" height="36" eyeDistance="2"/><model type="whitted" depth="2"/></scene>"#
+    );
+    let scene = scene::parse(&text, Path::new("coincident.xml")).unwrap();
+    let reference = plain(&scene);
+    for options in [RenderOptions::default(), render::auto(&scene).options] {
+        let fast = render::render(&scene, &options).unwrap();
+        assert!(fast == reference, "{options:?}");
+    }
+}

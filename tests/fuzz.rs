@@ -1,5 +1,7 @@
 //! A seeded mutation fuzzer for the scene parser and for parse-then-render
-//! of tiny images (see fuzz/README.md). Time-bounded: RAYOFLIGHT_FUZZ_SECONDS
+//! of tiny images (see fuzz/README.md): no input may panic, and every
+//! scene that parses must render the same through the plain path, the
+//! exact fast path and `auto`. Time-bounded: RAYOFLIGHT_FUZZ_SECONDS
 //! (default 5, CI 60); repeatable: RAYOFLIGHT_FUZZ_SEED (default 1).
 
 use rayoflight::render::{self, RenderOptions};
@@ -148,14 +150,27 @@ fn exercise(data: &[u8]) {
         s.model.depth = s.model.depth.min(50);
         s.objects.truncate(200);
         s.lights.truncate(50);
-        render::render(
-            &s,
-            &RenderOptions {
-                threads: Some(1),
-                ..RenderOptions::default()
-            },
-        )
-        .expect("valid options");
+        let with = |options: RenderOptions| {
+            render::render(
+                &s,
+                &RenderOptions {
+                    threads: Some(1),
+                    ..options
+                },
+            )
+            .expect("valid options")
+        };
+        // The exact shortcuts (BVH, culling, early stop) and auto's plan
+        // must give the plain path's image on whatever parses.
+        let plain = with(RenderOptions::reference());
+        assert!(
+            with(RenderOptions::default()) == plain,
+            "the fast path differs from the plain one"
+        );
+        assert!(
+            with(render::auto(&s).options) == plain,
+            "auto differs from the plain path"
+        );
         let _ = scene::edit::to_xml(&s);
     }
 }

@@ -127,14 +127,16 @@ impl Bvh {
 
     /// The nearest hit below `t_max`. `hit(k)` intersects the primitive at
     /// position `k` of [`Bvh::order`] and returns its t if any; the
-    /// result is the smallest t and its position (ties: the smaller
-    /// position).
+    /// result is the smallest t and its position. Ties go to the smaller
+    /// `rank(k)` (the scene passes the object's index in the file, so that
+    /// the BVH picks what a plain scan would).
     #[inline]
     pub fn nearest(
         &self,
         ray: &Ray,
         t_max: f64,
         mut hit: impl FnMut(usize) -> Option<f64>,
+        rank: impl Fn(usize) -> usize,
     ) -> Option<(f64, usize)> {
         let inv_dir = ray.dir.recip();
         let mut best: Option<(f64, usize)> = None;
@@ -148,7 +150,8 @@ impl Bvh {
                 let start = node.first as usize;
                 for k in start..start + node.count as usize {
                     if let Some(t) = hit(k)
-                        && (t < best_t || (t == best_t && best.is_some_and(|(_, b)| k < b)))
+                        && (t < best_t
+                            || (t == best_t && best.is_some_and(|(_, b)| rank(k) < rank(b))))
                     {
                         best_t = t;
                         best = Some((t, k));
@@ -201,12 +204,14 @@ impl Bvh {
 impl Bvh {
     /// Collects into `out` the positions (in [`Bvh::order`]) of the
     /// primitives whose boxes reach into the convex cone from `apex`
-    /// bounded by the planes through it with inward unit `normals`. Gives
-    /// up and returns false once more than `limit` are found.
+    /// bounded by the planes through it with inward unit `normals`, with a
+    /// slack of `relative` per unit of distance for the normals' own
+    /// error. Gives up and returns false once more than `limit` are found.
     pub fn collect_in_cone(
         &self,
         apex: DVec3,
         normals: &[DVec3; 4],
+        relative: f64,
         limit: usize,
         out: &mut Vec<usize>,
     ) -> bool {
@@ -224,7 +229,7 @@ impl Bvh {
                 .abs()
                 .max_element()
                 .max(apex.abs().max_element());
-            let slack = 1e-9 * reach + 1e-9 * (b.max - b.min).max_element();
+            let slack = relative * (reach + (b.max - b.min).max_element());
             let outside = normals.iter().any(|n| {
                 let p = DVec3::select(n.cmpge(DVec3::ZERO), b.max, b.min);
                 n.dot(p - apex) < -slack
@@ -407,7 +412,7 @@ mod tests {
                 .filter_map(|i| hit(i).map(|t| (t, i)))
                 .min_by(|x, y| x.0.total_cmp(&y.0));
             let fast = bvh
-                .nearest(&ray, f64::INFINITY, |k| hit(bvh.order()[k] as usize))
+                .nearest(&ray, f64::INFINITY, |k| hit(bvh.order()[k] as usize), |k| k)
                 .map(|(t, k)| (t, bvh.order()[k] as usize));
             assert_eq!(brute.map(|x| x.0), fast.map(|x| x.0), "ray {k}");
         }
@@ -426,13 +431,20 @@ mod tests {
         assert!(bvh.nodes.iter().all(|n| n.count as usize <= MAX_LEAF));
         let ray = Ray::new(DVec3::splat(-1.0), DVec3::ONE.normalize());
         let mut tested = 0;
-        // Every primitive "hit" beyond the boxes: nothing can be pruned, and
-        // the tie goes to the first position.
-        let found = bvh.nearest(&ray, f64::INFINITY, |_| {
-            tested += 1;
-            Some(100.0)
-        });
-        assert_eq!(found, Some((100.0, 0)));
+        // Every primitive "hit" beyond the boxes: nothing can be pruned.
+        let found = bvh.nearest(
+            &ray,
+            f64::INFINITY,
+            |_| {
+                tested += 1;
+                Some(100.0)
+            },
+            |k| bvh.order()[k] as usize,
+        );
+        // The tie goes to the smallest rank: primitive 0, wherever the
+        // build put it.
+        let at = bvh.order().iter().position(|&i| i == 0);
+        assert_eq!(found, Some((100.0, at.unwrap())));
         assert_eq!(tested, 10_000, "all overlap, so all are tested");
     }
 }

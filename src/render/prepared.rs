@@ -349,7 +349,16 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         bounded
             .iter()
             .filter_map(|p| p.bounds())
-            .map(|b| (b.centroid(), 0.5 * (b.max - b.min).length()))
+            .map(|b| {
+                let (centre, radius) = (b.centroid(), 0.5 * (b.max - b.min).length());
+                // A box that overflows (a sphere stretched by 1e308) has
+                // no finite centre: it may be anywhere, every tile keeps it.
+                if centre.is_finite() && radius.is_finite() {
+                    (centre, radius)
+                } else {
+                    (DVec3::ZERO, f64::INFINITY)
+                }
+            })
             .collect()
     } else {
         Vec::new()
@@ -456,9 +465,10 @@ impl Prepared {
             }
             (Some(bvh), Candidates::All) => {
                 let t_max = best.map_or(f64::INFINITY, |b| b.t);
-                // The BVH breaks ties by its own order; equal distances to
-                // two objects are rare enough to settle below.
-                if let Some((t, k)) = bvh.nearest(ray, t_max, |k| intersect(&bounded[k])) {
+                // Ties between spheres go to the object listed first, as
+                // in a plain scan; a tie with a plane is settled below.
+                let rank = |k: usize| self.bounded_objects[k];
+                if let Some((t, k)) = bvh.nearest(ray, t_max, |k| intersect(&bounded[k]), rank) {
                     consider(
                         &mut best,
                         t,
@@ -671,23 +681,37 @@ impl Prepared {
             corner(x0, y1),
         );
         let centre = (a + b + c + d).normalize();
-        // Inward normals of the four side planes.
-        let planes = [a.cross(b), b.cross(c), c.cross(d), d.cross(a)].map(|n| {
-            let n = n.normalize();
+        // Side planes through the eye; the cross product of two unit corner
+        // directions has length sin θ, θ the angle between them.
+        let sides = [a.cross(b), b.cross(c), c.cross(d), d.cross(a)];
+        let sin_min = sides
+            .iter()
+            .map(|n| n.length())
+            .fold(f64::INFINITY, f64::min);
+        if !(sin_min > 0.0 && sin_min.is_finite() && centre.is_finite()) {
+            // A degenerate frustum (a camera squashed flat): no culling.
+            return None;
+        }
+        // Inward unit normals. Their direction is only as good as the
+        // corner directions' rounding (~1e-15) over sin θ: a hair of
+        // relative slack per unit of distance covers that and the rounding
+        // of the dot products.
+        let planes = sides.map(|n| {
+            let n = n / n.length();
             if n.dot(centre) < 0.0 { -n } else { n }
         });
+        let relative = 1e-9 + 1e-13 / sin_min;
         if let Some(bvh) = &self.bvh
             && self.cull_spheres.is_empty()
         {
             let mut found = Vec::new();
             return bvh
-                .collect_in_cone(eye, &planes, TILE_CANDIDATES, &mut found)
+                .collect_in_cone(eye, &planes, relative, TILE_CANDIDATES, &mut found)
                 .then_some(found);
         }
         let inside = |(centre, radius): &(DVec3, f64)| {
             let to = *centre - eye;
-            // A relative hair covers the rounding of these few products.
-            let slack = radius * (1.0 + 1e-9) + 1e-9 * to.length();
+            let slack = radius * (1.0 + 1e-9) + relative * to.length();
             planes.iter().all(|n| n.dot(to) >= -slack)
         };
         Some(
