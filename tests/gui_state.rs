@@ -496,7 +496,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
         .with_size(egui::vec2(1400.0, 1000.0))
         .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
     harness.run_steps(2);
-    assert_eq!(harness.state().preview_methods().exact.name, "auto");
+    assert_eq!(harness.state().preview_methods().preview.name, "auto");
     harness.get_by_label("View").click();
     harness.run_steps(2);
     harness.get_by_label("Study…").click();
@@ -540,7 +540,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
         .unwrap()
         .click();
     harness.run_steps(2);
-    assert_eq!(harness.state().preview_methods().exact.name, "draft");
+    assert_eq!(harness.state().preview_methods().preview.name, "draft");
     // …and the picture becomes the draft render.
     let scene = harness.state().document().scene.clone();
     let expected = render::render(
@@ -573,7 +573,7 @@ fn the_dragging_method_applies_only_while_dragging() {
     use rayoflight::gui::study::{PreviewMethods, by_name};
     let scene = parse(&scene_text(1.0, 32));
     let methods = PreviewMethods {
-        exact: by_name("auto").unwrap(),
+        preview: by_name("auto").unwrap(),
         dragging: by_name("f32"),
     };
     let auto = render::auto(&scene).options;
@@ -584,7 +584,7 @@ fn the_dragging_method_applies_only_while_dragging() {
     // supersample.
     assert_eq!(methods.options(&scene, false, 3).aa, 3);
     let aa4 = PreviewMethods {
-        exact: by_name("aa4").unwrap(),
+        preview: by_name("aa4").unwrap(),
         dragging: None,
     };
     assert_eq!(aa4.options(&scene, true, 1).aa, 4);

@@ -235,7 +235,7 @@ impl RayOfLightApp {
             study::Action::Cancel => self.worker.cancel(),
             study::Action::Preview(name) => {
                 if let Some(method) = study::by_name(name) {
-                    self.methods.exact = method;
+                    self.methods.preview = method;
                     self.request_render();
                 }
             }
@@ -577,7 +577,7 @@ impl RayOfLightApp {
                 ui.label(if self.rendered_dragging {
                     self.methods.dragging.as_ref().map_or("", |m| m.name)
                 } else {
-                    self.methods.exact.name
+                    self.methods.preview.name
                 })
                 .on_hover_text("the live preview's method (View › Study…)");
                 if let Some((elapsed, rays)) = self.preview.last_render() {

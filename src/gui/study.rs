@@ -38,17 +38,19 @@ pub enum StudyState {
     Stopped(String),
 }
 
-/// The live preview's methods: the exact one and the one while dragging.
+/// The live preview's methods: its own, and the one while a value is
+/// dragged (`None`: its own).
 #[derive(Debug, Clone, PartialEq)]
 pub struct PreviewMethods {
-    pub exact: Method,
+    /// The method of the live preview (auto unless chosen).
+    pub preview: Method,
     pub dragging: Option<Method>,
 }
 
 impl Default for PreviewMethods {
     fn default() -> Self {
         PreviewMethods {
-            exact: by_name("auto").expect("the study has an auto method"),
+            preview: by_name("auto").expect("the study has an auto method"),
             dragging: None,
         }
     }
@@ -60,7 +62,7 @@ impl PreviewMethods {
     pub fn options(&self, scene: &Scene, dragging: bool, aa: u32) -> RenderOptions {
         let method = match (&self.dragging, dragging) {
             (Some(fast), true) => fast,
-            _ => &self.exact,
+            _ => &self.preview,
         };
         let options = method.options_for(scene);
         RenderOptions {
@@ -174,7 +176,10 @@ impl StudyWindow {
                 true
             }
             Event::StudyStopped { message, .. } => {
-                self.state = StudyState::Stopped(message);
+                // A newer request already said why (the scene changed).
+                if !matches!(self.state, StudyState::Stopped(_)) {
+                    self.state = StudyState::Stopped(message);
+                }
                 true
             }
             _ => false,
@@ -190,19 +195,19 @@ impl StudyWindow {
     }
 
     /// Draws the window; returns what the user asked for.
-    pub fn show(&mut self, ctx: &egui::Context, preview: &PreviewMethods) -> Vec<Action> {
+    pub fn show(&mut self, ctx: &egui::Context, live: &PreviewMethods) -> Vec<Action> {
         let mut actions = Vec::new();
         let mut open = self.open;
         egui::Window::new("Study")
             .open(&mut open)
             .default_size([720.0, 640.0])
             .vscroll(true)
-            .show(ctx, |ui| self.contents(ui, preview, &mut actions));
+            .show(ctx, |ui| self.contents(ui, live, &mut actions));
         self.open = open;
         actions
     }
 
-    fn contents(&mut self, ui: &mut egui::Ui, preview: &PreviewMethods, actions: &mut Vec<Action>) {
+    fn contents(&mut self, ui: &mut egui::Ui, live: &PreviewMethods, actions: &mut Vec<Action>) {
         ui.label(
             "Every method renders the current scene; each is timed (median of the runs) and \
              compared with the default image (anti-aliasing: with the default supersampled \
@@ -252,7 +257,7 @@ impl StudyWindow {
             }
         });
         ui.separator();
-        self.preview_choice(ui, preview, actions);
+        self.preview_choice(ui, live, actions);
         if !self.plan.is_empty() {
             egui::CollapsingHeader::new("auto's plan for this scene").show(ui, |ui| {
                 for d in &self.plan {
@@ -262,7 +267,7 @@ impl StudyWindow {
             });
         }
         ui.separator();
-        self.table(ui, preview, actions);
+        self.table(ui, live, actions);
         self.failure_picture(ui);
         self.plot(ui);
     }
@@ -270,18 +275,18 @@ impl StudyWindow {
     fn preview_choice(
         &mut self,
         ui: &mut egui::Ui,
-        preview: &PreviewMethods,
+        live: &PreviewMethods,
         actions: &mut Vec<Action>,
     ) {
         let methods = study::methods();
         egui::Grid::new("preview-methods").show(ui, |ui| {
             ui.label("Live preview");
             egui::ComboBox::from_id_salt("preview-method")
-                .selected_text(preview.exact.name)
+                .selected_text(live.preview.name)
                 .show_ui(ui, |ui| {
                     for m in &methods {
                         if ui
-                            .selectable_label(preview.exact.name == m.name, m.name)
+                            .selectable_label(live.preview.name == m.name, m.name)
                             .clicked()
                         {
                             actions.push(Action::Preview(m.name));
@@ -290,12 +295,12 @@ impl StudyWindow {
                 });
             ui.end_row();
             ui.label("While dragging");
-            let current = preview.dragging.as_ref().map_or("the same", |m| m.name);
+            let current = live.dragging.as_ref().map_or("the same", |m| m.name);
             egui::ComboBox::from_id_salt("dragging-method")
                 .selected_text(current)
                 .show_ui(ui, |ui| {
                     if ui
-                        .selectable_label(preview.dragging.is_none(), "the same")
+                        .selectable_label(live.dragging.is_none(), "the same")
                         .clicked()
                     {
                         actions.push(Action::WhileDragging(None));
@@ -310,7 +315,7 @@ impl StudyWindow {
         });
     }
 
-    fn table(&mut self, ui: &mut egui::Ui, preview: &PreviewMethods, actions: &mut Vec<Action>) {
+    fn table(&mut self, ui: &mut egui::Ui, live: &PreviewMethods, actions: &mut Vec<Action>) {
         if self.rows.is_empty() {
             return;
         }
@@ -355,7 +360,7 @@ impl StudyWindow {
                     } else {
                         ui.label("");
                     }
-                    if preview.exact.name == row.method {
+                    if live.preview.name == row.method {
                         ui.label("previewing");
                     } else if ui.button("preview with it").clicked() {
                         actions.push(Action::Preview(row.method));
