@@ -241,16 +241,19 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Resu
     let mut best = fastest_accurate(rows);
     best.sort_by_key(|r| r.time);
     let at = |r: &Row| (r.time.as_secs_f64() * 1e3, error(r));
-    let mut placed: Vec<(f64, f64)> = Vec::new();
+    // Each label takes the lowest line that no nearby label holds.
+    let mut placed: Vec<(f64, f64, i32)> = Vec::new();
     let mut labels = Vec::new();
     for r in &best {
         let (t, e) = at(r);
-        let near = placed
+        let taken: Vec<i32> = placed
             .iter()
-            .filter(|(pt, pe)| (t / pt).max(pt / t) < 2.5 && (e / pe).max(pe / e) < 3.0)
-            .count();
-        placed.push((t, e));
-        labels.push(-26 - 16 * near as i32);
+            .filter(|(pt, pe, _)| (t / pt).max(pt / t) < 2.5 && (e / pe).max(pe / e) < 3.0)
+            .map(|&(_, _, line)| line)
+            .collect();
+        let line = (0..).find(|l| !taken.contains(l)).unwrap_or(0);
+        placed.push((t, e, line));
+        labels.push(-26 - 16 * line);
     }
     chart
         .draw_series(best.iter().zip(labels).map(|(r, dy)| {
