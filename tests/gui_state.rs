@@ -343,6 +343,30 @@ fn saving_edits_keeps_the_comments_and_reloads_equal() {
     assert_eq!(doc.file_loaded(saved, reloaded), Reload::Unchanged);
 }
 
+/// Steps the app until its preview is finished and equals `expected`
+/// (at most 20 s; `what` names the picture in the failure).
+fn until_the_picture_is(
+    harness: &mut egui_kittest::Harness<'_, RayOfLightApp>,
+    expected: &image::RgbImage,
+    what: &str,
+) {
+    let start = Instant::now();
+    loop {
+        harness.step();
+        let app = harness.state();
+        if matches!(app.preview().state(), RenderState::Done { .. })
+            && app.preview().image() == expected
+        {
+            return;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{what} never showed"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+}
+
 #[test]
 fn a_panel_edit_renders_the_edited_scene() {
     let app = RayOfLightApp::new(&egui::Context::default(), Document::builtin());
@@ -366,21 +390,7 @@ fn a_panel_edit_renders_the_edited_scene() {
 
     // The picture becomes the lambert render, as the CLI would draw it.
     let expected = render::render(&app.document().scene, &RenderOptions::default()).unwrap();
-    let start = Instant::now();
-    loop {
-        harness.step();
-        let app = harness.state();
-        if matches!(app.preview().state(), RenderState::Done { .. })
-            && app.preview().image() == &expected
-        {
-            break;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "the edited scene never showed"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    until_the_picture_is(&mut harness, &expected, "the edited scene");
 }
 
 #[test]
@@ -551,21 +561,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
         },
     )
     .unwrap();
-    let start = Instant::now();
-    loop {
-        harness.step();
-        let app = harness.state();
-        if matches!(app.preview().state(), RenderState::Done { .. })
-            && app.preview().image() == &expected
-        {
-            break;
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(20),
-            "the draft preview never showed"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
+    until_the_picture_is(&mut harness, &expected, "the draft preview");
 }
 
 #[test]
