@@ -15,7 +15,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 const USAGE: &str = "\
-Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N]
+Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N] [--method NAME]
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
        rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
