@@ -41,7 +41,7 @@ fn render_or_stop(
 }
 
 /// A method: a name (the CSV's `method` column) and how it renders.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Method {
     pub name: &'static str,
     pub options: Options,
@@ -49,7 +49,7 @@ pub struct Method {
 
 /// How a method renders: the same options for every scene, or the options
 /// [`render::auto`] plans for each scene.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Options {
     Fixed(RenderOptions),
     Auto,
@@ -144,6 +144,11 @@ pub fn methods() -> Vec<Method> {
         ),
         method("draft", RenderOptions { draft: true, ..d() }),
     ]
+}
+
+/// The method called `name`, if the study has one.
+pub fn method(name: &str) -> Option<Method> {
+    methods().into_iter().find(|m| m.name == name)
 }
 
 /// A scene of the study and the name its rows carry.

@@ -33,10 +33,7 @@ fn scene(name: &str) -> StudyScene {
 }
 
 fn method(name: &str) -> Method {
-    study::methods()
-        .into_iter()
-        .find(|m| m.name == name)
-        .unwrap_or_else(|| panic!("no method {name}"))
+    study::method(name).unwrap_or_else(|| panic!("no method {name}"))
 }
 
 fn reference(scene: &StudyScene) -> image::RgbImage {

@@ -38,7 +38,7 @@ pub struct RenderArgs {
     pub threads: Option<usize>,
     pub aa: Option<u32>,
     /// A study method to render with instead of `auto` (`--method`).
-    pub method: Option<&'static str>,
+    pub method: Option<rayoflight::study::Method>,
 }
 
 impl RenderArgs {
@@ -149,20 +149,16 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             }
             "--method" => {
                 let v = value(flag)?;
-                let methods = rayoflight::study::methods();
-                r.method = Some(
-                    methods
+                r.method = Some(rayoflight::study::method(&v).ok_or_else(|| {
+                    let names: Vec<_> = rayoflight::study::methods()
                         .iter()
-                        .find(|m| m.name == v)
                         .map(|m| m.name)
-                        .ok_or_else(|| {
-                            let names: Vec<_> = methods.iter().map(|m| m.name).collect();
-                            usage(format!(
-                                "--method expects one of {}, not {v:?}",
-                                names.join(", ")
-                            ))
-                        })?,
-                );
+                        .collect();
+                    usage(format!(
+                        "--method expects one of {}, not {v:?}",
+                        names.join(", ")
+                    ))
+                })?);
             }
             _ => return Err(usage(format!("unknown flag '{text}'"))),
         }
@@ -180,7 +176,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         .as_deref()
         .and_then(|p| p.to_str())
         .filter(|p| ["bench", "study", "export-pov", "plan"].contains(p));
-    if let (Some(name), Some(_)) = (subcommand, r.method) {
+    if let (Some(name), Some(_)) = (subcommand, &r.method) {
         return Err(usage(format!(
             "--method belongs to rendering, not to '{name}'"
         )));
@@ -327,7 +323,7 @@ mod tests {
         let Ok(Command::Render(r)) = p(&["s.xml", "--method", "f32"]) else {
             panic!()
         };
-        assert_eq!(r.method, Some("f32"));
+        assert_eq!(r.method.as_ref().map(|m| m.name), Some("f32"));
         assert!(r.headless());
         assert!(p(&["s.xml", "--method", "fast"]).is_err());
         assert!(p(&["s.xml", "--method"]).is_err());

@@ -147,11 +147,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     let start = Instant::now();
     // `auto`: the exact options this scene needs (the reference image),
     // unless a study method is asked for.
-    let options = match r.method.and_then(|name| {
-        rayoflight::study::methods()
-            .into_iter()
-            .find(|m| m.name == name)
-    }) {
+    let options = match &r.method {
         Some(method) => method.options_for(&scene),
         None => render::auto(&scene).options,
     };

@@ -50,7 +50,7 @@ pub struct PreviewMethods {
 impl Default for PreviewMethods {
     fn default() -> Self {
         PreviewMethods {
-            preview: by_name("auto").expect("the study has an auto method"),
+            preview: study::method("auto").expect("the study has an auto method"),
             dragging: None,
         }
     }
@@ -74,11 +74,6 @@ impl PreviewMethods {
             ..options
         }
     }
-}
-
-/// The study method called `name`.
-pub fn by_name(name: &str) -> Option<Method> {
-    study::methods().into_iter().find(|m| m.name == name)
 }
 
 pub struct StudyWindow {
