@@ -51,22 +51,36 @@ fn mirrors(depth: u32, width: u32, height: u32) -> Scene {
     ))
 }
 
-/// Collects the worker's events until the full-resolution pass of
-/// `generation` finishes; returns them and the time it took.
-fn until_finished(worker: &Worker, generation: u64, limit: Duration) -> (Vec<Event>, Duration) {
+/// Collects the worker's events up to the first for which `last` holds;
+/// returns them and the time it took. Panics after `limit`, naming `what`.
+fn events_until(
+    worker: &Worker,
+    limit: Duration,
+    what: &str,
+    last: impl Fn(&Event) -> bool,
+) -> (Vec<Event>, Duration) {
     let start = Instant::now();
     let mut events = Vec::new();
     while start.elapsed() < limit {
         if let Some(e) = worker.next_event(Duration::from_millis(10)) {
-            let done =
-                matches!(e, Event::PassFinished { generation: g, scale: 1, .. } if g == generation);
+            let done = last(&e);
             events.push(e);
             if done {
                 return (events, start.elapsed());
             }
         }
     }
-    panic!("generation {generation} did not finish within {limit:?}");
+    panic!("{what} did not end within {limit:?}");
+}
+
+/// Events until the full-resolution pass of `generation` finishes.
+fn until_finished(worker: &Worker, generation: u64, limit: Duration) -> (Vec<Event>, Duration) {
+    events_until(
+        worker,
+        limit,
+        &format!("generation {generation}"),
+        |e| matches!(e, Event::PassFinished { generation: g, scale: 1, .. } if *g == generation),
+    )
 }
 
 #[test]
@@ -425,19 +439,10 @@ fn watcher_survives_a_rename_away_and_a_directory_in_place() {
 
 /// Events of `generation` until its study ends (finished or stopped).
 fn until_study_ends(worker: &Worker, generation: u64, limit: Duration) -> (Vec<Event>, Duration) {
-    let start = Instant::now();
-    let mut events = Vec::new();
-    while start.elapsed() < limit {
-        if let Some(e) = worker.next_event(Duration::from_millis(10)) {
-            let end = e.generation() == generation
-                && matches!(e, Event::StudyFinished { .. } | Event::StudyStopped { .. });
-            events.push(e);
-            if end {
-                return (events, start.elapsed());
-            }
-        }
-    }
-    panic!("study {generation} did not end within {limit:?}");
+    events_until(worker, limit, &format!("study {generation}"), |e| {
+        e.generation() == generation
+            && matches!(e, Event::StudyFinished { .. } | Event::StudyStopped { .. })
+    })
 }
 
 #[test]
@@ -566,11 +571,12 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
 
 #[test]
 fn the_dragging_method_applies_only_while_dragging() {
-    use rayoflight::gui::study::{PreviewMethods, by_name};
+    use rayoflight::gui::study::PreviewMethods;
+    use rayoflight::study::method;
     let scene = parse(&scene_text(1.0, 32));
     let methods = PreviewMethods {
-        preview: by_name("auto").unwrap(),
-        dragging: by_name("f32"),
+        preview: method("auto").unwrap(),
+        dragging: method("f32"),
     };
     let auto = render::auto(&scene).options;
     assert_eq!(methods.options(&scene, false, 1), auto);
@@ -580,7 +586,7 @@ fn the_dragging_method_applies_only_while_dragging() {
     // supersample.
     assert_eq!(methods.options(&scene, false, 3).aa, 3);
     let aa4 = PreviewMethods {
-        preview: by_name("aa4").unwrap(),
+        preview: method("aa4").unwrap(),
         dragging: None,
     };
     assert_eq!(aa4.options(&scene, true, 1).aa, 4);
