@@ -3,6 +3,9 @@
 
 use std::path::Path;
 
+mod common;
+use common::Rng;
+
 use rayoflight::math::{Transform, TransformStep, Vec3};
 use rayoflight::scene::edit::{EditError, rewrite, to_xml};
 use rayoflight::scene::{self, Camera, Illumination, Light, Material, Model, Object, Scene, Shape};
@@ -654,21 +657,8 @@ fn invalid_edited_values_are_an_error() {
 
 // ----- random edits -----
 
-/// xorshift64*: a small deterministic generator.
-struct Rng(u64);
-
+// The random scene edits, on the shared generator.
 impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-
     fn chance(&mut self, percent: u64) -> bool {
         self.next() % 100 < percent
     }

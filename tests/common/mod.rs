@@ -1,9 +1,27 @@
-//! Helpers shared by the tests that drive the built binary.
+//! Helpers shared by the test crates: the built binary's output, a tiny
+//! scene, and a small deterministic random generator.
 #![allow(dead_code)] // each test crate uses its own subset
 
 use std::fs;
 use std::path::Path;
 use std::process::Output;
+
+/// xorshift64*: a small deterministic generator (seed ≠ 0).
+pub struct Rng(pub u64);
+
+impl Rng {
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
+    }
+
+    /// A number in 0..n (0 when n is 0).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
+}
 
 /// A 16×12 scene: one sphere, one light.
 pub const TINY: &str = r#"<scene>
