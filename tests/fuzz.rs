@@ -158,7 +158,7 @@ fn exercise(data: &[u8]) {
             with(render::auto(&s).options) == plain,
             "auto differs from the plain path"
         );
-        let _ = scene::edit::to_xml(&s);
+        let _ = scene::splice::to_xml(&s);
     }
 }
 

@@ -7,7 +7,8 @@ mod common;
 use common::Rng;
 
 use rayoflight::math::{Transform, TransformStep, Vec3};
-use rayoflight::scene::edit::{EditError, rewrite, to_xml};
+use rayoflight::scene::edit::EditError;
+use rayoflight::scene::splice::{rewrite_by_index as rewrite, to_xml};
 use rayoflight::scene::{self, Camera, Illumination, Light, Material, Model, Object, Scene, Shape};
 
 const EXAMPLE: &str = rayoflight::EXAMPLE_SCENE;
@@ -347,20 +348,19 @@ fn transformation_steps_rewritten() {
 }
 
 #[test]
-fn transformation_removed_when_emptied_and_added_when_missing() {
+fn steps_removed_when_emptied_and_transformation_added_when_missing() {
+    // Removing every step removes the steps, not the <transformation>
+    // element the user did not remove (nor the comments it may hold).
     let mut s = parse(EXAMPLE);
     s.objects[0].transform = Transform::default();
     let out = save(EXAMPLE, &s);
     assert_diff(
         EXAMPLE,
         &out,
-        &[
-            " <transformation>",
-            r#"  <translate x="2" y="0" z="-2"/>"#,
-            " </transformation>",
-        ],
+        &[r#"  <translate x="2" y="0" z="-2"/>"#],
         &[],
     );
+    assert!(out.contains(" <transformation>\n </transformation>\n</sphere>"));
 
     let mut s = parse(ODD);
     s.objects[2].transform = transform(vec![TransformStep::RotateX(1.5)]);
@@ -487,7 +487,7 @@ fn shape_change_renames_both_tags() {
 }
 
 #[test]
-fn objects_and_lights_added_before_the_end_of_the_scene() {
+fn objects_and_lights_added_after_the_last_of_their_kind() {
     let mut s = parse(EXAMPLE);
     s.objects.push(Object {
         shape: Shape::Plane,
@@ -525,7 +525,8 @@ fn objects_and_lights_added_before_the_end_of_the_scene() {
             r#"<light x="0" y="-10" z="0"/>"#,
         ],
     );
-    assert!(out.ends_with("<light x=\"0\" y=\"-10\" z=\"0\"/>\n</scene>\n"));
+    assert!(out.contains("</sphere>\n<plane/>\n<sphere>\n"));
+    assert!(out.contains("</light>\n<light x=\"0\" y=\"-10\" z=\"0\"/>\n<camera"));
 }
 
 #[test]
@@ -561,6 +562,7 @@ fn trailing_objects_and_lights_removed_with_their_lines() {
         &out,
         &[
             "\t<sphere />",
+            "\t<!-- a floor -->",
             "\t<plane>",
             "\t\t<material m=\"20\" ka=\"0.1\"/>",
             "\t</plane>",
@@ -568,7 +570,9 @@ fn trailing_objects_and_lights_removed_with_their_lines() {
         ],
         &[],
     );
-    assert!(out.contains("<!-- a floor -->") && out.contains("<!-- end of lights -->"));
+    // The comment directly above the plane described it and went with it;
+    // the one below the last light stays.
+    assert!(out.contains("<!-- end of lights -->"));
 }
 
 #[test]

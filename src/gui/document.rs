@@ -3,7 +3,7 @@
 //!
 //! The file is the truth until the user edits in the panel; then the edits
 //! are kept as an edited copy of the scene until saved (written back into
-//! the text with [`crate::scene::edit::rewrite`], keeping the file's
+//! the text with [`crate::scene::splice`], keeping the file's
 //! comments and layout) or discarded. A change of the file on disk while
 //! edits are unsaved is held back and the user is asked.
 
@@ -182,7 +182,7 @@ impl Document {
     /// Writes the scene to `path` (atomically) and makes it this document's
     /// file.
     pub fn save_as(&mut self, path: &Path) -> Result<(), SaveError> {
-        let text = scene::edit::rewrite(&self.text, path, &self.scene)?;
+        let text = scene::splice::rewrite_by_index(&self.text, path, &self.scene)?;
         crate::output::write_atomic(path, text.as_bytes())?;
         self.text = text;
         self.saved = self.scene.clone();

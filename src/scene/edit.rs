@@ -1,167 +1,357 @@
-//! Save-back: writing a scene edited in the app back into its XML source.
+//! The edit engine: every change to a scene is an [`Edit`] value, applied in
+//! one place ([`Edited::apply`]) with the loader's rules, and undone by the
+//! [`Undo`] that applying it returns.
 //!
-//! [`rewrite`] compares the scene the text describes with the edited one and
-//! changes only what differs, in place: an attribute value between its
-//! quotes, a missing attribute appended to its element, a missing element
-//! inserted among its siblings with their indentation. Every other byte of
-//! the text is kept: comments, whitespace, attribute order and quoting, the
-//! spelling of unchanged numbers (`1.0` stays `1.0`), the XML declaration.
+//! The app's panel, its keys and its undo stack, `rayoflight edit` and the
+//! render's `--set` all produce and apply these same values, so a value can
+//! only change through here and can never become one the loader refuses.
 //!
-//! [`to_xml`] writes a fresh, indented file for a scene that has no source
-//! text yet ("Save as" of the built-in example, a new scene).
+//! Fields and elements are named by paths that count from 1 in file order,
+//! as the panel numbers them: `object[2].material.ka`, `light[1].x`,
+//! `camera.transformation[1].angle`, `model.type` ([`Field`], [`Item`]).
 //!
-//! Numbers are written with Rust's shortest round-trip formatting, so the
-//! written text parses back to exactly the edited values.
-//!
-//! How it works: the text is scanned again with quick-xml to find each
-//! element's byte span and each attribute value's byte range; the edits are
-//! collected as splices (byte range → replacement) and applied in one pass.
-//! Before anything is returned, the new text is parsed and compared with the
-//! edited scene: `rewrite` never returns a text that would load differently.
+//! [`Edited`] is a scene together with where each of its objects, lights
+//! and transformation steps came from in the text it was loaded from (its
+//! *origin*, or none for an element added since). Save-back
+//! ([`super::splice`]) writes the edits into that text by these origins,
+//! never by matching elements up again.
 
-use std::borrow::Cow;
-use std::mem::discriminant;
-use std::ops::Range;
-use std::path::Path;
+use std::fmt;
 
-use quick_xml::Reader;
-use quick_xml::events::{BytesStart, Event};
+use super::load::{MAX_SIDE, NumberError, parse_integer, parse_number};
+use super::{Camera, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, Object, Scene, Shape};
+use crate::math::{Transform, TransformStep, Vec3};
+use crate::shading::{Illumination, Light, Material, Model};
 
-use super::{Color, Illumination, LoadError, Material, Model, Object, Scene, parse};
-use crate::math::{TransformStep, Vec3};
-use crate::shading::Light;
-
-/// Why a scene could not be written back.
+/// Why an edit, or a save of edits, could not be done.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum EditError {
+    /// A path that does not parse or names nothing in this scene
+    /// (`object[5]: the scene has 3 objects`).
+    #[error("{path}: {message}")]
+    Path { path: String, message: String },
+    /// A value the loader would refuse (`object[1].material.ka: must be >= 0,
+    /// got -1`).
+    #[error("{path}: {message}")]
+    Value { path: String, message: String },
     /// The source text is not a valid scene.
     #[error("the scene text does not load: {0}")]
-    Parse(Box<LoadError>),
-    /// The edited scene holds a value the format refuses (a negative
-    /// coefficient, a non-finite number, a singular transformation, an image
-    /// too large...). The error's position is in the text that would have
-    /// been written.
+    Parse(Box<super::LoadError>),
+    /// The edited text would not load (a bug: every value was checked).
     #[error("the edited scene cannot be saved: {0}")]
-    Invalid(Box<LoadError>),
+    Invalid(Box<super::LoadError>),
     /// Something the editor did not expect (a bug).
     #[error("cannot write the edited scene back into its text: {0}")]
     Internal(String),
 }
 
-fn internal(message: impl Into<String>) -> EditError {
-    EditError::Internal(message.into())
-}
-
-/// Writes `edited` back into `text`, the source of a valid scene file
-/// (`path` only names it in errors).
-///
-/// The result parses to a scene equal to `edited`; every part of `text` that
-/// did not need to change is kept byte for byte. Objects and lights are
-/// matched by index in document order; extra ones in `edited` are appended
-/// before `</scene>`, missing ones are removed from the end.
-pub fn rewrite(text: &str, path: &Path, edited: &Scene) -> Result<String, EditError> {
-    let original = parse(text, path).map_err(|e| EditError::Parse(Box::new(e)))?;
-    if &original == edited {
-        return Ok(text.to_owned());
-    }
-    let out = rewrite_unchecked(text, &original, edited)?;
-    match parse(&out, path) {
-        Ok(scene) if &scene == edited => Ok(out),
-        Ok(_) => Err(internal(
-            "the rewritten text does not load as the edited scene",
-        )),
-        Err(e) => Err(EditError::Invalid(Box::new(e))),
+fn path_error(path: impl fmt::Display, message: impl Into<String>) -> EditError {
+    EditError::Path {
+        path: path.to_string(),
+        message: message.into(),
     }
 }
 
-/// The splices that turn `original` (the scene `text` describes) into
-/// `edited`, applied; the result is not checked.
-fn rewrite_unchecked(text: &str, original: &Scene, edited: &Scene) -> Result<String, EditError> {
-    let doc = Doc::scan(text)?;
-    let mut editor = Editor {
-        doc: &doc,
-        splices: Vec::new(),
-    };
-    editor.scene(original, edited)?;
-    apply(text, editor.splices)
+fn value_error(path: impl fmt::Display, message: impl Into<String>) -> EditError {
+    EditError::Value {
+        path: path.to_string(),
+        message: message.into(),
+    }
 }
 
-/// A fresh scene file for `scene`, indented by two spaces:
-/// `parse(&to_xml(scene), path) == Ok(scene)` for every valid scene.
-///
-/// Objects come first, then lights, the camera and the model. Each object
-/// gets its colour and its full material, so that the file is easy to edit
-/// by hand; a transformation is written when it has steps, a light colour
-/// when it is not white.
-pub fn to_xml(scene: &Scene) -> String {
-    let mut lines: Lines = vec![(0, "<scene>".to_owned())];
-    for object in &scene.objects {
-        let name = object.shape.name();
-        lines.push((1, format!("<{name}>")));
-        lines.push((2, color_tag(object.color)));
-        lines.push((2, material_tag(&object.material, false)));
-        push_nested(
-            &mut lines,
-            2,
-            transformation_lines(object.transform.steps()),
-        );
-        lines.push((1, format!("</{name}>")));
-    }
-    for light in &scene.lights {
-        push_nested(&mut lines, 1, light_lines(light));
-    }
-    let camera = &scene.camera;
-    let camera_tag = format!(
-        "camera width=\"{}\" height=\"{}\" eyeDistance=\"{}\"",
-        camera.width,
-        camera.height,
-        num(camera.eye_distance)
-    );
-    if camera.transform.steps().is_empty() {
-        lines.push((1, format!("<{camera_tag}/>")));
-    } else {
-        lines.push((1, format!("<{camera_tag}>")));
-        push_nested(
-            &mut lines,
-            2,
-            transformation_lines(camera.transform.steps()),
-        );
-        lines.push((1, "</camera>".to_owned()));
-    }
-    let model = scene.model;
-    let depth = if model.depth != 1 || model.illumination == Illumination::Whitted {
-        format!(" depth=\"{}\"", model.depth)
-    } else {
-        String::new()
-    };
-    lines.push((
-        1,
-        format!("<model type=\"{}\"{depth}/>", model.illumination.name()),
-    ));
-    lines.push((0, "</scene>".to_owned()));
+// ----- paths -----
 
-    let mut out = String::from("<?xml version=\"1.0\"?>\n");
-    for (level, line) in lines {
-        out.push_str(&"  ".repeat(level));
-        out.push_str(&line);
-        out.push('\n');
-    }
-    out
+/// A coordinate of a position, translation or scale.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
 }
 
-// ----- writing elements -----
-
-/// Lines of XML, each with its nesting level relative to the first.
-type Lines = Vec<(usize, String)>;
-
-fn push_nested(lines: &mut Lines, level: usize, nested: Lines) {
-    lines.extend(nested.into_iter().map(|(l, s)| (l + level, s)));
+/// A component of a colour.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Channel {
+    Red,
+    Green,
+    Blue,
 }
 
-/// A number as Rust writes it shortest while reading back the same `f64`:
-/// `{}`, or `{:e}` for very large or very small magnitudes (where `{}` would
-/// write hundreds of zeros).
-fn num(v: f64) -> String {
+/// A material coefficient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Coef {
+    Ka,
+    Kd,
+    Ks,
+    M,
+}
+
+/// An attribute of a transformation step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StepAttr {
+    X,
+    Y,
+    Z,
+    Angle,
+    Factor,
+}
+
+/// Whose `<transformation>`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Owner {
+    Camera,
+    /// Object index from 0.
+    Object(usize),
+}
+
+/// One value of the scene. Indices count from 0 here and from 1 in paths.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Field {
+    ModelType,
+    ModelDepth,
+    CameraWidth,
+    CameraHeight,
+    CameraEyeDistance,
+    Step {
+        owner: Owner,
+        step: usize,
+        attr: StepAttr,
+    },
+    Color {
+        object: usize,
+        channel: Channel,
+    },
+    Material {
+        object: usize,
+        coef: Coef,
+    },
+    LightPosition {
+        light: usize,
+        axis: Axis,
+    },
+    LightColor {
+        light: usize,
+        channel: Channel,
+    },
+}
+
+/// An element that can be added or removed. Indices count from 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Item {
+    /// A sphere or plane: objects count spheres and planes together.
+    Object(usize),
+    Light(usize),
+    /// A step of a transformation.
+    Step(Owner, usize),
+}
+
+/// A value as a field holds it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value {
+    Number(f64),
+    /// `camera.width`, `camera.height`, `model.depth`.
+    Integer(u64),
+    Model(Illumination),
+}
+
+/// The contents of an element being inserted.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Element {
+    Object(Box<Object>),
+    Light(Light),
+    Step(TransformStep),
+}
+
+/// One change to a scene.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Edit {
+    /// Set one value.
+    Set(Field, Value),
+    /// Insert an element at `Item`'s index (its length appends).
+    Insert(Item, Element),
+    /// Remove an element.
+    Remove(Item),
+    /// Replace the camera's whole transformation (the viewport's edit).
+    CameraTransform(Vec<TransformStep>),
+}
+
+const AXES: [(Axis, &str); 3] = [(Axis::X, "x"), (Axis::Y, "y"), (Axis::Z, "z")];
+const CHANNELS: [(Channel, &str); 3] = [
+    (Channel::Red, "red"),
+    (Channel::Green, "green"),
+    (Channel::Blue, "blue"),
+];
+const COEFS: [(Coef, &str); 4] = [
+    (Coef::Ka, "ka"),
+    (Coef::Kd, "kd"),
+    (Coef::Ks, "ks"),
+    (Coef::M, "m"),
+];
+const STEP_ATTRS: [(StepAttr, &str); 5] = [
+    (StepAttr::X, "x"),
+    (StepAttr::Y, "y"),
+    (StepAttr::Z, "z"),
+    (StepAttr::Angle, "angle"),
+    (StepAttr::Factor, "factor"),
+];
+
+fn name_of<T: PartialEq + Copy>(table: &[(T, &'static str)], value: T) -> &'static str {
+    table
+        .iter()
+        .find(|(v, _)| *v == value)
+        .map_or("?", |(_, n)| n)
+}
+
+fn from_name<T: Copy>(table: &[(T, &'static str)], name: &str) -> Option<T> {
+    table.iter().find(|(_, n)| *n == name).map(|(v, _)| *v)
+}
+
+impl Axis {
+    pub fn name(self) -> &'static str {
+        name_of(&AXES, self)
+    }
+    fn of(self, v: Vec3) -> f64 {
+        match self {
+            Axis::X => v.x,
+            Axis::Y => v.y,
+            Axis::Z => v.z,
+        }
+    }
+    fn slot(self, v: &mut Vec3) -> &mut f64 {
+        match self {
+            Axis::X => &mut v.x,
+            Axis::Y => &mut v.y,
+            Axis::Z => &mut v.z,
+        }
+    }
+}
+
+impl Channel {
+    pub fn name(self) -> &'static str {
+        name_of(&CHANNELS, self)
+    }
+    fn axis(self) -> Axis {
+        match self {
+            Channel::Red => Axis::X,
+            Channel::Green => Axis::Y,
+            Channel::Blue => Axis::Z,
+        }
+    }
+}
+
+impl Coef {
+    pub fn name(self) -> &'static str {
+        name_of(&COEFS, self)
+    }
+    fn slot(self, m: &mut Material) -> &mut f64 {
+        match self {
+            Coef::Ka => &mut m.ka,
+            Coef::Kd => &mut m.kd,
+            Coef::Ks => &mut m.ks,
+            Coef::M => &mut m.m,
+        }
+    }
+}
+
+impl StepAttr {
+    pub fn name(self) -> &'static str {
+        name_of(&STEP_ATTRS, self)
+    }
+
+    /// The attributes a step of this kind has.
+    fn allowed(step: &TransformStep) -> &'static [StepAttr] {
+        match step {
+            TransformStep::Translate(_) | TransformStep::Scale(_) => {
+                &[StepAttr::X, StepAttr::Y, StepAttr::Z]
+            }
+            TransformStep::RotateX(_) | TransformStep::RotateY(_) | TransformStep::RotateZ(_) => {
+                &[StepAttr::Angle]
+            }
+            TransformStep::UniformScale(_) => &[StepAttr::Factor],
+        }
+    }
+
+    fn axis(self) -> Option<Axis> {
+        match self {
+            StepAttr::X => Some(Axis::X),
+            StepAttr::Y => Some(Axis::Y),
+            StepAttr::Z => Some(Axis::Z),
+            StepAttr::Angle | StepAttr::Factor => None,
+        }
+    }
+}
+
+/// The element name of a step (`translate`, `rotate-x`, `scale`, ...).
+pub fn step_name(step: &TransformStep) -> &'static str {
+    match step {
+        TransformStep::Translate(_) => "translate",
+        TransformStep::RotateX(_) => "rotate-x",
+        TransformStep::RotateY(_) => "rotate-y",
+        TransformStep::RotateZ(_) => "rotate-z",
+        TransformStep::UniformScale(_) | TransformStep::Scale(_) => "scale",
+    }
+}
+
+impl fmt::Display for Owner {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Owner::Camera => write!(f, "camera"),
+            Owner::Object(n) => write!(f, "object[{}]", n + 1),
+        }
+    }
+}
+
+impl fmt::Display for Item {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Item::Object(n) => write!(f, "object[{}]", n + 1),
+            Item::Light(n) => write!(f, "light[{}]", n + 1),
+            Item::Step(owner, k) => write!(f, "{owner}.transformation[{}]", k + 1),
+        }
+    }
+}
+
+impl fmt::Display for Field {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Field::ModelType => write!(f, "model.type"),
+            Field::ModelDepth => write!(f, "model.depth"),
+            Field::CameraWidth => write!(f, "camera.width"),
+            Field::CameraHeight => write!(f, "camera.height"),
+            Field::CameraEyeDistance => write!(f, "camera.eyeDistance"),
+            Field::Step { owner, step, attr } => {
+                write!(f, "{}.{}", Item::Step(owner, step), attr.name())
+            }
+            Field::Color { object, channel } => {
+                write!(f, "object[{}].color.{}", object + 1, channel.name())
+            }
+            Field::Material { object, coef } => {
+                write!(f, "object[{}].material.{}", object + 1, coef.name())
+            }
+            Field::LightPosition { light, axis } => {
+                write!(f, "light[{}].{}", light + 1, axis.name())
+            }
+            Field::LightColor { light, channel } => {
+                write!(f, "light[{}].color.{}", light + 1, channel.name())
+            }
+        }
+    }
+}
+
+impl fmt::Display for Value {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Value::Number(v) => f.write_str(&number_text(*v)),
+            Value::Integer(v) => write!(f, "{v}"),
+            Value::Model(m) => f.write_str(m.name()),
+        }
+    }
+}
+
+/// A number as it is written into a scene file: Rust's shortest text that
+/// reads back to the same `f64`, in exponent form for magnitudes where the
+/// plain form would write many zeros.
+pub fn number_text(v: f64) -> String {
     let a = v.abs();
     if a != 0.0 && !(1e-6..1e16).contains(&a) {
         format!("{v:e}")
@@ -170,891 +360,1073 @@ fn num(v: f64) -> String {
     }
 }
 
-fn color_tag(c: Color) -> String {
-    format!(
-        "<color red=\"{}\" green=\"{}\" blue=\"{}\"/>",
-        num(c.x),
-        num(c.y),
-        num(c.z)
-    )
+/// One `name` or `name[N]` segment of a path; N counts from 1.
+struct Segment<'a> {
+    name: &'a str,
+    index: Option<usize>,
 }
 
-/// `<material .../>`; with `only_changed`, the attributes equal to their
-/// defaults are left out.
-fn material_tag(m: &Material, only_changed: bool) -> String {
-    let d = Material::default();
-    let mut tag = String::from("<material");
-    for (name, v, dv) in [
-        ("ka", m.ka, d.ka),
-        ("kd", m.kd, d.kd),
-        ("ks", m.ks, d.ks),
-        ("m", m.m, d.m),
-    ] {
-        if !only_changed || v != dv {
-            tag.push_str(&format!(" {name}=\"{}\"", num(v)));
-        }
-    }
-    tag.push_str("/>");
-    tag
-}
-
-fn xyz(v: Vec3) -> String {
-    format!("x=\"{}\" y=\"{}\" z=\"{}\"", num(v.x), num(v.y), num(v.z))
-}
-
-fn step_tag(step: &TransformStep) -> String {
-    match *step {
-        TransformStep::Translate(v) => format!("<translate {}/>", xyz(v)),
-        TransformStep::RotateX(a) => format!("<rotate-x angle=\"{}\"/>", num(a)),
-        TransformStep::RotateY(a) => format!("<rotate-y angle=\"{}\"/>", num(a)),
-        TransformStep::RotateZ(a) => format!("<rotate-z angle=\"{}\"/>", num(a)),
-        TransformStep::UniformScale(f) => format!("<scale factor=\"{}\"/>", num(f)),
-        TransformStep::Scale(v) => format!("<scale {}/>", xyz(v)),
-    }
-}
-
-/// `<transformation>` with its steps; nothing when there are none.
-fn transformation_lines(steps: &[TransformStep]) -> Lines {
-    if steps.is_empty() {
-        return Vec::new();
-    }
-    let mut lines = vec![(0, "<transformation>".to_owned())];
-    lines.extend(steps.iter().map(|s| (1, step_tag(s))));
-    lines.push((0, "</transformation>".to_owned()));
-    lines
-}
-
-/// A new object element: only what differs from the defaults.
-fn object_lines(object: &Object) -> Lines {
-    let name = object.shape.name();
-    let mut inner: Lines = Vec::new();
-    if object.color != Vec3::ONE {
-        inner.push((0, color_tag(object.color)));
-    }
-    if object.material != Material::default() {
-        inner.push((0, material_tag(&object.material, true)));
-    }
-    inner.extend(transformation_lines(object.transform.steps()));
-    wrap(name, "", inner)
-}
-
-fn light_lines(light: &Light) -> Lines {
-    let inner = if light.color == Vec3::ONE {
-        Vec::new()
-    } else {
-        vec![(0, color_tag(light.color))]
-    };
-    wrap("light", &format!(" {}", xyz(light.position)), inner)
-}
-
-fn model_tag(model: &Model) -> String {
-    let depth = if model.depth == 1 {
-        String::new()
-    } else {
-        format!(" depth=\"{}\"", model.depth)
-    };
-    format!("<model type=\"{}\"{depth}/>", model.illumination.name())
-}
-
-/// `<name attrs/>`, or `<name attrs>` + `inner` one level deeper + `</name>`.
-fn wrap(name: &str, attrs: &str, inner: Lines) -> Lines {
-    if inner.is_empty() {
-        return vec![(0, format!("<{name}{attrs}/>"))];
-    }
-    let mut lines = vec![(0, format!("<{name}{attrs}>"))];
-    push_nested(&mut lines, 1, inner);
-    lines.push((0, format!("</{name}>")));
-    lines
-}
-
-// ----- the scanned document -----
-
-/// One attribute: its name and the byte range of its raw value, between the
-/// quotes.
-struct AttrSpan {
-    name: String,
-    value: Range<usize>,
-}
-
-/// One element of the text, with byte offsets into the whole text.
-struct Node {
-    name: String,
-    /// Offset of the `<` of the start tag.
-    start: usize,
-    /// Offset just past the `>` of the start tag.
-    tag_end: usize,
-    /// `<x/>`: no content and no end tag.
-    empty: bool,
-    /// The end tag `</x>`; `tag_end..tag_end` for an empty element.
-    end: Range<usize>,
-    attrs: Vec<AttrSpan>,
-    children: Vec<usize>,
-}
-
-impl Node {
-    /// Offset just past the whole element.
-    fn elem_end(&self) -> usize {
-        if self.empty {
-            self.tag_end
-        } else {
-            self.end.end
-        }
-    }
-}
-
-struct Doc<'t> {
-    text: &'t str,
-    /// Offset of the text after a byte-order mark (0 without one).
-    base: usize,
-    /// The file's line ending.
-    nl: &'static str,
-    /// One level of indentation, as the file writes it.
-    unit: String,
-    nodes: Vec<Node>,
-    root: usize,
-}
-
-impl<'t> Doc<'t> {
-    fn scan(text: &'t str) -> Result<Doc<'t>, EditError> {
-        let body = text.strip_prefix('\u{feff}').unwrap_or(text);
-        let base = text.len() - body.len();
-        let offset = |slice: &[u8]| -> Result<usize, EditError> {
-            (slice.as_ptr() as usize)
-                .checked_sub(body.as_ptr() as usize)
-                .filter(|&o| o.saturating_add(slice.len()) <= body.len())
-                .map(|o| o + base)
-                .ok_or_else(|| internal("a slice outside the text"))
-        };
-
-        let mut reader = Reader::from_str(body);
-        let config = reader.config_mut();
-        config.check_end_names = true;
-        config.expand_empty_elements = false;
-        config.trim_text(false);
-
-        let mut nodes: Vec<Node> = Vec::new();
-        let mut stack: Vec<usize> = Vec::new();
-        let mut root = None;
-        loop {
-            let event = reader
-                .read_event()
-                .map_err(|e| internal(format!("XML: {e}")))?;
-            let position = usize::try_from(reader.buffer_position())
-                .map_err(|_| internal("position out of range"))?
-                .saturating_add(base);
-            let (start, empty) = match event {
-                Event::Start(start) => (start, false),
-                Event::Empty(start) => (start, true),
-                Event::End(_) => {
-                    let at = text
-                        .get(..position)
-                        .and_then(|before| before.rfind('<'))
-                        .ok_or_else(|| internal("end tag without '<'"))?;
-                    let id = stack.pop().ok_or_else(|| internal("unbalanced end tag"))?;
-                    nodes[id].end = at..position;
-                    continue;
+fn segments(path: &str) -> Result<Vec<Segment<'_>>, EditError> {
+    path.split('.')
+        .map(|part| {
+            let Some((name, rest)) = part.split_once('[') else {
+                if part.is_empty() {
+                    return Err(path_error(path, "empty name between dots"));
                 }
-                Event::Eof => break,
-                _ => continue,
+                return Ok(Segment {
+                    name: part,
+                    index: None,
+                });
             };
-            let id = nodes.len();
-            nodes.push(element(&start, empty, position, &offset)?);
-            match stack.last() {
-                Some(&parent) => nodes[parent].children.push(id),
-                None if root.is_none() => root = Some(id),
-                None => return Err(internal("a second root element")),
-            }
-            if !empty {
-                stack.push(id);
-            }
-        }
-        let root = match (root, stack.is_empty()) {
-            (Some(root), true) => root,
-            _ => return Err(internal("unbalanced elements")),
-        };
-        let nl = if text.contains("\r\n") { "\r\n" } else { "\n" };
-        let mut doc = Doc {
-            text,
-            base,
-            nl,
-            unit: String::new(),
-            nodes,
-            root,
-        };
-        doc.unit = doc.indent_unit();
-        Ok(doc)
-    }
+            let number = rest
+                .strip_suffix(']')
+                .ok_or_else(|| path_error(path, format!("'{part}': missing ']'")))?;
+            let n = parse_integer(number)
+                .filter(|&n| n >= 1 && number.bytes().all(|b| b.is_ascii_digit()))
+                .and_then(|n| usize::try_from(n).ok())
+                .ok_or_else(|| {
+                    path_error(
+                        path,
+                        format!("'{number}' is not an index: they count from 1"),
+                    )
+                })?;
+            Ok(Segment {
+                name,
+                index: Some(n - 1),
+            })
+        })
+        .collect()
+}
 
-    /// The extra indentation of the first child, on its own line, of a
-    /// parent on its own line; two spaces when the file shows none.
-    fn indent_unit(&self) -> String {
-        for node in &self.nodes {
-            let Some(parent) = self.own_indent(node.start) else {
-                continue;
-            };
-            for &child in &node.children {
-                if let Some(indent) = self.own_indent(self.nodes[child].start)
-                    && indent.len() > parent.len()
-                    && let Some(unit) = indent.strip_prefix(parent)
-                {
-                    return unit.to_owned();
+const FIELD_PATHS: &str = "model.type, model.depth, camera.width, camera.height, \
+camera.eyeDistance, camera.transformation[K].<x|y|z|angle|factor>, \
+object[N].color.<red|green|blue>, object[N].material.<ka|kd|ks|m>, \
+object[N].transformation[K].<x|y|z|angle|factor>, light[N].<x|y|z>, \
+light[N].color.<red|green|blue>";
+
+const ITEM_PATHS: &str = "object[N], light[N], object[N].transformation[K], \
+camera.transformation[K]";
+
+/// The element a path's first segments name: `camera`, `object[N]`,
+/// `light[N]`, `model`, maybe followed by `transformation[K]`.
+fn owner_of(path: &str, first: &Segment<'_>) -> Result<Option<Owner>, EditError> {
+    match (first.name, first.index) {
+        ("camera", None) => Ok(Some(Owner::Camera)),
+        ("object", Some(n)) => Ok(Some(Owner::Object(n))),
+        ("object" | "light", None) => Err(path_error(
+            path,
+            format!("{} needs an index: {}[N], N from 1", first.name, first.name),
+        )),
+        _ => Ok(None),
+    }
+}
+
+impl Field {
+    /// Parses a path such as `object[2].material.ka`.
+    pub fn parse(path: &str) -> Result<Field, EditError> {
+        let s = segments(path)?;
+        let unknown = || path_error(path, format!("no such value; paths are {FIELD_PATHS}"));
+        let plain = |i: usize| s.get(i).filter(|s| s.index.is_none()).map(|s| s.name);
+        let field = match (s.first().map(|s| (s.name, s.index)), s.len()) {
+            (Some(_), 3) if s[1].name == "transformation" => {
+                let owner = owner_of(path, &s[0])?.ok_or_else(unknown)?;
+                let step = match (s[1].name, s[1].index) {
+                    ("transformation", Some(k)) => k,
+                    _ => return Err(unknown()),
+                };
+                let attr = plain(2)
+                    .and_then(|n| from_name(&STEP_ATTRS, n))
+                    .ok_or_else(unknown)?;
+                Field::Step { owner, step, attr }
+            }
+            (Some(("model", None)), 2) => match plain(1) {
+                Some("type") => Field::ModelType,
+                Some("depth") => Field::ModelDepth,
+                _ => return Err(unknown()),
+            },
+            (Some(("camera", None)), 2) => match plain(1) {
+                Some("width") => Field::CameraWidth,
+                Some("height") => Field::CameraHeight,
+                Some("eyeDistance") => Field::CameraEyeDistance,
+                _ => return Err(unknown()),
+            },
+            (Some(("light", Some(light))), 2) => {
+                let axis = plain(1).and_then(|n| from_name(&AXES, n));
+                Field::LightPosition {
+                    light,
+                    axis: axis.ok_or_else(unknown)?,
                 }
             }
-        }
-        "  ".to_owned()
-    }
-
-    /// Offset of the start of the line holding `pos`.
-    fn line_start(&self, pos: usize) -> usize {
-        let before = self.text.get(..pos).unwrap_or_default();
-        before.rfind('\n').map_or(0, |i| i + 1).max(self.base)
-    }
-
-    /// The indentation before `pos` when only spaces and tabs precede it on
-    /// its line.
-    fn own_indent(&self, pos: usize) -> Option<&'t str> {
-        let indent = self.text.get(self.line_start(pos)..pos)?;
-        indent
-            .bytes()
-            .all(|b| b == b' ' || b == b'\t')
-            .then_some(indent)
-    }
-
-    /// The offset just past the line ending that follows `pos`, when only
-    /// spaces and tabs come between (or the end of the text).
-    fn line_end_after(&self, pos: usize) -> Option<usize> {
-        let rest = self.text.get(pos..)?;
-        let spaces = rest.len() - rest.trim_start_matches([' ', '\t']).len();
-        let after = &rest[spaces..];
-        let ending = if after.starts_with("\r\n") {
-            2
-        } else if after.starts_with('\n') {
-            1
-        } else if after.is_empty() {
-            0
-        } else {
-            return None;
+            (Some(("light", Some(light))), 3) if plain(1) == Some("color") => {
+                let channel = plain(2).and_then(|n| from_name(&CHANNELS, n));
+                Field::LightColor {
+                    light,
+                    channel: channel.ok_or_else(unknown)?,
+                }
+            }
+            (Some(("object", Some(object))), 3) => match plain(1) {
+                Some("color") => Field::Color {
+                    object,
+                    channel: plain(2)
+                        .and_then(|n| from_name(&CHANNELS, n))
+                        .ok_or_else(unknown)?,
+                },
+                Some("material") => Field::Material {
+                    object,
+                    coef: plain(2)
+                        .and_then(|n| from_name(&COEFS, n))
+                        .ok_or_else(unknown)?,
+                },
+                _ => return Err(unknown()),
+            },
+            (Some(_), _) => {
+                owner_of(path, &s[0])?;
+                return Err(unknown());
+            }
+            (None, _) => return Err(unknown()),
         };
-        Some(pos + spaces + ending)
+        Ok(field)
     }
 
-    fn node(&self, id: usize) -> &Node {
-        &self.nodes[id]
+    /// What the field holds: for reading a typed value.
+    fn kind(self) -> Kind {
+        match self {
+            Field::ModelType => Kind::Model,
+            Field::ModelDepth => Kind::Integer {
+                min: 0,
+                max: u64::from(Model::MAX_DEPTH),
+            },
+            Field::CameraWidth | Field::CameraHeight => Kind::Integer {
+                min: 1,
+                max: MAX_SIDE,
+            },
+            _ => Kind::Number,
+        }
     }
 
-    /// The only child of `id` named `name`, if any.
-    fn child(&self, id: usize, name: &str) -> Option<usize> {
-        self.node(id)
-            .children
-            .iter()
-            .copied()
-            .find(|&c| self.node(c).name == name)
+    /// Reads `text` as a value of this field, by the loader's rules for its
+    /// attribute (the range is checked when the edit is applied).
+    pub fn parse_value(self, text: &str) -> Result<Value, EditError> {
+        match self.kind() {
+            Kind::Number => match parse_number(text) {
+                Ok(v) => Ok(Value::Number(v)),
+                Err(NumberError::NotFinite) => Err(value_error(
+                    self,
+                    format!("must be a finite number, got '{text}'"),
+                )),
+                Err(NumberError::Invalid) => {
+                    Err(value_error(self, format!("not a number: '{text}'")))
+                }
+            },
+            Kind::Integer { min, max } => parse_integer(text)
+                .filter(|v| (min..=max).contains(v))
+                .map(Value::Integer)
+                .ok_or_else(|| {
+                    value_error(
+                        self,
+                        format!("must be a whole number from {min} to {max}, got '{text}'"),
+                    )
+                }),
+            Kind::Model => Illumination::from_name(text.trim_ascii())
+                .map(Value::Model)
+                .ok_or_else(|| {
+                    let names: Vec<_> = Illumination::ALL.iter().map(|m| m.name()).collect();
+                    value_error(
+                        self,
+                        format!("must be one of {}, got '{text}'", names.join(", ")),
+                    )
+                }),
+        }
     }
 
-    fn children_named(&self, id: usize, names: &[&str]) -> Vec<usize> {
-        self.node(id)
-            .children
-            .iter()
-            .copied()
-            .filter(|&c| names.contains(&self.node(c).name.as_str()))
-            .collect()
+    /// The field's value in `scene`.
+    pub fn get(self, scene: &Scene) -> Result<Value, EditError> {
+        Ok(match self {
+            Field::ModelType => Value::Model(scene.model.illumination),
+            Field::ModelDepth => Value::Integer(u64::from(scene.model.depth)),
+            Field::CameraWidth => Value::Integer(u64::from(scene.camera.width)),
+            Field::CameraHeight => Value::Integer(u64::from(scene.camera.height)),
+            Field::CameraEyeDistance => Value::Number(scene.camera.eye_distance),
+            Field::Step { owner, step, attr } => {
+                let s = *step_of(scene, owner, step)?;
+                Value::Number(step_attr(&s, attr).ok_or_else(|| wrong_attr(self, &s))?)
+            }
+            Field::Color { object, channel } => {
+                Value::Number(channel.axis().of(object_of(scene, object)?.color))
+            }
+            Field::Material { object, coef } => {
+                let mut m = object_of(scene, object)?.material;
+                Value::Number(*coef.slot(&mut m))
+            }
+            Field::LightPosition { light, axis } => {
+                Value::Number(axis.of(light_of(scene, light)?.position))
+            }
+            Field::LightColor { light, channel } => {
+                Value::Number(channel.axis().of(light_of(scene, light)?.color))
+            }
+        })
+    }
+
+    /// The element the field belongs to, if it is an object or a light.
+    fn item(self) -> Option<Item> {
+        match self {
+            Field::Color { object, .. } | Field::Material { object, .. } => {
+                Some(Item::Object(object))
+            }
+            Field::LightPosition { light, .. } | Field::LightColor { light, .. } => {
+                Some(Item::Light(light))
+            }
+            Field::Step { owner, step, .. } => Some(Item::Step(owner, step)),
+            _ => None,
+        }
+    }
+
+    /// The attribute's name, for labels ("ka", "eyeDistance", "angle").
+    pub fn attribute(self) -> &'static str {
+        match self {
+            Field::ModelType => "type",
+            Field::ModelDepth => "depth",
+            Field::CameraWidth => "width",
+            Field::CameraHeight => "height",
+            Field::CameraEyeDistance => "eyeDistance",
+            Field::Step { attr, .. } => attr.name(),
+            Field::Color { channel, .. } | Field::LightColor { channel, .. } => channel.name(),
+            Field::Material { coef, .. } => coef.name(),
+            Field::LightPosition { axis, .. } => axis.name(),
+        }
     }
 }
 
-/// A node for a start tag read at `tag_end` (the offset past its `>`).
-fn element(
-    start: &BytesStart<'_>,
-    empty: bool,
-    tag_end: usize,
-    offset: &impl Fn(&[u8]) -> Result<usize, EditError>,
-) -> Result<Node, EditError> {
-    let name = start.name();
-    let at = offset(name.as_ref())?
-        .checked_sub(1)
-        .ok_or_else(|| internal("start tag without '<'"))?;
-    let mut attrs = Vec::new();
-    let mut iter = start.attributes();
-    iter.with_checks(false);
-    for attr in iter {
-        let attr = attr.map_err(|e| internal(format!("attribute: {e}")))?;
-        let Cow::Borrowed(value) = attr.value else {
-            return Err(internal("an attribute value not borrowed from the text"));
-        };
-        let from = offset(value)?;
-        attrs.push(AttrSpan {
-            name: String::from_utf8_lossy(attr.key.as_ref()).into_owned(),
-            value: from..from + value.len(),
-        });
+#[derive(Clone, Copy)]
+enum Kind {
+    Number,
+    Integer { min: u64, max: u64 },
+    Model,
+}
+
+impl Item {
+    /// Parses a path such as `object[2]` or `camera.transformation[1]`.
+    pub fn parse(path: &str) -> Result<Item, EditError> {
+        let s = segments(path)?;
+        let unknown = || path_error(path, format!("not an element; elements are {ITEM_PATHS}"));
+        match s.as_slice() {
+            [one] => match (one.name, one.index) {
+                ("object", Some(n)) => Ok(Item::Object(n)),
+                ("light", Some(n)) => Ok(Item::Light(n)),
+                _ => {
+                    owner_of(path, one)?;
+                    Err(unknown())
+                }
+            },
+            [first, second] => {
+                let owner = owner_of(path, first)?.ok_or_else(unknown)?;
+                match (second.name, second.index) {
+                    ("transformation", Some(k)) => Ok(Item::Step(owner, k)),
+                    _ => Err(unknown()),
+                }
+            }
+            _ => Err(unknown()),
+        }
     }
-    Ok(Node {
-        name: String::from_utf8_lossy(name.as_ref()).into_owned(),
-        start: at,
-        tag_end,
-        empty,
-        end: tag_end..tag_end,
-        attrs,
-        children: Vec::new(),
+}
+
+impl Edit {
+    /// A new sphere, plane or light with the default values, appended.
+    pub fn add(scene: &Scene, kind: NewElement) -> Edit {
+        match kind {
+            NewElement::Sphere | NewElement::Plane => {
+                let shape = if kind == NewElement::Sphere {
+                    Shape::Sphere
+                } else {
+                    Shape::Plane
+                };
+                Edit::Insert(
+                    Item::Object(scene.objects.len()),
+                    Element::Object(Box::new(Object {
+                        shape,
+                        color: Vec3::ONE,
+                        material: Material::default(),
+                        transform: Transform::default(),
+                    })),
+                )
+            }
+            NewElement::Light => Edit::Insert(
+                Item::Light(scene.lights.len()),
+                Element::Light(Light {
+                    position: Vec3::new(0.0, -5.0, -5.0),
+                    color: Vec3::ONE,
+                }),
+            ),
+        }
+    }
+
+    /// A step appended to `owner`'s transformation.
+    pub fn add_step(scene: &Scene, owner: Owner, step: TransformStep) -> Result<Edit, EditError> {
+        let len = transform_of(scene, owner)?.steps().len();
+        Ok(Edit::Insert(Item::Step(owner, len), Element::Step(step)))
+    }
+
+    /// What the edit does, for the Edit menu ("ka of #2 sphere").
+    pub fn describe(&self, scene: &Scene) -> String {
+        let item_name = |item: Item| -> String {
+            match item {
+                Item::Object(n) => scene
+                    .objects
+                    .get(n)
+                    .map_or(format!("object {}", n + 1), |o| {
+                        format!("#{} {}", n + 1, o.shape.name())
+                    }),
+                Item::Light(n) => format!("light {}", n + 1),
+                Item::Step(owner, k) => {
+                    let owner = match owner {
+                        Owner::Camera => "camera".to_owned(),
+                        Owner::Object(n) => format!("#{} object", n + 1),
+                    };
+                    format!("step {} of {owner}", k + 1)
+                }
+            }
+        };
+        match self {
+            Edit::Set(field, _) => {
+                let of = match field.item() {
+                    Some(item) => item_name(item),
+                    None => match field {
+                        Field::ModelType | Field::ModelDepth => "model".to_owned(),
+                        _ => "camera".to_owned(),
+                    },
+                };
+                let attr = match field {
+                    Field::Color { .. } | Field::LightColor { .. } => {
+                        format!("colour {}", field.attribute())
+                    }
+                    _ => field.attribute().to_owned(),
+                };
+                format!("{attr} of {of}")
+            }
+            Edit::Insert(item, element) => match element {
+                Element::Object(o) => format!("add {}", o.shape.name()),
+                Element::Light(_) => "add light".to_owned(),
+                Element::Step(s) => format!("add {} to {}", step_name(s), {
+                    let Item::Step(owner, _) = item else {
+                        return "add step".to_owned();
+                    };
+                    owner.to_string()
+                }),
+            },
+            Edit::Remove(item) => format!("remove {}", item_name(*item)),
+            Edit::CameraTransform(_) => "camera view".to_owned(),
+        }
+    }
+}
+
+/// What `--add` and the panel's buttons add.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NewElement {
+    Sphere,
+    Plane,
+    Light,
+}
+
+impl NewElement {
+    pub fn parse(name: &str) -> Result<NewElement, EditError> {
+        match name {
+            "sphere" => Ok(NewElement::Sphere),
+            "plane" => Ok(NewElement::Plane),
+            "light" => Ok(NewElement::Light),
+            _ => Err(path_error(name, "can add sphere, plane or light")),
+        }
+    }
+}
+
+// ----- lookups -----
+
+fn object_of(scene: &Scene, n: usize) -> Result<&Object, EditError> {
+    scene.objects.get(n).ok_or_else(|| {
+        path_error(
+            Item::Object(n),
+            count_message(scene.objects.len(), "object"),
+        )
     })
 }
 
-// ----- edits -----
-
-/// Replace `range` of the text with `text` (an insertion when empty).
-struct Splice {
-    range: Range<usize>,
-    text: String,
+fn light_of(scene: &Scene, n: usize) -> Result<&Light, EditError> {
+    scene
+        .lights
+        .get(n)
+        .ok_or_else(|| path_error(Item::Light(n), count_message(scene.lights.len(), "light")))
 }
 
-/// Applies the splices; insertions at one offset keep the order they were
-/// made in and come before a replacement starting there.
-fn apply(text: &str, mut splices: Vec<Splice>) -> Result<String, EditError> {
-    splices.sort_by_key(|s| (s.range.start, !s.range.is_empty()));
-    let mut out =
-        String::with_capacity(text.len() + splices.iter().map(|s| s.text.len()).sum::<usize>());
-    let mut cursor = 0;
-    for splice in splices {
-        let Range { start, end } = splice.range;
-        if start < cursor || end < start {
-            return Err(internal("overlapping edits"));
-        }
-        let kept = text
-            .get(cursor..start)
-            .ok_or_else(|| internal("an edit outside the text"))?;
-        text.get(start..end)
-            .ok_or_else(|| internal("an edit outside the text"))?;
-        out.push_str(kept);
-        out.push_str(&splice.text);
-        cursor = end;
+fn count_message(len: usize, what: &str) -> String {
+    match len {
+        0 => format!("the scene has no {what}s"),
+        1 => format!("the scene has 1 {what}"),
+        n => format!("the scene has {n} {what}s"),
     }
-    out.push_str(text.get(cursor..).unwrap_or_default());
-    Ok(out)
 }
 
-/// Ranks of an object's children: where a new one goes among its siblings.
-const OBJECT_RANKS: &[(&str, u8)] = &[("color", 0), ("material", 1), ("transformation", 2)];
-const LIGHT_RANKS: &[(&str, u8)] = &[("color", 0)];
-const CAMERA_RANKS: &[(&str, u8)] = &[("transformation", 0)];
-
-struct Editor<'d, 't> {
-    doc: &'d Doc<'t>,
-    splices: Vec<Splice>,
+fn transform_of(scene: &Scene, owner: Owner) -> Result<&Transform, EditError> {
+    match owner {
+        Owner::Camera => Ok(&scene.camera.transform),
+        Owner::Object(n) => Ok(&object_of(scene, n)?.transform),
+    }
 }
 
-impl Editor<'_, '_> {
-    fn splice(&mut self, range: Range<usize>, text: impl Into<String>) {
-        self.splices.push(Splice {
-            range,
-            text: text.into(),
-        });
+fn step_of(scene: &Scene, owner: Owner, k: usize) -> Result<&TransformStep, EditError> {
+    let steps = transform_of(scene, owner)?.steps();
+    steps.get(k).ok_or_else(|| {
+        path_error(
+            Item::Step(owner, k),
+            match steps.len() {
+                0 => format!("{owner} has no transformation steps"),
+                1 => format!("{owner} has 1 transformation step"),
+                n => format!("{owner} has {n} transformation steps"),
+            },
+        )
+    })
+}
+
+fn step_attr(step: &TransformStep, attr: StepAttr) -> Option<f64> {
+    use TransformStep as S;
+    match (*step, attr) {
+        (S::Translate(v) | S::Scale(v), a) => a.axis().map(|axis| axis.of(v)),
+        (S::RotateX(a) | S::RotateY(a) | S::RotateZ(a), StepAttr::Angle) => Some(a),
+        (S::UniformScale(f), StepAttr::Factor) => Some(f),
+        _ => None,
+    }
+}
+
+fn set_step_attr(step: &mut TransformStep, attr: StepAttr, value: f64) {
+    use TransformStep as S;
+    match (step, attr) {
+        (S::Translate(v) | S::Scale(v), a) => {
+            if let Some(axis) = a.axis() {
+                *axis.slot(v) = value;
+            }
+        }
+        (S::RotateX(a) | S::RotateY(a) | S::RotateZ(a), StepAttr::Angle) => *a = value,
+        (S::UniformScale(f), StepAttr::Factor) => *f = value,
+        _ => {}
+    }
+}
+
+fn wrong_attr(field: Field, step: &TransformStep) -> EditError {
+    let allowed: Vec<&str> = StepAttr::allowed(step).iter().map(|a| a.name()).collect();
+    let what = match step {
+        TransformStep::Scale(_) => "a scale by x, y, z".to_owned(),
+        TransformStep::UniformScale(_) => "a scale by a factor".to_owned(),
+        s => format!("a {}", step_name(s)),
+    };
+    path_error(
+        field,
+        format!("this step is {what}: its values are {}", allowed.join(", ")),
+    )
+}
+
+// ----- the edited scene -----
+
+/// Where an object came from: its index among the text's objects and the
+/// origins of its transformation steps.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct ObjectOrigin {
+    pub(crate) index: usize,
+    pub(crate) steps: Vec<Option<usize>>,
+}
+
+/// A scene and, for each of its elements, where it came from in the text
+/// it was loaded from (`None`: added since).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Edited {
+    scene: Scene,
+    pub(crate) objects: Vec<Option<ObjectOrigin>>,
+    pub(crate) lights: Vec<Option<usize>>,
+    pub(crate) camera_steps: Vec<Option<usize>>,
+}
+
+/// What undoes an applied edit: the inverse edit, and the origin the
+/// element it brings back had, so that save-back finds its text again.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Undo {
+    edit: Edit,
+    restore: Restore,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+enum Restore {
+    Nothing,
+    Object(Option<ObjectOrigin>),
+    Light(Option<usize>),
+    Step(Option<usize>),
+    CameraSteps(Vec<Option<usize>>),
+}
+
+impl Undo {
+    /// The inverse edit.
+    pub fn edit(&self) -> &Edit {
+        &self.edit
     }
 
-    fn scene(&mut self, original: &Scene, edited: &Scene) -> Result<(), EditError> {
-        let doc = self.doc;
-        let root = doc.root;
-        let objects = doc.children_named(root, &["sphere", "plane"]);
-        let lights = doc.children_named(root, &["light"]);
-        let cameras = doc.children_named(root, &["camera"]);
-        let models = doc.children_named(root, &["model"]);
-        if objects.len() != original.objects.len()
-            || lights.len() != original.lights.len()
-            || cameras.len() != 1
-            || models.len() > 1
-        {
-            return Err(internal("the text's elements do not match its scene"));
-        }
-
-        let mut new_items: Vec<Lines> = Vec::new();
-        for (i, &node) in objects.iter().enumerate() {
-            match edited.objects.get(i) {
-                Some(e) if e == &original.objects[i] => {}
-                Some(e) => self.object(node, &original.objects[i], e)?,
-                None => self.remove(node),
-            }
-        }
-        for object in edited.objects.iter().skip(objects.len()) {
-            new_items.push(object_lines(object));
-        }
-        for (i, &node) in lights.iter().enumerate() {
-            match edited.lights.get(i) {
-                Some(e) if e == &original.lights[i] => {}
-                Some(e) => self.light(node, &original.lights[i], e)?,
-                None => self.remove(node),
-            }
-        }
-        for light in edited.lights.iter().skip(lights.len()) {
-            new_items.push(light_lines(light));
-        }
-
-        self.camera(cameras[0], original, edited)?;
-
-        let (om, em) = (original.model, edited.model);
-        if om != em {
-            match models.first() {
-                Some(&node) => {
-                    if om.illumination != em.illumination {
-                        self.set_attr(node, "type", em.illumination.name());
-                    }
-                    if om.depth != em.depth {
-                        self.set_attr(node, "depth", &em.depth.to_string());
-                    }
-                }
-                None => new_items.push(vec![(0, model_tag(&em))]),
-            }
-        }
-
-        if !new_items.is_empty() {
-            self.insert(root, "scene", None, &new_items)?;
-        }
-        Ok(())
+    /// Drops the origin it would restore: for when the text the origins
+    /// point into is replaced (a reload from disk). The element comes back
+    /// as new text.
+    pub fn forget_origin(&mut self) {
+        self.restore = Restore::Nothing;
     }
+}
 
-    fn object(&mut self, node: usize, o: &Object, e: &Object) -> Result<(), EditError> {
-        let doc = self.doc;
-        let name = e.shape.name();
-        if o.shape != e.shape {
-            self.rename(node, name)?;
-        }
-        let mut new_items: Vec<(u8, Lines)> = Vec::new();
-        if o.color != e.color {
-            match doc.child(node, "color") {
-                Some(c) => self.set_color(c, o.color, e.color),
-                None => new_items.push((0, vec![(0, color_tag(e.color))])),
-            }
-        }
-        if o.material != e.material {
-            match doc.child(node, "material") {
-                Some(m) => {
-                    let (om, em) = (o.material, e.material);
-                    for (attr, ov, ev) in [
-                        ("ka", om.ka, em.ka),
-                        ("kd", om.kd, em.kd),
-                        ("ks", om.ks, em.ks),
-                        ("m", om.m, em.m),
-                    ] {
-                        if ov != ev {
-                            self.set_attr(m, attr, &num(ev));
-                        }
-                    }
-                }
-                None => new_items.push((1, vec![(0, material_tag(&e.material, true))])),
-            }
-        }
-        let removed = self.transformation(
-            node,
-            o.transform.steps(),
-            e.transform.steps(),
-            2,
-            &mut new_items,
-        )?;
-        self.insert_ranked(node, name, OBJECT_RANKS, new_items, removed)
-    }
-
-    fn light(&mut self, node: usize, o: &Light, e: &Light) -> Result<(), EditError> {
-        for (attr, ov, ev) in [
-            ("x", o.position.x, e.position.x),
-            ("y", o.position.y, e.position.y),
-            ("z", o.position.z, e.position.z),
-        ] {
-            if ov != ev {
-                self.set_attr(node, attr, &num(ev));
-            }
-        }
-        if o.color != e.color {
-            match self.doc.child(node, "color") {
-                Some(c) => self.set_color(c, o.color, e.color),
-                None => {
-                    let item = vec![(0, vec![(0, color_tag(e.color))])];
-                    self.insert_ranked(node, "light", LIGHT_RANKS, item, None)?;
-                }
-            }
-        }
-        Ok(())
-    }
-
-    fn camera(&mut self, node: usize, original: &Scene, edited: &Scene) -> Result<(), EditError> {
-        let (o, e) = (&original.camera, &edited.camera);
-        if o.width != e.width {
-            self.set_attr(node, "width", &e.width.to_string());
-        }
-        if o.height != e.height {
-            self.set_attr(node, "height", &e.height.to_string());
-        }
-        if o.eye_distance != e.eye_distance {
-            self.set_attr(node, "eyeDistance", &num(e.eye_distance));
-        }
-        let mut new_items = Vec::new();
-        let removed = self.transformation(
-            node,
-            o.transform.steps(),
-            e.transform.steps(),
-            0,
-            &mut new_items,
-        )?;
-        self.insert_ranked(node, "camera", CAMERA_RANKS, new_items, removed)
-    }
-
-    /// Brings the `<transformation>` of `parent` from steps `o` to `e`: edits
-    /// the values in place when the steps are of the same kinds, rewrites
-    /// its children otherwise, removes it when `e` is empty, or queues a new
-    /// one (at `rank`) in `new_items`. Returns the node removed, if any.
-    fn transformation(
-        &mut self,
-        parent: usize,
-        o: &[TransformStep],
-        e: &[TransformStep],
-        rank: u8,
-        new_items: &mut Vec<(u8, Lines)>,
-    ) -> Result<Option<usize>, EditError> {
-        if o == e {
-            return Ok(None);
-        }
-        let Some(node) = self.doc.child(parent, "transformation") else {
-            new_items.push((rank, transformation_lines(e)));
-            return Ok(None);
-        };
-        if e.is_empty() {
-            self.remove(node);
-            return Ok(Some(node));
-        }
-        let steps = self.doc.node(node).children.clone();
-        let same_kinds = steps.len() == o.len()
-            && o.len() == e.len()
-            && o.iter()
-                .zip(e)
-                .all(|(a, b)| discriminant(a) == discriminant(b));
-        if same_kinds {
-            for ((&step, a), b) in steps.iter().zip(o).zip(e) {
-                self.step(step, a, b);
-            }
-        } else {
-            self.rewrite_steps(node, e)?;
-        }
-        Ok(None)
-    }
-
-    /// Edits the values of one step node from `a` to `b` (same kind).
-    fn step(&mut self, node: usize, a: &TransformStep, b: &TransformStep) {
-        use TransformStep as S;
-        match (*a, *b) {
-            (S::Translate(u), S::Translate(v)) | (S::Scale(u), S::Scale(v)) => {
-                for (attr, ov, ev) in [("x", u.x, v.x), ("y", u.y, v.y), ("z", u.z, v.z)] {
-                    if ov != ev {
-                        self.set_attr(node, attr, &num(ev));
-                    }
-                }
-            }
-            (S::RotateX(u), S::RotateX(v))
-            | (S::RotateY(u), S::RotateY(v))
-            | (S::RotateZ(u), S::RotateZ(v))
-                if u != v =>
-            {
-                self.set_attr(node, "angle", &num(v));
-            }
-            (S::UniformScale(u), S::UniformScale(v)) if u != v => {
-                self.set_attr(node, "factor", &num(v));
-            }
-            _ => {}
-        }
-    }
-
-    /// Replaces every child of the `<transformation>` `node` with `steps`,
-    /// keeping the element's own tags and the layout of its content.
-    fn rewrite_steps(&mut self, node: usize, steps: &[TransformStep]) -> Result<(), EditError> {
-        let doc = self.doc;
-        let t = doc.node(node);
-        let tags: Vec<String> = steps.iter().map(step_tag).collect();
-        if t.empty {
-            let items: Vec<Lines> = tags.into_iter().map(|s| vec![(0, s)]).collect();
-            return self.insert(node, "transformation", None, &items);
-        }
-        let content = t.tag_end..t.end.start;
-        let inside = doc.text.get(content.clone()).unwrap_or_default();
-        if !inside.contains('\n') {
-            self.splice(content, tags.concat());
-            return Ok(());
-        }
-        let indent = t
-            .children
-            .first()
-            .and_then(|&c| doc.own_indent(doc.node(c).start))
-            .map(str::to_owned)
-            .unwrap_or_else(|| format!("{}{}", doc.own_indent(t.start).unwrap_or(""), doc.unit));
-        let lines: Vec<String> = tags.iter().map(|s| format!("{indent}{s}")).collect();
-        if doc.own_indent(t.end.start).is_some() {
-            let mut text = String::from(doc.nl);
-            for line in lines {
-                text.push_str(&line);
-                text.push_str(doc.nl);
-            }
-            self.splice(t.tag_end..doc.line_start(t.end.start), text);
-        } else {
-            self.splice(content, format!("{}{}", doc.nl, lines.join(doc.nl)));
-        }
-        Ok(())
-    }
-
-    fn set_color(&mut self, node: usize, o: Color, e: Color) {
-        for (attr, ov, ev) in [("red", o.x, e.x), ("green", o.y, e.y), ("blue", o.z, e.z)] {
-            if ov != ev {
-                self.set_attr(node, attr, &num(ev));
-            }
-        }
-    }
-
-    /// Sets attribute `name` of `node`: its value replaced between the
-    /// quotes, or ` name="value"` appended after the last attribute.
-    fn set_attr(&mut self, node: usize, name: &str, value: &str) {
-        let n = self.doc.node(node);
-        if let Some(attr) = n.attrs.iter().find(|a| a.name == name) {
-            self.splice(attr.value.clone(), value);
-            return;
-        }
-        let (at, quote) = match n.attrs.last() {
-            Some(last) => {
-                let quote = match self.doc.text.as_bytes().get(last.value.end) {
-                    Some(b'\'') => '\'',
-                    _ => '"',
-                };
-                (last.value.end + 1, quote)
-            }
-            None => (n.start + 1 + n.name.len(), '"'),
-        };
-        self.splice(at..at, format!(" {name}={quote}{value}{quote}"));
-    }
-
-    /// Renames the element `node` (start and end tags) to `name`.
-    fn rename(&mut self, node: usize, name: &str) -> Result<(), EditError> {
-        let n = self.doc.node(node);
-        let old = n.name.len();
-        let start = n.start + 1..n.start + 1 + old;
-        let end = (!n.empty).then(|| n.end.start + 2..n.end.start + 2 + old);
-        for range in std::iter::once(start).chain(end) {
-            if self.doc.text.get(range.clone()) != Some(n.name.as_str()) {
-                return Err(internal("a tag name not where expected"));
-            }
-            self.splice(range, name);
-        }
-        Ok(())
-    }
-
-    /// Removes the element `node`, with its line when it is alone on it.
-    fn remove(&mut self, node: usize) {
-        let doc = self.doc;
-        let n = doc.node(node);
-        let end = n.elem_end();
-        let range = match (doc.own_indent(n.start), doc.line_end_after(end)) {
-            (Some(_), Some(after)) => doc.line_start(n.start)..after,
-            _ => n.start..end,
-        };
-        self.splice(range, "");
-    }
-
-    /// Inserts new children of `parent` (named `name` in the edited scene),
-    /// each before the first existing child of a higher rank, or at the end.
-    /// `items` are in rank order; `removed` is a child being removed.
-    fn insert_ranked(
-        &mut self,
-        parent: usize,
-        name: &str,
-        ranks: &[(&str, u8)],
-        items: Vec<(u8, Lines)>,
-        removed: Option<usize>,
-    ) -> Result<(), EditError> {
-        if items.is_empty() {
-            return Ok(());
-        }
-        let doc = self.doc;
-        let rank_of = |id: usize| {
-            ranks
-                .iter()
-                .find(|(n, _)| *n == doc.node(id).name)
-                .map_or(u8::MAX, |&(_, r)| r)
-        };
-        let existing: Vec<usize> = doc
-            .node(parent)
-            .children
+impl Edited {
+    /// A scene just loaded from a text: every element is its own origin.
+    pub fn new(scene: Scene) -> Edited {
+        let objects = scene
+            .objects
             .iter()
-            .copied()
-            .filter(|&c| Some(c) != removed)
+            .enumerate()
+            .map(|(index, o)| {
+                Some(ObjectOrigin {
+                    index,
+                    steps: (0..o.transform.steps().len()).map(Some).collect(),
+                })
+            })
             .collect();
-        let mut groups: Vec<(Option<usize>, Vec<Lines>)> = Vec::new();
-        for (rank, lines) in items {
-            let anchor = existing.iter().copied().find(|&c| rank_of(c) > rank);
-            match groups.last_mut() {
-                Some((a, group)) if *a == anchor => group.push(lines),
-                _ => groups.push((anchor, vec![lines])),
+        let lights = (0..scene.lights.len()).map(Some).collect();
+        let camera_steps = (0..scene.camera.transform.steps().len())
+            .map(Some)
+            .collect();
+        Edited {
+            scene,
+            objects,
+            lights,
+            camera_steps,
+        }
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The index, among the loaded text's objects, that object `n` came
+    /// from; `None` for an object added since.
+    pub fn object_origin(&self, n: usize) -> Option<usize> {
+        self.objects.get(n)?.as_ref().map(|o| o.index)
+    }
+
+    /// Applies `edit` if the result is a valid scene, and returns what undoes
+    /// it; on an error nothing changes.
+    pub fn apply(&mut self, edit: &Edit) -> Result<Undo, EditError> {
+        self.apply_restoring(edit, Restore::Nothing)
+    }
+
+    /// Applies an [`Undo`] (or a redo: undoing returns the redo) and returns
+    /// what undoes that in turn.
+    pub fn undo(&mut self, undo: Undo) -> Result<Undo, EditError> {
+        self.apply_restoring(&undo.edit, undo.restore)
+    }
+
+    fn apply_restoring(&mut self, edit: &Edit, restore: Restore) -> Result<Undo, EditError> {
+        match edit {
+            Edit::Set(field, value) => {
+                let old = field.get(&self.scene)?;
+                self.set(*field, *value)?;
+                Ok(Undo {
+                    edit: Edit::Set(*field, old),
+                    restore: Restore::Nothing,
+                })
+            }
+            Edit::Insert(item, element) => self.insert(*item, element, restore),
+            Edit::Remove(item) => self.remove(*item),
+            Edit::CameraTransform(steps) => {
+                let transform = Transform::from_steps(steps.clone())
+                    .map_err(|_| value_error("camera.transformation", SINGULAR))?;
+                let old_steps = self.scene.camera.transform.steps().to_vec();
+                let old_origins = self.camera_steps.clone();
+                self.camera_steps = match restore {
+                    Restore::CameraSteps(origins) if origins.len() == steps.len() => origins,
+                    // Steps of the same kind at the same place keep their
+                    // origin: the view changed their values.
+                    _ => steps
+                        .iter()
+                        .enumerate()
+                        .map(|(k, s)| {
+                            old_steps
+                                .get(k)
+                                .filter(|o| std::mem::discriminant(*o) == std::mem::discriminant(s))
+                                .and_then(|_| old_origins.get(k).copied().flatten())
+                        })
+                        .collect(),
+                };
+                self.scene.camera.transform = transform;
+                Ok(Undo {
+                    edit: Edit::CameraTransform(old_steps),
+                    restore: Restore::CameraSteps(old_origins),
+                })
             }
         }
-        for (anchor, group) in groups {
-            self.insert(parent, name, anchor, &group)?;
+    }
+
+    fn set(&mut self, field: Field, value: Value) -> Result<(), EditError> {
+        let scene = &mut self.scene;
+        let number = |value: Value| match value {
+            Value::Number(v) if v.is_finite() => Ok(v),
+            Value::Number(v) => Err(value_error(
+                field,
+                format!("must be a finite number, got {v}"),
+            )),
+            other => Err(value_error(field, format!("must be a number, got {other}"))),
+        };
+        let at_least_zero = |value: Value| {
+            let v = number(value)?;
+            if v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(value_error(
+                    field,
+                    format!("must be >= 0, got {}", number_text(v)),
+                ))
+            }
+        };
+        let integer = |value: Value| match (value, field.kind()) {
+            (Value::Integer(v), Kind::Integer { min, max }) if (min..=max).contains(&v) => Ok(v),
+            (_, Kind::Integer { min, max }) => Err(value_error(
+                field,
+                format!("must be a whole number from {min} to {max}, got {value}"),
+            )),
+            _ => Err(value_error(field, "not a whole-number field")),
+        };
+        match field {
+            Field::ModelType => match value {
+                Value::Model(m) => scene.model.illumination = m,
+                other => {
+                    return Err(value_error(
+                        field,
+                        format!("must be a model name, got {other}"),
+                    ));
+                }
+            },
+            Field::ModelDepth => {
+                scene.model.depth = u32::try_from(integer(value)?).unwrap_or(Model::MAX_DEPTH);
+            }
+            Field::CameraWidth | Field::CameraHeight => {
+                let v = integer(value)?;
+                let camera: &mut Camera = &mut scene.camera;
+                let (w, h) = if field == Field::CameraWidth {
+                    (v, u64::from(camera.height))
+                } else {
+                    (u64::from(camera.width), v)
+                };
+                if w.saturating_mul(h) > MAX_PIXELS {
+                    return Err(value_error(
+                        field,
+                        format!("a {w}x{h} image has more than the limit of {MAX_PIXELS} pixels"),
+                    ));
+                }
+                let v = u32::try_from(v).map_err(|_| value_error(field, "too large"))?;
+                if field == Field::CameraWidth {
+                    camera.width = v;
+                } else {
+                    camera.height = v;
+                }
+            }
+            Field::CameraEyeDistance => {
+                let v = number(value)?;
+                if v <= 0.0 {
+                    return Err(value_error(
+                        field,
+                        format!("must be > 0, got {}", number_text(v)),
+                    ));
+                }
+                scene.camera.eye_distance = v;
+            }
+            Field::Step { owner, step, attr } => {
+                let v = number(value)?;
+                let transform = transform_of(scene, owner)?;
+                let mut steps = transform.steps().to_vec();
+                let s = step_of(scene, owner, step)?;
+                if step_attr(s, attr).is_none() {
+                    return Err(wrong_attr(field, s));
+                }
+                if let Some(s) = steps.get_mut(step) {
+                    set_step_attr(s, attr, v);
+                }
+                let t = Transform::from_steps(steps).map_err(|_| value_error(field, SINGULAR))?;
+                *transform_mut(scene, owner)? = t;
+            }
+            Field::Color { object, channel } => {
+                let v = at_least_zero(value)?;
+                let o = object_mut(scene, object)?;
+                *channel.axis().slot(&mut o.color) = v;
+            }
+            Field::Material { object, coef } => {
+                let v = at_least_zero(value)?;
+                let o = object_mut(scene, object)?;
+                *coef.slot(&mut o.material) = v;
+            }
+            Field::LightPosition { light, axis } => {
+                let v = number(value)?;
+                let l = light_mut(scene, light)?;
+                *axis.slot(&mut l.position) = v;
+            }
+            Field::LightColor { light, channel } => {
+                let v = at_least_zero(value)?;
+                let l = light_mut(scene, light)?;
+                *channel.axis().slot(&mut l.color) = v;
+            }
         }
         Ok(())
     }
 
-    /// Inserts `items` as children of `parent` (named `name` once edited),
-    /// before the child `anchor` or at the end, with the indentation of
-    /// their siblings. An empty `<x/>` becomes `<x>…</x>`.
     fn insert(
         &mut self,
-        parent: usize,
-        name: &str,
-        anchor: Option<usize>,
-        items: &[Lines],
-    ) -> Result<(), EditError> {
-        let doc = self.doc;
-        let p = doc.node(parent);
-        let block = |indent: &str| {
-            let mut text = String::new();
-            for item in items {
-                for (level, line) in item {
-                    text.push_str(indent);
-                    text.push_str(&doc.unit.repeat(*level));
-                    text.push_str(line);
-                    text.push_str(doc.nl);
-                }
-            }
-            text
+        item: Item,
+        element: &Element,
+        restore: Restore,
+    ) -> Result<Undo, EditError> {
+        let past_end = |len: usize, what: &str| {
+            path_error(
+                item,
+                format!("can insert at most one past the last {what} ({})", len + 1),
+            )
         };
-        let inline = || -> String { items.iter().flatten().map(|(_, l)| l.as_str()).collect() };
-        let parent_indent = doc.own_indent(p.start).unwrap_or("");
-
-        if let Some(sibling) = anchor {
-            let at = doc.node(sibling).start;
-            match doc.own_indent(at) {
-                Some(indent) => {
-                    let line = doc.line_start(at);
-                    self.splice(line..line, block(indent));
+        match (item, element) {
+            (Item::Object(n), Element::Object(object)) => {
+                let len = self.scene.objects.len();
+                if n > len {
+                    return Err(past_end(len, "object"));
                 }
-                None => self.splice(at..at, inline()),
+                if len >= MAX_OBJECTS {
+                    return Err(path_error(
+                        item,
+                        format!("the scene has the most objects allowed ({MAX_OBJECTS})"),
+                    ));
+                }
+                check_object(item, object)?;
+                let origin = match restore {
+                    Restore::Object(origin) => origin,
+                    _ => None,
+                };
+                self.scene.objects.insert(n, object.as_ref().clone());
+                self.objects.insert(
+                    n,
+                    origin.filter(|o| o.steps.len() == object.transform.steps().len()),
+                );
             }
-            return Ok(());
-        }
-
-        if p.empty {
-            // `<x .../>` (maybe `<x ... />`): replace from the end of the
-            // attributes to the end of the tag.
-            let slash = p
-                .tag_end
-                .checked_sub(2)
-                .filter(|&s| doc.text.get(s..p.tag_end) == Some("/>"))
-                .ok_or_else(|| internal("an empty element without '/>'"))?;
-            let tag = doc.text.get(p.start..slash).unwrap_or_default();
-            let from = p.start + tag.trim_end_matches([' ', '\t', '\r', '\n']).len();
-            let child_indent = format!("{parent_indent}{}", doc.unit);
-            let text = format!(
-                ">{}{}{parent_indent}</{name}>",
-                doc.nl,
-                block(&child_indent)
-            );
-            self.splice(from..p.tag_end, text);
-            return Ok(());
-        }
-
-        let end = p.end.start;
-        if let Some(end_indent) = doc.own_indent(end) {
-            let sibling_indent = p
-                .children
-                .last()
-                .and_then(|&c| doc.own_indent(doc.node(c).start));
-            let indent = match sibling_indent {
-                Some(indent) => indent.to_owned(),
-                None => {
-                    let outer = doc.own_indent(p.start).unwrap_or(end_indent);
-                    format!("{outer}{}", doc.unit)
+            (Item::Light(n), Element::Light(light)) => {
+                let len = self.scene.lights.len();
+                if n > len {
+                    return Err(past_end(len, "light"));
                 }
-            };
-            let line = doc.line_start(end);
-            self.splice(line..line, block(&indent));
-        } else if doc
-            .text
-            .get(p.tag_end..end)
-            .is_some_and(|s| s.trim_matches([' ', '\t']).is_empty())
-        {
-            let child_indent = format!("{parent_indent}{}", doc.unit);
-            let text = format!("{}{}{parent_indent}", doc.nl, block(&child_indent));
-            self.splice(p.tag_end..end, text);
-        } else {
-            self.splice(end..end, inline());
+                if len >= MAX_LIGHTS {
+                    return Err(path_error(
+                        item,
+                        format!("the scene has the most lights allowed ({MAX_LIGHTS})"),
+                    ));
+                }
+                check_light(item, light)?;
+                let origin = match restore {
+                    Restore::Light(origin) => origin,
+                    _ => None,
+                };
+                self.scene.lights.insert(n, *light);
+                self.lights.insert(n, origin);
+            }
+            (Item::Step(owner, k), Element::Step(step)) => {
+                let mut steps = transform_of(&self.scene, owner)?.steps().to_vec();
+                if k > steps.len() {
+                    return Err(past_end(steps.len(), "step"));
+                }
+                steps.insert(k, *step);
+                let t = Transform::from_steps(steps).map_err(|_| value_error(item, SINGULAR))?;
+                *transform_mut(&mut self.scene, owner)? = t;
+                let origin = match restore {
+                    Restore::Step(origin) => origin,
+                    _ => None,
+                };
+                if let Some(origins) = self.step_origins_mut(owner) {
+                    origins.insert(k.min(origins.len()), origin);
+                }
+            }
+            _ => {
+                return Err(path_error(item, "the element inserted is not of this kind"));
+            }
         }
+        Ok(Undo {
+            edit: Edit::Remove(item),
+            restore: Restore::Nothing,
+        })
+    }
+
+    fn remove(&mut self, item: Item) -> Result<Undo, EditError> {
+        let (element, restore) = match item {
+            Item::Object(n) => {
+                object_of(&self.scene, n)?;
+                let object = self.scene.objects.remove(n);
+                let origin = take(&mut self.objects, n);
+                (Element::Object(Box::new(object)), Restore::Object(origin))
+            }
+            Item::Light(n) => {
+                light_of(&self.scene, n)?;
+                let light = self.scene.lights.remove(n);
+                let origin = take(&mut self.lights, n);
+                (Element::Light(light), Restore::Light(origin))
+            }
+            Item::Step(owner, k) => {
+                let step = *step_of(&self.scene, owner, k)?;
+                let mut steps = transform_of(&self.scene, owner)?.steps().to_vec();
+                steps.remove(k);
+                // Removing a step can make the rest overflow (a scale of
+                // 1e300 that another step undid).
+                let t = Transform::from_steps(steps).map_err(|_| value_error(item, SINGULAR))?;
+                *transform_mut(&mut self.scene, owner)? = t;
+                let origin = self.step_origins_mut(owner).and_then(|o| take(o, k));
+                (Element::Step(step), Restore::Step(origin))
+            }
+        };
+        Ok(Undo {
+            edit: Edit::Insert(item, element),
+            restore,
+        })
+    }
+
+    fn step_origins_mut(&mut self, owner: Owner) -> Option<&mut Vec<Option<usize>>> {
+        match owner {
+            Owner::Camera => Some(&mut self.camera_steps),
+            Owner::Object(n) => match self.objects.get_mut(n)? {
+                Some(origin) => Some(&mut origin.steps),
+                None => None,
+            },
+        }
+    }
+}
+
+/// Removes entry `n` of `v` (if there) and returns its content.
+fn take<T>(v: &mut Vec<Option<T>>, n: usize) -> Option<T> {
+    if n < v.len() { v.remove(n) } else { None }
+}
+
+const SINGULAR: &str = "the transformation would be singular (a zero scale, or an overflow)";
+
+fn object_mut(scene: &mut Scene, n: usize) -> Result<&mut Object, EditError> {
+    object_of(scene, n)?;
+    scene
+        .objects
+        .get_mut(n)
+        .ok_or_else(|| path_error(Item::Object(n), "no such object"))
+}
+
+fn light_mut(scene: &mut Scene, n: usize) -> Result<&mut Light, EditError> {
+    light_of(scene, n)?;
+    scene
+        .lights
+        .get_mut(n)
+        .ok_or_else(|| path_error(Item::Light(n), "no such light"))
+}
+
+fn transform_mut(scene: &mut Scene, owner: Owner) -> Result<&mut Transform, EditError> {
+    match owner {
+        Owner::Camera => Ok(&mut scene.camera.transform),
+        Owner::Object(n) => Ok(&mut object_mut(scene, n)?.transform),
+    }
+}
+
+/// An inserted object must hold values the loader accepts.
+fn check_object(item: Item, o: &Object) -> Result<(), EditError> {
+    let m = o.material;
+    let values = [o.color.x, o.color.y, o.color.z, m.ka, m.kd, m.ks, m.m];
+    if values.iter().all(|v| v.is_finite() && *v >= 0.0) {
         Ok(())
+    } else {
+        Err(value_error(
+            item,
+            "colour and material values must be finite and >= 0",
+        ))
+    }
+}
+
+fn check_light(item: Item, l: &Light) -> Result<(), EditError> {
+    let ok = l.position.is_finite() && l.color.is_finite() && l.color.min_element() >= 0.0;
+    if ok {
+        Ok(())
+    } else {
+        Err(value_error(
+            item,
+            "position must be finite and colour finite and >= 0",
+        ))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::path::Path;
 
-    fn scene(text: &str) -> Scene {
-        parse(text, Path::new("t.xml")).unwrap()
+    fn example() -> Edited {
+        Edited::new(super::super::parse(crate::EXAMPLE_SCENE, Path::new("e.xml")).unwrap())
     }
 
     #[test]
-    fn no_change_means_no_splice() {
-        for text in [
-            crate::EXAMPLE_SCENE,
-            "\u{feff}<scene><!-- x --><camera width='2' height=\"3\" eyeDistance=\"1.0\"/></scene>",
+    fn paths_read_and_print_the_same() {
+        for path in [
+            "model.type",
+            "model.depth",
+            "camera.width",
+            "camera.height",
+            "camera.eyeDistance",
+            "camera.transformation[3].angle",
+            "object[2].color.green",
+            "object[1].material.m",
+            "object[12].transformation[1].factor",
+            "light[1].z",
+            "light[2].color.blue",
         ] {
-            let s = scene(text);
-            let doc = Doc::scan(text).unwrap();
-            let mut editor = Editor {
-                doc: &doc,
-                splices: Vec::new(),
-            };
-            editor.scene(&s, &s).unwrap();
-            assert!(editor.splices.is_empty());
-            assert_eq!(rewrite_unchecked(text, &s, &s).unwrap(), text);
+            assert_eq!(Field::parse(path).unwrap().to_string(), path);
+        }
+        for path in [
+            "object[3]",
+            "light[1]",
+            "object[2].transformation[4]",
+            "camera.transformation[1]",
+        ] {
+            assert_eq!(Item::parse(path).unwrap().to_string(), path);
         }
     }
 
     #[test]
-    fn numbers_read_back_exactly() {
-        for v in [
-            0.0,
-            -0.0,
-            1.0,
-            0.1,
-            1.0 / 3.0,
-            1e-7,
-            1e-300,
-            5e-324,
-            1e16,
-            1e300,
-            f64::MAX,
-            -2.5e-8,
-            123456.789,
-            0.000001,
+    fn bad_paths_say_what_is_allowed() {
+        for (path, expected) in [
+            ("object[0].material.ka", "count from 1"),
+            ("object.material.ka", "object needs an index"),
+            ("object[1].material.kx", "paths are model.type"),
+            ("object[1].material[2].ka", "paths are"),
+            ("camera..width", "empty name"),
+            ("object[x].color.red", "is not an index"),
+            ("object[1.color.red", "missing ']'"),
         ] {
-            let s = num(v);
-            let back: f64 = s.parse().unwrap();
-            assert_eq!(back.to_bits(), v.to_bits(), "{v} -> {s}");
-            assert!(s.len() < 30, "{s}");
+            let e = Field::parse(path).unwrap_err().to_string();
+            assert!(e.starts_with(&format!("{path}: ")), "{e}");
+            assert!(e.contains(expected), "{path}: {e}");
         }
+        assert!(
+            Item::parse("camera")
+                .unwrap_err()
+                .to_string()
+                .contains("elements are object[N]")
+        );
     }
 
     #[test]
-    fn indentation_unit_is_detected() {
-        assert_eq!(Doc::scan(crate::EXAMPLE_SCENE).unwrap().unit, " ");
-        let tabs = "<scene>\n\t<camera width=\"1\" height=\"1\" eyeDistance=\"1\"/>\n</scene>\n";
-        assert_eq!(Doc::scan(tabs).unwrap().unit, "\t");
-        let flat = "<scene><camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>";
-        assert_eq!(Doc::scan(flat).unwrap().unit, "  ");
+    fn out_of_range_indices_name_the_count() {
+        let mut e = example();
+        let err = e
+            .apply(&Edit::Set(
+                Field::parse("object[5].material.ka").unwrap(),
+                Value::Number(0.5),
+            ))
+            .unwrap_err();
+        assert_eq!(err.to_string(), "object[5]: the scene has 2 objects");
+        let err = e
+            .apply(&Edit::Remove(Item::parse("light[2]").unwrap()))
+            .unwrap_err();
+        assert_eq!(err.to_string(), "light[2]: the scene has 1 light");
     }
 
     #[test]
-    fn overlapping_splices_are_an_error() {
-        let splices = vec![
-            Splice {
-                range: 0..3,
-                text: "a".into(),
-            },
-            Splice {
-                range: 2..4,
-                text: "b".into(),
-            },
+    fn values_follow_the_loaders_rules() {
+        let mut e = example();
+        let before = e.clone();
+        for (path, value, message) in [
+            ("object[1].material.ka", "-1", "must be >= 0, got -1"),
+            ("camera.eyeDistance", "0", "must be > 0, got 0"),
+            ("camera.width", "0", "from 1 to"),
+            ("camera.width", "1.5", "whole number"),
+            ("model.depth", "10001", "from 0 to 10000"),
+            ("model.type", "raytrace", "must be one of ambient"),
+            ("light[1].x", "inf", "finite"),
+            ("light[1].x", "abc", "not a number"),
+            ("object[1].color.red", "-0.5", ">= 0"),
+        ] {
+            let field = Field::parse(path).unwrap();
+            let err = field
+                .parse_value(value)
+                .and_then(|v| e.apply(&Edit::Set(field, v)))
+                .unwrap_err();
+            assert!(err.to_string().contains(message), "{path}={value}: {err}");
+            assert!(err.to_string().starts_with(path), "{err}");
+        }
+        let err = e
+            .apply(&Edit::Set(Field::CameraWidth, Value::Integer(1 << 20)))
+            .unwrap_err();
+        assert!(err.to_string().contains("limit"), "{err}");
+        assert_eq!(e, before, "a refused edit changes nothing");
+    }
+
+    #[test]
+    fn a_step_that_makes_the_transformation_singular_is_refused() {
+        let mut e = example();
+        let scale = Edit::add_step(
+            e.scene(),
+            Owner::Object(0),
+            TransformStep::UniformScale(2.0),
+        )
+        .unwrap();
+        e.apply(&scale).unwrap();
+        let k = e.scene().objects[0].transform.steps().len();
+        let field = Field::parse(&format!("object[1].transformation[{k}].factor")).unwrap();
+        let err = e.apply(&Edit::Set(field, Value::Number(0.0))).unwrap_err();
+        assert!(err.to_string().contains("singular"), "{err}");
+        let err = e
+            .apply(&Edit::Set(
+                Field::parse(&format!("object[1].transformation[{k}].x")).unwrap(),
+                Value::Number(1.0),
+            ))
+            .unwrap_err();
+        assert!(err.to_string().contains("its values are factor"), "{err}");
+    }
+
+    #[test]
+    fn undo_restores_the_scene_and_the_origins() {
+        let original = example();
+        let mut e = original.clone();
+        let edits = [
+            Edit::Set(
+                Field::parse("object[2].material.ka").unwrap(),
+                Value::Number(0.9),
+            ),
+            Edit::Remove(Item::Object(0)),
+            Edit::add(&original.scene, NewElement::Light),
+            Edit::Remove(Item::Light(0)),
+            Edit::Set(Field::ModelType, Value::Model(Illumination::Lambert)),
         ];
-        assert!(matches!(
-            apply("abcdef", splices),
-            Err(EditError::Internal(_))
-        ));
+        let mut undos = Vec::new();
+        for edit in &edits {
+            undos.push(e.apply(edit).unwrap());
+        }
+        assert_eq!(e.object_origin(0), Some(1));
+        let mut redos = Vec::new();
+        while let Some(u) = undos.pop() {
+            redos.push(e.undo(u).unwrap());
+        }
+        assert_eq!(e, original);
+        while let Some(r) = redos.pop() {
+            e.undo(r).unwrap();
+        }
+        assert_eq!(e.scene().objects.len(), 1);
+        assert_eq!(e.object_origin(0), Some(1));
+        assert_eq!(e.lights, vec![None]);
+    }
+
+    #[test]
+    fn descriptions_name_the_value_and_the_element() {
+        let e = example();
+        let set = Edit::Set(
+            Field::parse("object[2].material.ka").unwrap(),
+            Value::Number(0.1),
+        );
+        assert_eq!(set.describe(e.scene()), "ka of #2 sphere");
+        assert_eq!(
+            Edit::Remove(Item::Light(0)).describe(e.scene()),
+            "remove light 1"
+        );
+        assert_eq!(
+            Edit::add(e.scene(), NewElement::Plane).describe(e.scene()),
+            "add plane"
+        );
     }
 }

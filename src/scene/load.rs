@@ -34,10 +34,6 @@ pub const MAX_LIGHTS: usize = 1_000_000;
 /// Most pixels (`width * height`) in the camera's image: 2^28.
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-/// Largest `width` or `height` on its own (the product is bounded by
-/// [`MAX_PIXELS`] too).
-const MAX_SIDE: u64 = u32::MAX as u64;
-
 const SCENE_CHILDREN: &[&str] = &["sphere", "plane", "light", "camera", "model"];
 const OBJECT_CHILDREN: &[&str] = &["color", "material", "transformation"];
 const LIGHT_CHILDREN: &[&str] = &["color"];
@@ -115,6 +111,44 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, LoadError> {
     let body = text.strip_prefix('\u{feff}').unwrap_or(text);
     Parser::new(body, path).document()
 }
+
+/// Why a number attribute was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum NumberError {
+    /// Not a number at all.
+    Invalid,
+    /// `inf`, `NaN` or an overflow to infinity.
+    NotFinite,
+}
+
+/// A number as the format reads it (contract section 9): a finite `f64`,
+/// surrounding ASCII whitespace ignored. The edit engine reads values typed
+/// on the command line with the same rule.
+pub(crate) fn parse_number(text: &str) -> Result<f64, NumberError> {
+    match text.trim_ascii().parse::<f64>() {
+        Ok(v) if v.is_finite() => Ok(v),
+        Ok(_) => Err(NumberError::NotFinite),
+        Err(_) => Err(NumberError::Invalid),
+    }
+}
+
+/// An integer as the format reads it (contract section 9): ASCII digits
+/// with an optional leading `+`, surrounding ASCII whitespace ignored;
+/// `None` when it is not one or does not fit in a `u64`.
+pub(crate) fn parse_integer(text: &str) -> Option<u64> {
+    let text = text.trim_ascii();
+    let digits = text.strip_prefix('+').unwrap_or(text);
+    if digits.is_empty() || !digits.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    digits.bytes().try_fold(0u64, |acc, b| {
+        acc.checked_mul(10)?.checked_add(u64::from(b - b'0'))
+    })
+}
+
+/// Largest `width` or `height` on its own (the product is bounded by
+/// [`MAX_PIXELS`] too).
+pub(crate) const MAX_SIDE: u64 = u32::MAX as u64;
 
 /// A start tag as the reader gave it.
 struct Elem<'a> {
@@ -474,9 +508,9 @@ impl<'a> Parser<'a> {
     /// A finite number (contract section 9).
     fn number(&self, attrs: &Attrs<'_>, attr: &Attr<'_>) -> Result<f64, LoadError> {
         let fields = || (attrs.element, attr.name, Box::from(attr.value.as_ref()));
-        match attr.value.trim_ascii().parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            Ok(_) => {
+        match parse_number(&attr.value) {
+            Ok(v) => Ok(v),
+            Err(NumberError::NotFinite) => {
                 let (element, attribute, value) = fields();
                 Err(self.error_at(
                     attr.at,
@@ -487,7 +521,7 @@ impl<'a> Parser<'a> {
                     },
                 ))
             }
-            Err(_) => {
+            Err(NumberError::Invalid) => {
                 let (element, attribute, value) = fields();
                 Err(self.error_at(
                     attr.at,
@@ -564,16 +598,7 @@ impl<'a> Parser<'a> {
         min: u64,
         max: u64,
     ) -> Result<u64, LoadError> {
-        let text = attr.value.trim_ascii();
-        let digits = text.strip_prefix('+').unwrap_or(text);
-        let parsed = if !digits.is_empty() && digits.bytes().all(|b| b.is_ascii_digit()) {
-            digits.bytes().try_fold(0u64, |acc, b| {
-                acc.checked_mul(10)?.checked_add(u64::from(b - b'0'))
-            })
-        } else {
-            None
-        };
-        match parsed {
+        match parse_integer(&attr.value) {
             Some(v) if (min..=max).contains(&v) => Ok(v),
             _ => Err(self.error_at(
                 attr.at,

@@ -6,10 +6,15 @@
 //! [`LoadError`] that carries the file and the `line:column` of the culprit.
 //! A `Scene` holds no render state: `render::prepare` turns it into what the
 //! tracer needs.
+//!
+//! [`edit`] is the one way a scene changes (the app's panel and undo, the
+//! command line's `edit` and `--set`); [`splice`] writes those changes back
+//! into the file's text, keeping every byte that was not edited.
 
 pub mod edit;
 mod error;
 mod load;
+pub mod splice;
 
 pub use error::{LoadError, LoadErrorKind, Position};
 pub use load::{MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_with_text, parse};

@@ -1,0 +1,1199 @@
+//! Save-back: writing an [`Edited`] scene into the XML text it was loaded
+//! from.
+//!
+//! [`save`] splices the edits into the text by the origins the edit engine
+//! kept ([`super::edit`]): an element is found again by where it came from,
+//! never by matching elements up by position or name. It changes only what
+//! differs, in place: an attribute value between its quotes, a missing
+//! attribute appended to its element, a removed element with its lines and
+//! the comment lines directly above it, an added element after the last one
+//! of its kind with the indentation of its siblings. Every other byte of the
+//! text is kept: comments, whitespace, attribute order and quoting, the
+//! spelling of unchanged numbers (`1.0` stays `1.0`), the XML declaration.
+//!
+//! [`to_xml`] writes a fresh, indented file for a scene that has no source
+//! text yet ("Save as" of the built-in example, a new scene).
+//!
+//! Numbers are written with Rust's shortest round-trip formatting, so the
+//! written text parses back to exactly the edited values.
+//!
+//! How it works: the text is scanned again with quick-xml to find each
+//! element's byte span, each attribute value's byte range and each comment;
+//! the edits are collected as splices (byte range → replacement) and
+//! applied in one pass. Before anything is returned, the new text is parsed
+//! and compared with the edited scene: `save` never returns a text that
+//! would load differently.
+
+use std::borrow::Cow;
+use std::mem::discriminant;
+use std::ops::Range;
+use std::path::Path;
+
+use quick_xml::Reader;
+use quick_xml::events::{BytesStart, Event};
+
+use super::edit::{EditError, Edited, ObjectOrigin, number_text as num};
+use super::{Color, Illumination, Material, Model, Object, Scene, parse};
+use crate::math::{TransformStep, Vec3};
+use crate::shading::Light;
+
+fn internal(message: impl Into<String>) -> EditError {
+    EditError::Internal(message.into())
+}
+
+/// Writes `edited` into `text`, the source of a valid scene file that
+/// `edited` was loaded from (`path` only names it in errors).
+///
+/// The result parses to `edited`'s scene; every part of `text` that did not
+/// need to change is kept byte for byte.
+pub fn save(text: &str, path: &Path, edited: &Edited) -> Result<String, EditError> {
+    let original = parse(text, path).map_err(|e| EditError::Parse(Box::new(e)))?;
+    if *edited == Edited::new(original.clone()) {
+        return Ok(text.to_owned());
+    }
+    let doc = Doc::scan(text)?;
+    let mut editor = Editor {
+        doc: &doc,
+        splices: Vec::new(),
+    };
+    editor.scene(&original, edited)?;
+    let out = apply(text, editor.splices)?;
+    match parse(&out, path) {
+        Ok(scene) if &scene == edited.scene() => Ok(out),
+        Ok(_) => Err(internal(
+            "the rewritten text does not load as the edited scene",
+        )),
+        Err(e) => Err(EditError::Invalid(Box::new(e))),
+    }
+}
+
+/// Writes `edited` into `text`, pairing the text's objects, lights and
+/// transformation steps with `edited`'s by their index (and steps only when
+/// of the same kind); the rest are removed or added.
+///
+/// For scenes changed outside the edit engine, which has no origins to go
+/// by (tests, tools). The app and the command line save with [`save`].
+pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<String, EditError> {
+    let original = parse(text, path).map_err(|e| EditError::Parse(Box::new(e)))?;
+    let steps = |o: &[TransformStep], e: &[TransformStep]| -> Vec<Option<usize>> {
+        e.iter()
+            .enumerate()
+            .map(|(k, s)| {
+                o.get(k)
+                    .filter(|t| discriminant(*t) == discriminant(s))
+                    .map(|_| k)
+            })
+            .collect()
+    };
+    let mut by_index = Edited::new(edited.clone());
+    for (i, origin) in by_index.objects.iter_mut().enumerate() {
+        *origin = original.objects.get(i).map(|o| ObjectOrigin {
+            index: i,
+            steps: steps(o.transform.steps(), edited.objects[i].transform.steps()),
+        });
+    }
+    for (i, origin) in by_index.lights.iter_mut().enumerate() {
+        *origin = (i < original.lights.len()).then_some(i);
+    }
+    by_index.camera_steps = steps(
+        original.camera.transform.steps(),
+        edited.camera.transform.steps(),
+    );
+    save(text, path, &by_index)
+}
+
+/// The first words of the comment directly above each object (spheres and
+/// planes in file order), for naming it in the panel ("RED" for `<!-- RED
+/// sphere, left -->`). `None` where no comment touches the object.
+pub fn object_labels(text: &str) -> Vec<Option<String>> {
+    let Ok(doc) = Doc::scan(text) else {
+        return Vec::new();
+    };
+    doc.children_named(doc.root, &["sphere", "plane"])
+        .into_iter()
+        .map(|node| {
+            let comment = doc.comments_above(doc.node(node).start).last()?.clone();
+            let inner = doc.text.get(comment.start + 4..comment.end - 3)?;
+            let words: Vec<&str> = inner.split_whitespace().take(3).collect();
+            let label = words
+                .join(" ")
+                .trim_end_matches([',', '.', ':', ';', '-'])
+                .to_owned();
+            (!label.is_empty()).then_some(label)
+        })
+        .collect()
+}
+
+/// A fresh scene file for `scene`, indented by two spaces:
+/// `parse(&to_xml(scene), path) == Ok(scene)` for every valid scene.
+///
+/// Objects come first, then lights, the camera and the model. Each object
+/// gets its colour and its full material, so that the file is easy to edit
+/// by hand; a transformation is written when it has steps, a light colour
+/// when it is not white.
+pub fn to_xml(scene: &Scene) -> String {
+    let mut lines: Lines = vec![(0, "<scene>".to_owned())];
+    for object in &scene.objects {
+        let name = object.shape.name();
+        lines.push((1, format!("<{name}>")));
+        lines.push((2, color_tag(object.color)));
+        lines.push((2, material_tag(&object.material, false)));
+        push_nested(
+            &mut lines,
+            2,
+            transformation_lines(object.transform.steps()),
+        );
+        lines.push((1, format!("</{name}>")));
+    }
+    for light in &scene.lights {
+        push_nested(&mut lines, 1, light_lines(light));
+    }
+    let camera = &scene.camera;
+    let camera_tag = format!(
+        "camera width=\"{}\" height=\"{}\" eyeDistance=\"{}\"",
+        camera.width,
+        camera.height,
+        num(camera.eye_distance)
+    );
+    if camera.transform.steps().is_empty() {
+        lines.push((1, format!("<{camera_tag}/>")));
+    } else {
+        lines.push((1, format!("<{camera_tag}>")));
+        push_nested(
+            &mut lines,
+            2,
+            transformation_lines(camera.transform.steps()),
+        );
+        lines.push((1, "</camera>".to_owned()));
+    }
+    let model = scene.model;
+    let depth = if model.depth != 1 || model.illumination == Illumination::Whitted {
+        format!(" depth=\"{}\"", model.depth)
+    } else {
+        String::new()
+    };
+    lines.push((
+        1,
+        format!("<model type=\"{}\"{depth}/>", model.illumination.name()),
+    ));
+    lines.push((0, "</scene>".to_owned()));
+
+    let mut out = String::from("<?xml version=\"1.0\"?>\n");
+    for (level, line) in lines {
+        out.push_str(&"  ".repeat(level));
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}
+
+// ----- writing elements -----
+
+/// Lines of XML, each with its nesting level relative to the first.
+type Lines = Vec<(usize, String)>;
+
+fn push_nested(lines: &mut Lines, level: usize, nested: Lines) {
+    lines.extend(nested.into_iter().map(|(l, s)| (l + level, s)));
+}
+
+fn color_tag(c: Color) -> String {
+    format!(
+        "<color red=\"{}\" green=\"{}\" blue=\"{}\"/>",
+        num(c.x),
+        num(c.y),
+        num(c.z)
+    )
+}
+
+/// `<material .../>`; with `only_changed`, the attributes equal to their
+/// defaults are left out.
+fn material_tag(m: &Material, only_changed: bool) -> String {
+    let d = Material::default();
+    let mut tag = String::from("<material");
+    for (name, v, dv) in [
+        ("ka", m.ka, d.ka),
+        ("kd", m.kd, d.kd),
+        ("ks", m.ks, d.ks),
+        ("m", m.m, d.m),
+    ] {
+        if !only_changed || v != dv {
+            tag.push_str(&format!(" {name}=\"{}\"", num(v)));
+        }
+    }
+    tag.push_str("/>");
+    tag
+}
+
+fn xyz(v: Vec3) -> String {
+    format!("x=\"{}\" y=\"{}\" z=\"{}\"", num(v.x), num(v.y), num(v.z))
+}
+
+fn step_tag(step: &TransformStep) -> String {
+    match *step {
+        TransformStep::Translate(v) => format!("<translate {}/>", xyz(v)),
+        TransformStep::RotateX(a) => format!("<rotate-x angle=\"{}\"/>", num(a)),
+        TransformStep::RotateY(a) => format!("<rotate-y angle=\"{}\"/>", num(a)),
+        TransformStep::RotateZ(a) => format!("<rotate-z angle=\"{}\"/>", num(a)),
+        TransformStep::UniformScale(f) => format!("<scale factor=\"{}\"/>", num(f)),
+        TransformStep::Scale(v) => format!("<scale {}/>", xyz(v)),
+    }
+}
+
+/// `<transformation>` with its steps; nothing when there are none.
+fn transformation_lines(steps: &[TransformStep]) -> Lines {
+    if steps.is_empty() {
+        return Vec::new();
+    }
+    let mut lines = vec![(0, "<transformation>".to_owned())];
+    lines.extend(steps.iter().map(|s| (1, step_tag(s))));
+    lines.push((0, "</transformation>".to_owned()));
+    lines
+}
+
+/// A new object element: only what differs from the defaults.
+fn object_lines(object: &Object) -> Lines {
+    let name = object.shape.name();
+    let mut inner: Lines = Vec::new();
+    if object.color != Vec3::ONE {
+        inner.push((0, color_tag(object.color)));
+    }
+    if object.material != Material::default() {
+        inner.push((0, material_tag(&object.material, true)));
+    }
+    inner.extend(transformation_lines(object.transform.steps()));
+    wrap(name, "", inner)
+}
+
+fn light_lines(light: &Light) -> Lines {
+    let inner = if light.color == Vec3::ONE {
+        Vec::new()
+    } else {
+        vec![(0, color_tag(light.color))]
+    };
+    wrap("light", &format!(" {}", xyz(light.position)), inner)
+}
+
+fn model_tag(model: &Model) -> String {
+    let depth = if model.depth == 1 {
+        String::new()
+    } else {
+        format!(" depth=\"{}\"", model.depth)
+    };
+    format!("<model type=\"{}\"{depth}/>", model.illumination.name())
+}
+
+/// `<name attrs/>`, or `<name attrs>` + `inner` one level deeper + `</name>`.
+fn wrap(name: &str, attrs: &str, inner: Lines) -> Lines {
+    if inner.is_empty() {
+        return vec![(0, format!("<{name}{attrs}/>"))];
+    }
+    let mut lines = vec![(0, format!("<{name}{attrs}>"))];
+    push_nested(&mut lines, 1, inner);
+    lines.push((0, format!("</{name}>")));
+    lines
+}
+
+// ----- the scanned document -----
+
+/// One attribute: its name and the byte range of its raw value, between the
+/// quotes.
+struct AttrSpan {
+    name: String,
+    value: Range<usize>,
+}
+
+/// One element of the text, with byte offsets into the whole text.
+struct Node {
+    name: String,
+    /// Offset of the `<` of the start tag.
+    start: usize,
+    /// Offset just past the `>` of the start tag.
+    tag_end: usize,
+    /// `<x/>`: no content and no end tag.
+    empty: bool,
+    /// The end tag `</x>`; `tag_end..tag_end` for an empty element.
+    end: Range<usize>,
+    attrs: Vec<AttrSpan>,
+    children: Vec<usize>,
+}
+
+impl Node {
+    /// Offset just past the whole element.
+    fn elem_end(&self) -> usize {
+        if self.empty {
+            self.tag_end
+        } else {
+            self.end.end
+        }
+    }
+}
+
+struct Doc<'t> {
+    text: &'t str,
+    /// Offset of the text after a byte-order mark (0 without one).
+    base: usize,
+    /// The file's line ending.
+    nl: &'static str,
+    /// One level of indentation, as the file writes it.
+    unit: String,
+    nodes: Vec<Node>,
+    root: usize,
+    /// Every comment, `<!--` to `-->`, in text order.
+    comments: Vec<Range<usize>>,
+}
+
+impl<'t> Doc<'t> {
+    fn scan(text: &'t str) -> Result<Doc<'t>, EditError> {
+        let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+        let base = text.len() - body.len();
+        let offset = |slice: &[u8]| -> Result<usize, EditError> {
+            (slice.as_ptr() as usize)
+                .checked_sub(body.as_ptr() as usize)
+                .filter(|&o| o.saturating_add(slice.len()) <= body.len())
+                .map(|o| o + base)
+                .ok_or_else(|| internal("a slice outside the text"))
+        };
+
+        let mut reader = Reader::from_str(body);
+        let config = reader.config_mut();
+        config.check_end_names = true;
+        config.expand_empty_elements = false;
+        config.trim_text(false);
+
+        let mut nodes: Vec<Node> = Vec::new();
+        let mut stack: Vec<usize> = Vec::new();
+        let mut root = None;
+        let mut comments = Vec::new();
+        loop {
+            let event = reader
+                .read_event()
+                .map_err(|e| internal(format!("XML: {e}")))?;
+            let position = usize::try_from(reader.buffer_position())
+                .map_err(|_| internal("position out of range"))?
+                .saturating_add(base);
+            let (start, empty) = match event {
+                Event::Start(start) => (start, false),
+                Event::Empty(start) => (start, true),
+                Event::End(_) => {
+                    let at = text
+                        .get(..position)
+                        .and_then(|before| before.rfind('<'))
+                        .ok_or_else(|| internal("end tag without '<'"))?;
+                    let id = stack.pop().ok_or_else(|| internal("unbalanced end tag"))?;
+                    nodes[id].end = at..position;
+                    continue;
+                }
+                Event::Eof => break,
+                Event::Comment(content) => {
+                    let from = offset(&content)?;
+                    comments.push(from - 4..from + content.len() + 3);
+                    continue;
+                }
+                _ => continue,
+            };
+            let id = nodes.len();
+            nodes.push(element(&start, empty, position, &offset)?);
+            match stack.last() {
+                Some(&parent) => nodes[parent].children.push(id),
+                None if root.is_none() => root = Some(id),
+                None => return Err(internal("a second root element")),
+            }
+            if !empty {
+                stack.push(id);
+            }
+        }
+        let root = match (root, stack.is_empty()) {
+            (Some(root), true) => root,
+            _ => return Err(internal("unbalanced elements")),
+        };
+        let nl = if text.contains("\r\n") { "\r\n" } else { "\n" };
+        let mut doc = Doc {
+            text,
+            base,
+            nl,
+            unit: String::new(),
+            nodes,
+            root,
+            comments,
+        };
+        doc.unit = doc.indent_unit();
+        Ok(doc)
+    }
+
+    /// The extra indentation of the first child, on its own line, of a
+    /// parent on its own line; two spaces when the file shows none.
+    fn indent_unit(&self) -> String {
+        for node in &self.nodes {
+            let Some(parent) = self.own_indent(node.start) else {
+                continue;
+            };
+            for &child in &node.children {
+                if let Some(indent) = self.own_indent(self.nodes[child].start)
+                    && indent.len() > parent.len()
+                    && let Some(unit) = indent.strip_prefix(parent)
+                {
+                    return unit.to_owned();
+                }
+            }
+        }
+        "  ".to_owned()
+    }
+
+    /// Offset of the start of the line holding `pos`.
+    fn line_start(&self, pos: usize) -> usize {
+        let before = self.text.get(..pos).unwrap_or_default();
+        before.rfind('\n').map_or(0, |i| i + 1).max(self.base)
+    }
+
+    /// The indentation before `pos` when only spaces and tabs precede it on
+    /// its line.
+    fn own_indent(&self, pos: usize) -> Option<&'t str> {
+        let indent = self.text.get(self.line_start(pos)..pos)?;
+        indent
+            .bytes()
+            .all(|b| b == b' ' || b == b'\t')
+            .then_some(indent)
+    }
+
+    /// The offset just past the line ending that follows `pos`, when only
+    /// spaces and tabs come between (or the end of the text).
+    fn line_end_after(&self, pos: usize) -> Option<usize> {
+        let rest = self.text.get(pos..)?;
+        let spaces = rest.len() - rest.trim_start_matches([' ', '\t']).len();
+        let after = &rest[spaces..];
+        let ending = if after.starts_with("\r\n") {
+            2
+        } else if after.starts_with('\n') {
+            1
+        } else if after.is_empty() {
+            0
+        } else {
+            return None;
+        };
+        Some(pos + spaces + ending)
+    }
+
+    /// The comments directly above the line holding `pos`, in text order:
+    /// each alone on its lines, with no blank line between them and `pos`.
+    fn comments_above(&self, pos: usize) -> Vec<Range<usize>> {
+        let mut found = Vec::new();
+        if self.own_indent(pos).is_none() {
+            return found;
+        }
+        let mut line = self.line_start(pos);
+        let mut next = self.comments.partition_point(|c| c.end <= line);
+        while let Some(c) = next.checked_sub(1).and_then(|i| self.comments.get(i)) {
+            let alone =
+                self.own_indent(c.start).is_some() && self.line_end_after(c.end) == Some(line);
+            if !alone {
+                break;
+            }
+            found.push(c.clone());
+            line = self.line_start(c.start);
+            next -= 1;
+        }
+        found.reverse();
+        found
+    }
+
+    /// Where the lines of element `id` begin: the first comment directly
+    /// above it, or its own line; `None` when it shares its line.
+    fn block_start(&self, id: usize) -> Option<usize> {
+        let start = self.node(id).start;
+        self.own_indent(start)?;
+        let first = self
+            .comments_above(start)
+            .first()
+            .map_or(start, |c| c.start);
+        Some(self.line_start(first))
+    }
+
+    fn node(&self, id: usize) -> &Node {
+        &self.nodes[id]
+    }
+
+    /// The only child of `id` named `name`, if any.
+    fn child(&self, id: usize, name: &str) -> Option<usize> {
+        self.node(id)
+            .children
+            .iter()
+            .copied()
+            .find(|&c| self.node(c).name == name)
+    }
+
+    fn children_named(&self, id: usize, names: &[&str]) -> Vec<usize> {
+        self.node(id)
+            .children
+            .iter()
+            .copied()
+            .filter(|&c| names.contains(&self.node(c).name.as_str()))
+            .collect()
+    }
+}
+
+/// A node for a start tag read at `tag_end` (the offset past its `>`).
+fn element(
+    start: &BytesStart<'_>,
+    empty: bool,
+    tag_end: usize,
+    offset: &impl Fn(&[u8]) -> Result<usize, EditError>,
+) -> Result<Node, EditError> {
+    let name = start.name();
+    let at = offset(name.as_ref())?
+        .checked_sub(1)
+        .ok_or_else(|| internal("start tag without '<'"))?;
+    let mut attrs = Vec::new();
+    let mut iter = start.attributes();
+    iter.with_checks(false);
+    for attr in iter {
+        let attr = attr.map_err(|e| internal(format!("attribute: {e}")))?;
+        let Cow::Borrowed(value) = attr.value else {
+            return Err(internal("an attribute value not borrowed from the text"));
+        };
+        let from = offset(value)?;
+        attrs.push(AttrSpan {
+            name: String::from_utf8_lossy(attr.key.as_ref()).into_owned(),
+            value: from..from + value.len(),
+        });
+    }
+    Ok(Node {
+        name: String::from_utf8_lossy(name.as_ref()).into_owned(),
+        start: at,
+        tag_end,
+        empty,
+        end: tag_end..tag_end,
+        attrs,
+        children: Vec::new(),
+    })
+}
+
+// ----- edits -----
+
+/// `items` as lines indented by `indent` plus their own levels.
+fn block(doc: &Doc<'_>, indent: &str, items: &[Lines]) -> String {
+    let mut text = String::new();
+    for item in items {
+        for (level, line) in item {
+            text.push_str(indent);
+            text.push_str(&doc.unit.repeat(*level));
+            text.push_str(line);
+            text.push_str(doc.nl);
+        }
+    }
+    text
+}
+
+/// `items` written one after another on the current line.
+fn inline(items: &[Lines]) -> String {
+    items.iter().flatten().map(|(_, l)| l.as_str()).collect()
+}
+
+/// Replace `range` of the text with `text` (an insertion when empty).
+struct Splice {
+    range: Range<usize>,
+    text: String,
+}
+
+/// Applies the splices; insertions at one offset keep the order they were
+/// made in and come before a replacement starting there.
+fn apply(text: &str, mut splices: Vec<Splice>) -> Result<String, EditError> {
+    splices.sort_by_key(|s| (s.range.start, !s.range.is_empty()));
+    let mut out =
+        String::with_capacity(text.len() + splices.iter().map(|s| s.text.len()).sum::<usize>());
+    let mut cursor = 0;
+    for splice in splices {
+        let Range { start, end } = splice.range;
+        if start < cursor || end < start {
+            return Err(internal("overlapping edits"));
+        }
+        let kept = text
+            .get(cursor..start)
+            .ok_or_else(|| internal("an edit outside the text"))?;
+        text.get(start..end)
+            .ok_or_else(|| internal("an edit outside the text"))?;
+        out.push_str(kept);
+        out.push_str(&splice.text);
+        cursor = end;
+    }
+    out.push_str(text.get(cursor..).unwrap_or_default());
+    Ok(out)
+}
+
+/// Ranks of an object's children: where a new one goes among its siblings.
+const OBJECT_RANKS: &[(&str, u8)] = &[("color", 0), ("material", 1), ("transformation", 2)];
+const LIGHT_RANKS: &[(&str, u8)] = &[("color", 0)];
+const CAMERA_RANKS: &[(&str, u8)] = &[("transformation", 0)];
+
+struct Editor<'d, 't> {
+    doc: &'d Doc<'t>,
+    splices: Vec<Splice>,
+}
+
+impl Editor<'_, '_> {
+    fn splice(&mut self, range: Range<usize>, text: impl Into<String>) {
+        self.splices.push(Splice {
+            range,
+            text: text.into(),
+        });
+    }
+
+    fn scene(&mut self, original: &Scene, edited: &Edited) -> Result<(), EditError> {
+        let doc = self.doc;
+        let scene = edited.scene();
+        let root = doc.root;
+        let objects = doc.children_named(root, &["sphere", "plane"]);
+        let lights = doc.children_named(root, &["light"]);
+        let cameras = doc.children_named(root, &["camera"]);
+        let models = doc.children_named(root, &["model"]);
+        if objects.len() != original.objects.len()
+            || lights.len() != original.lights.len()
+            || cameras.len() != 1
+            || models.len() > 1
+        {
+            return Err(internal("the text's elements do not match its scene"));
+        }
+
+        let origins: Vec<Option<usize>> = edited
+            .objects
+            .iter()
+            .map(|o| o.as_ref().map(|o| o.index))
+            .collect();
+        self.group(
+            root,
+            &objects,
+            &origins,
+            |i| object_lines(&scene.objects[i]),
+            |editor, k, i| {
+                let steps = edited.objects[i]
+                    .as_ref()
+                    .map_or(&[][..], |o| o.steps.as_slice());
+                editor.object(objects[k], &original.objects[k], &scene.objects[i], steps)
+            },
+        )?;
+        self.group(
+            root,
+            &lights,
+            &edited.lights,
+            |i| light_lines(&scene.lights[i]),
+            |editor, k, i| editor.light(lights[k], &original.lights[k], &scene.lights[i]),
+        )?;
+
+        self.camera(
+            cameras[0],
+            &original.camera,
+            &scene.camera,
+            &edited.camera_steps,
+        )?;
+
+        let (om, em) = (original.model, scene.model);
+        if om != em {
+            match models.first() {
+                Some(&node) => {
+                    if om.illumination != em.illumination {
+                        self.set_attr(node, "type", em.illumination.name());
+                    }
+                    if om.depth != em.depth {
+                        self.set_attr(node, "depth", &em.depth.to_string());
+                    }
+                }
+                None => self.insert(root, "scene", None, &[vec![(0, model_tag(&em))]])?,
+            }
+        }
+        Ok(())
+    }
+
+    /// Brings a group of sibling elements of `parent` (`nodes`, in text
+    /// order: the objects, the lights, the steps of one transformation) to
+    /// the current elements. `origins[i]` is the index in `nodes` that
+    /// current element `i` came from, or `None` for a new one (written by
+    /// `lines(i)`). Nodes no element came from are removed with the comment
+    /// lines above them; kept ones are edited by `keep(self, k, i)`; new
+    /// ones go before the next kept element, or after the group's last
+    /// node, or at the end of `parent`.
+    fn group(
+        &mut self,
+        parent: usize,
+        nodes: &[usize],
+        origins: &[Option<usize>],
+        lines: impl Fn(usize) -> Lines,
+        mut keep: impl FnMut(&mut Self, usize, usize) -> Result<(), EditError>,
+    ) -> Result<(), EditError> {
+        let doc = self.doc;
+        let mut kept = vec![false; nodes.len()];
+        let mut last = None;
+        for (i, origin) in origins.iter().enumerate() {
+            let Some(k) = *origin else { continue };
+            if k >= nodes.len() || kept[k] || last.is_some_and(|l| l >= k) {
+                return Err(internal("the elements' origins are not in text order"));
+            }
+            kept[k] = true;
+            last = Some(k);
+            keep(self, k, i)?;
+        }
+        for (k, &node) in nodes.iter().enumerate() {
+            if !kept[k] {
+                self.remove(node);
+            }
+        }
+        let name = doc.node(parent).name.clone();
+        let mut i = 0;
+        while i < origins.len() {
+            if origins[i].is_some() {
+                i += 1;
+                continue;
+            }
+            let run_end = origins[i..]
+                .iter()
+                .position(Option::is_some)
+                .map_or(origins.len(), |p| i + p);
+            let items: Vec<Lines> = (i..run_end).map(&lines).collect();
+            match origins.get(run_end).copied().flatten() {
+                Some(k) => self.insert_before(nodes[k], &items),
+                None => match nodes.last() {
+                    Some(&node) => self.insert_after(node, &items),
+                    None => self.insert(parent, &name, None, &items)?,
+                },
+            }
+            i = run_end;
+        }
+        Ok(())
+    }
+
+    fn object(
+        &mut self,
+        node: usize,
+        o: &Object,
+        e: &Object,
+        step_origins: &[Option<usize>],
+    ) -> Result<(), EditError> {
+        let doc = self.doc;
+        let name = e.shape.name();
+        if o.shape != e.shape {
+            self.rename(node, name)?;
+        }
+        let mut new_items: Vec<(u8, Lines)> = Vec::new();
+        if o.color != e.color {
+            match doc.child(node, "color") {
+                Some(c) => self.set_color(c, o.color, e.color),
+                None => new_items.push((0, vec![(0, color_tag(e.color))])),
+            }
+        }
+        if o.material != e.material {
+            match doc.child(node, "material") {
+                Some(m) => {
+                    let (om, em) = (o.material, e.material);
+                    for (attr, ov, ev) in [
+                        ("ka", om.ka, em.ka),
+                        ("kd", om.kd, em.kd),
+                        ("ks", om.ks, em.ks),
+                        ("m", om.m, em.m),
+                    ] {
+                        if ov != ev {
+                            self.set_attr(m, attr, &num(ev));
+                        }
+                    }
+                }
+                None => new_items.push((1, vec![(0, material_tag(&e.material, true))])),
+            }
+        }
+        self.transformation(
+            node,
+            o.transform.steps(),
+            e.transform.steps(),
+            step_origins,
+            2,
+            &mut new_items,
+        )?;
+        self.insert_ranked(node, name, OBJECT_RANKS, new_items)
+    }
+
+    fn light(&mut self, node: usize, o: &Light, e: &Light) -> Result<(), EditError> {
+        for (attr, ov, ev) in [
+            ("x", o.position.x, e.position.x),
+            ("y", o.position.y, e.position.y),
+            ("z", o.position.z, e.position.z),
+        ] {
+            if ov != ev {
+                self.set_attr(node, attr, &num(ev));
+            }
+        }
+        if o.color != e.color {
+            match self.doc.child(node, "color") {
+                Some(c) => self.set_color(c, o.color, e.color),
+                None => {
+                    let item = vec![(0, vec![(0, color_tag(e.color))])];
+                    self.insert_ranked(node, "light", LIGHT_RANKS, item)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn camera(
+        &mut self,
+        node: usize,
+        o: &super::Camera,
+        e: &super::Camera,
+        step_origins: &[Option<usize>],
+    ) -> Result<(), EditError> {
+        if o.width != e.width {
+            self.set_attr(node, "width", &e.width.to_string());
+        }
+        if o.height != e.height {
+            self.set_attr(node, "height", &e.height.to_string());
+        }
+        if o.eye_distance != e.eye_distance {
+            self.set_attr(node, "eyeDistance", &num(e.eye_distance));
+        }
+        let mut new_items = Vec::new();
+        self.transformation(
+            node,
+            o.transform.steps(),
+            e.transform.steps(),
+            step_origins,
+            0,
+            &mut new_items,
+        )?;
+        self.insert_ranked(node, "camera", CAMERA_RANKS, new_items)
+    }
+
+    /// Brings the `<transformation>` of `parent` from steps `o` to `e`,
+    /// step by step by their origins; queues a new `<transformation>` (at
+    /// `rank`) in `new_items` when `parent` has none.
+    fn transformation(
+        &mut self,
+        parent: usize,
+        o: &[TransformStep],
+        e: &[TransformStep],
+        origins: &[Option<usize>],
+        rank: u8,
+        new_items: &mut Vec<(u8, Lines)>,
+    ) -> Result<(), EditError> {
+        let Some(node) = self.doc.child(parent, "transformation") else {
+            if !e.is_empty() {
+                new_items.push((rank, transformation_lines(e)));
+            }
+            return Ok(());
+        };
+        let steps = self.doc.node(node).children.clone();
+        if steps.len() != o.len() || origins.len() != e.len() {
+            return Err(internal("a transformation's steps do not match its text"));
+        }
+        self.group(
+            node,
+            &steps,
+            origins,
+            |i| vec![(0, step_tag(&e[i]))],
+            |editor, k, i| editor.step(steps[k], &o[k], &e[i]),
+        )
+    }
+
+    /// Edits the values of one step node from `a` to `b` (same kind).
+    fn step(&mut self, node: usize, a: &TransformStep, b: &TransformStep) -> Result<(), EditError> {
+        use TransformStep as S;
+        match (*a, *b) {
+            (S::Translate(u), S::Translate(v)) | (S::Scale(u), S::Scale(v)) => {
+                for (attr, ov, ev) in [("x", u.x, v.x), ("y", u.y, v.y), ("z", u.z, v.z)] {
+                    if ov != ev {
+                        self.set_attr(node, attr, &num(ev));
+                    }
+                }
+            }
+            (S::RotateX(u), S::RotateX(v))
+            | (S::RotateY(u), S::RotateY(v))
+            | (S::RotateZ(u), S::RotateZ(v)) => {
+                if u != v {
+                    self.set_attr(node, "angle", &num(v));
+                }
+            }
+            (S::UniformScale(u), S::UniformScale(v)) => {
+                if u != v {
+                    self.set_attr(node, "factor", &num(v));
+                }
+            }
+            _ => return Err(internal("a step changed its kind")),
+        }
+        Ok(())
+    }
+
+    fn set_color(&mut self, node: usize, o: Color, e: Color) {
+        for (attr, ov, ev) in [("red", o.x, e.x), ("green", o.y, e.y), ("blue", o.z, e.z)] {
+            if ov != ev {
+                self.set_attr(node, attr, &num(ev));
+            }
+        }
+    }
+
+    /// Sets attribute `name` of `node`: its value replaced between the
+    /// quotes, or ` name="value"` appended after the last attribute.
+    fn set_attr(&mut self, node: usize, name: &str, value: &str) {
+        let n = self.doc.node(node);
+        if let Some(attr) = n.attrs.iter().find(|a| a.name == name) {
+            self.splice(attr.value.clone(), value);
+            return;
+        }
+        let (at, quote) = match n.attrs.last() {
+            Some(last) => {
+                let quote = match self.doc.text.as_bytes().get(last.value.end) {
+                    Some(b'\'') => '\'',
+                    _ => '"',
+                };
+                (last.value.end + 1, quote)
+            }
+            None => (n.start + 1 + n.name.len(), '"'),
+        };
+        self.splice(at..at, format!(" {name}={quote}{value}{quote}"));
+    }
+
+    /// Renames the element `node` (start and end tags) to `name`.
+    fn rename(&mut self, node: usize, name: &str) -> Result<(), EditError> {
+        let n = self.doc.node(node);
+        let old = n.name.len();
+        let start = n.start + 1..n.start + 1 + old;
+        let end = (!n.empty).then(|| n.end.start + 2..n.end.start + 2 + old);
+        for range in std::iter::once(start).chain(end) {
+            if self.doc.text.get(range.clone()) != Some(n.name.as_str()) {
+                return Err(internal("a tag name not where expected"));
+            }
+            self.splice(range, name);
+        }
+        Ok(())
+    }
+
+    /// Removes the element `node`: with its lines and the comment lines
+    /// directly above it when it is alone on its lines, else just its text.
+    fn remove(&mut self, node: usize) {
+        let doc = self.doc;
+        let n = doc.node(node);
+        let end = n.elem_end();
+        let range = match (doc.block_start(node), doc.line_end_after(end)) {
+            (Some(start), Some(after)) => start..after,
+            _ => n.start..end,
+        };
+        self.splice(range, "");
+    }
+
+    /// Inserts `items` (siblings of `node`) just before it, with its
+    /// indentation and before the comments above it.
+    fn insert_before(&mut self, node: usize, items: &[Lines]) {
+        let doc = self.doc;
+        let at = doc.node(node).start;
+        match (doc.block_start(node), doc.own_indent(at)) {
+            (Some(line), Some(indent)) => self.splice(line..line, block(doc, indent, items)),
+            _ => self.splice(at..at, inline(items)),
+        }
+    }
+
+    /// Inserts `items` (siblings of `node`) on the lines just after it, with
+    /// its indentation.
+    fn insert_after(&mut self, node: usize, items: &[Lines]) {
+        let doc = self.doc;
+        let n = doc.node(node);
+        let end = n.elem_end();
+        match (doc.own_indent(n.start), doc.line_end_after(end)) {
+            (Some(indent), Some(after)) => {
+                let mut text = block(doc, indent, items);
+                if !doc.text[..after].ends_with('\n') {
+                    // The text ends on this line: start a new one.
+                    text = format!("{}{}", doc.nl, text.trim_end_matches(['\r', '\n']));
+                }
+                self.splice(after..after, text);
+            }
+            _ => self.splice(end..end, inline(items)),
+        }
+    }
+
+    /// Inserts new children of `parent` (named `name` in the edited scene),
+    /// each before the first existing child of a higher rank, or at the end.
+    /// `items` are in rank order; `removed` is a child being removed.
+    fn insert_ranked(
+        &mut self,
+        parent: usize,
+        name: &str,
+        ranks: &[(&str, u8)],
+        items: Vec<(u8, Lines)>,
+    ) -> Result<(), EditError> {
+        if items.is_empty() {
+            return Ok(());
+        }
+        let doc = self.doc;
+        let rank_of = |id: usize| {
+            ranks
+                .iter()
+                .find(|(n, _)| *n == doc.node(id).name)
+                .map_or(u8::MAX, |&(_, r)| r)
+        };
+        let existing: Vec<usize> = doc.node(parent).children.to_vec();
+        let mut groups: Vec<(Option<usize>, Vec<Lines>)> = Vec::new();
+        for (rank, lines) in items {
+            let anchor = existing.iter().copied().find(|&c| rank_of(c) > rank);
+            match groups.last_mut() {
+                Some((a, group)) if *a == anchor => group.push(lines),
+                _ => groups.push((anchor, vec![lines])),
+            }
+        }
+        for (anchor, group) in groups {
+            self.insert(parent, name, anchor, &group)?;
+        }
+        Ok(())
+    }
+
+    /// Inserts `items` as children of `parent` (named `name` once edited),
+    /// before the child `anchor` or at the end, with the indentation of
+    /// their siblings. An empty `<x/>` becomes `<x>…</x>`.
+    fn insert(
+        &mut self,
+        parent: usize,
+        name: &str,
+        anchor: Option<usize>,
+        items: &[Lines],
+    ) -> Result<(), EditError> {
+        let doc = self.doc;
+        let p = doc.node(parent);
+        let block = |indent: &str| block(doc, indent, items);
+        let inline = || inline(items);
+        let parent_indent = doc.own_indent(p.start).unwrap_or("");
+
+        if let Some(sibling) = anchor {
+            let at = doc.node(sibling).start;
+            match doc.own_indent(at) {
+                Some(indent) => {
+                    let line = doc.line_start(at);
+                    self.splice(line..line, block(indent));
+                }
+                None => self.splice(at..at, inline()),
+            }
+            return Ok(());
+        }
+
+        if p.empty {
+            // `<x .../>` (maybe `<x ... />`): replace from the end of the
+            // attributes to the end of the tag.
+            let slash = p
+                .tag_end
+                .checked_sub(2)
+                .filter(|&s| doc.text.get(s..p.tag_end) == Some("/>"))
+                .ok_or_else(|| internal("an empty element without '/>'"))?;
+            let tag = doc.text.get(p.start..slash).unwrap_or_default();
+            let from = p.start + tag.trim_end_matches([' ', '\t', '\r', '\n']).len();
+            let child_indent = format!("{parent_indent}{}", doc.unit);
+            let text = format!(
+                ">{}{}{parent_indent}</{name}>",
+                doc.nl,
+                block(&child_indent)
+            );
+            self.splice(from..p.tag_end, text);
+            return Ok(());
+        }
+
+        let end = p.end.start;
+        if let Some(end_indent) = doc.own_indent(end) {
+            let sibling_indent = p
+                .children
+                .last()
+                .and_then(|&c| doc.own_indent(doc.node(c).start));
+            let indent = match sibling_indent {
+                Some(indent) => indent.to_owned(),
+                None => {
+                    let outer = doc.own_indent(p.start).unwrap_or(end_indent);
+                    format!("{outer}{}", doc.unit)
+                }
+            };
+            let line = doc.line_start(end);
+            self.splice(line..line, block(&indent));
+        } else if doc
+            .text
+            .get(p.tag_end..end)
+            .is_some_and(|s| s.trim_matches([' ', '\t']).is_empty())
+        {
+            let child_indent = format!("{parent_indent}{}", doc.unit);
+            let text = format!("{}{}{parent_indent}", doc.nl, block(&child_indent));
+            self.splice(p.tag_end..end, text);
+        } else {
+            self.splice(end..end, inline());
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scene(text: &str) -> Scene {
+        parse(text, Path::new("t.xml")).unwrap()
+    }
+
+    #[test]
+    fn no_change_means_no_splice() {
+        for text in [
+            crate::EXAMPLE_SCENE,
+            "\u{feff}<scene><!-- x --><camera width='2' height=\"3\" eyeDistance=\"1.0\"/></scene>",
+        ] {
+            let s = scene(text);
+            let doc = Doc::scan(text).unwrap();
+            let mut editor = Editor {
+                doc: &doc,
+                splices: Vec::new(),
+            };
+            editor.scene(&s, &Edited::new(s.clone())).unwrap();
+            assert!(editor.splices.is_empty());
+            assert_eq!(
+                save(text, Path::new("t.xml"), &Edited::new(s)).unwrap(),
+                text
+            );
+        }
+    }
+
+    #[test]
+    fn numbers_read_back_exactly() {
+        for v in [
+            0.0,
+            -0.0,
+            1.0,
+            0.1,
+            1.0 / 3.0,
+            1e-7,
+            1e-300,
+            5e-324,
+            1e16,
+            1e300,
+            f64::MAX,
+            -2.5e-8,
+            123456.789,
+            0.000001,
+        ] {
+            let s = num(v);
+            let back: f64 = s.parse().unwrap();
+            assert_eq!(back.to_bits(), v.to_bits(), "{v} -> {s}");
+            assert!(s.len() < 30, "{s}");
+        }
+    }
+
+    #[test]
+    fn indentation_unit_is_detected() {
+        assert_eq!(Doc::scan(crate::EXAMPLE_SCENE).unwrap().unit, " ");
+        let tabs = "<scene>\n\t<camera width=\"1\" height=\"1\" eyeDistance=\"1\"/>\n</scene>\n";
+        assert_eq!(Doc::scan(tabs).unwrap().unit, "\t");
+        let flat = "<scene><camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>";
+        assert_eq!(Doc::scan(flat).unwrap().unit, "  ");
+    }
+
+    #[test]
+    fn overlapping_splices_are_an_error() {
+        let splices = vec![
+            Splice {
+                range: 0..3,
+                text: "a".into(),
+            },
+            Splice {
+                range: 2..4,
+                text: "b".into(),
+            },
+        ];
+        assert!(matches!(
+            apply("abcdef", splices),
+            Err(EditError::Internal(_))
+        ));
+    }
+}
