@@ -97,7 +97,8 @@ pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::I
 
 /// Writes `bytes` to `path` through a temporary file in the same directory,
 /// synced, then renamed over `path`. On any failure the temporary file is
-/// removed and an existing `path` is left as it was.
+/// removed and an existing `path` is left as it was. A symbolic link is
+/// followed: the file it points to is replaced, the link is kept.
 ///
 /// An existing path that is not a regular file (`/dev/stdout`, a FIFO,
 /// `/dev/full`) is written directly: renaming over it would replace the
@@ -107,6 +108,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         path: path.to_owned(),
         source,
     };
+    // A symbolic link is written through: its target gets the new bytes
+    // and the link stays a link.
+    let target = through_links(path);
+    let path = target.as_path();
     if let Ok(meta) = std::fs::metadata(path)
         && !meta.is_file()
         && !meta.is_dir()
@@ -157,6 +162,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     file.as_file().sync_all().map_err(io_error)?;
     file.persist(path).map_err(|e| io_error(e.error))?;
     Ok(())
+}
+
+/// The file `path` names once symbolic links are followed (at most 40, as
+/// the kernel does); a dangling link gives the path it points to.
+pub fn through_links(path: &Path) -> std::path::PathBuf {
+    let mut p = path.to_owned();
+    for _ in 0..40 {
+        let Ok(target) = std::fs::read_link(&p) else {
+            break;
+        };
+        p = match p.parent() {
+            Some(dir) => dir.join(target),
+            None => target,
+        };
+    }
+    p
 }
 
 #[cfg(test)]
