@@ -1,8 +1,8 @@
 //! The app's logic without a display: the render worker (newest request
 //! wins, stale events dropped, cancellation), the picture assembled from
 //! tiles, the file watcher (atomic rename, plain write, delete and
-//! recreate, debounced), and the document (broken saves, conflicts,
-//! save-back).
+//! recreate, debounced), and the document's broken saves. Editing, undo,
+//! save-back and merges are tests/editing.rs.
 #![cfg(feature = "gui")]
 
 use egui_kittest::kittest::Queryable;
@@ -285,13 +285,13 @@ fn document_on(text: &str) -> (tempfile::TempDir, std::path::PathBuf, Document) 
 #[test]
 fn a_broken_save_keeps_the_last_good_scene_and_shows_the_error() {
     let (_dir, path, mut doc) = document_on(&scene_text(0.1, 8));
-    let good = doc.scene.clone();
+    let good = doc.scene().clone();
     let error = scene::load(&path).err();
     assert!(error.is_none());
     std::fs::write(&path, "<scene><camera width=\"0\"").unwrap();
     let error = scene::load(&path).unwrap_err();
     assert_eq!(doc.file_broken(&error), Reload::Broken);
-    assert_eq!(doc.scene, good);
+    assert_eq!(doc.scene(), &good);
     assert!(
         doc.error()
             .unwrap()
@@ -304,7 +304,7 @@ fn a_broken_save_keeps_the_last_good_scene_and_shows_the_error() {
         Reload::Replaced
     );
     assert!(doc.error().is_none());
-    assert_eq!(doc.scene.objects[0].color.x, 0.7);
+    assert_eq!(doc.scene().objects[0].color.x, 0.7);
     // The same content again is not a change.
     assert_eq!(
         doc.file_loaded(text.clone(), parse(&text)),
@@ -312,49 +312,6 @@ fn a_broken_save_keeps_the_last_good_scene_and_shows_the_error() {
     );
     doc.file_missing();
     assert_eq!(doc.state(), &FileState::Missing);
-}
-
-#[test]
-fn a_file_change_never_silently_drops_unsaved_edits() {
-    let (_dir, _path, mut doc) = document_on(&scene_text(0.1, 8));
-    doc.scene.objects[0].material.ka = 0.9;
-    assert!(doc.has_unsaved_edits());
-    let text = scene_text(0.6, 8);
-    assert_eq!(
-        doc.file_loaded(text.clone(), parse(&text)),
-        Reload::Conflict
-    );
-    assert!(doc.has_conflict());
-    assert_eq!(doc.scene.objects[0].material.ka, 0.9, "edits still there");
-    doc.keep_edits();
-    assert!(!doc.has_conflict());
-    assert_eq!(doc.scene.objects[0].material.ka, 0.9);
-
-    let text = scene_text(0.8, 8);
-    assert_eq!(
-        doc.file_loaded(text.clone(), parse(&text)),
-        Reload::Conflict
-    );
-    doc.take_file_version();
-    assert_eq!(doc.scene.objects[0].color.x, 0.8);
-    assert!(!doc.has_unsaved_edits());
-}
-
-#[test]
-fn saving_edits_keeps_the_comments_and_reloads_equal() {
-    let original = scene_text(0.1, 8);
-    let (_dir, path, mut doc) = document_on(&original);
-    doc.scene.objects[0].material.kd = 0.75;
-    doc.scene.model.illumination = scene::Illumination::Lambert;
-    doc.save().unwrap();
-    assert!(!doc.has_unsaved_edits());
-    let saved = std::fs::read_to_string(&path).unwrap();
-    assert!(saved.contains("<!-- a comment that save-back must keep -->"));
-    assert!(saved.contains(r#"<color red="0.1" green="0.5" blue="0.25"/>"#));
-    let reloaded = scene::load(&path).unwrap();
-    assert_eq!(reloaded, doc.scene);
-    // Our own save seen by the watcher is not a change.
-    assert_eq!(doc.file_loaded(saved, reloaded), Reload::Unchanged);
 }
 
 /// Steps the app until its preview is finished and equals `expected`
@@ -393,7 +350,7 @@ fn a_panel_edit_renders_the_edited_scene() {
     harness.run_steps(2);
     let app = harness.state();
     assert_eq!(
-        app.document().scene.model.illumination,
+        app.document().scene().model.illumination,
         scene::Illumination::Lambert
     );
     assert!(app.document().has_unsaved_edits());
@@ -403,7 +360,7 @@ fn a_panel_edit_renders_the_edited_scene() {
     );
 
     // The picture becomes the lambert render, as the CLI would draw it.
-    let expected = render::render(&app.document().scene, &RenderOptions::default()).unwrap();
+    let expected = render::render(app.document().scene(), &RenderOptions::default()).unwrap();
     until_the_picture_is(&mut harness, &expected, "the edited scene");
 }
 
@@ -557,7 +514,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
     harness.run_steps(2);
     assert_eq!(harness.state().preview_methods().preview.name, "draft");
     // …and the picture becomes the draft render.
-    let scene = harness.state().document().scene.clone();
+    let scene = harness.state().document().scene().clone();
     let expected = render::render(
         &scene,
         &RenderOptions {

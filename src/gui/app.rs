@@ -2,16 +2,19 @@
 //! file watcher, the render worker and the picture on screen.
 //!
 //! State is small and owned here; the work is elsewhere: the worker renders,
-//! the watcher reads files, [`Document`] keeps the text and the edits,
-//! [`Preview`] assembles tiles.
+//! the watcher reads files, [`Document`] keeps the text, the edits and
+//! their undo, [`Preview`] assembles tiles. Every menu item and key is a
+//! [`Command`], carried out in one place ([`RayOfLightApp::run`]), which
+//! also asks before anything drops unsaved edits or replaces a file.
 
-use super::document::{Document, FileState, Reload};
-use super::panel;
+use super::document::{Document, FileState, Reload, SaveError};
+use super::panel::{self, Selection};
 use super::preview::{Preview, RenderState};
 use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
 use super::worker::{Event, Worker};
 use crate::render::{self, RenderOptions};
+use crate::scene::merge::Choice;
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, Pos2, Rect, Sense, TextureOptions, Vec2};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
@@ -23,6 +26,62 @@ const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O)
 const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
 const EXPORT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::E);
 const QUIT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Q);
+const UNDO: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
+const REDO: KeyboardShortcut =
+    KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::Z);
+const REDO_Y: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
+
+/// Everything the menus and keys can ask for.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// The Open dialog.
+    Open,
+    /// The plain path field for opening.
+    OpenPath,
+    /// Open this file (Recent, a drop, a dialog's or field's answer).
+    OpenFile(PathBuf),
+    OpenBuiltin,
+    /// Read the file again, dropping unsaved edits.
+    Reload,
+    Save,
+    /// The Save as dialog.
+    SaveAs,
+    /// The plain path field for Save as.
+    SaveAsPath,
+    /// Save to this file (asks first if it is another existing file).
+    SaveTo(PathBuf),
+    Export,
+    ExportPath,
+    RevertEdits,
+    Undo,
+    Redo,
+    Quit,
+    Fit,
+    OneToOne,
+    ZoomIn,
+    ZoomOut,
+    CancelRender,
+    Study,
+}
+
+impl Command {
+    /// Whether carrying it out drops unsaved edits.
+    fn drops_edits(&self) -> bool {
+        matches!(
+            self,
+            Command::OpenFile(_) | Command::OpenBuiltin | Command::Reload | Command::Quit
+        )
+    }
+}
+
+/// A question the app is waiting on.
+#[derive(Debug, Clone, PartialEq)]
+enum Confirm {
+    /// `Command` would drop unsaved edits.
+    Discard(Command),
+    /// Save as would replace this existing file.
+    Replace(PathBuf),
+}
 
 /// How the picture is placed in the central area.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -59,6 +118,22 @@ enum Background {
     Dialog(DialogKind, Option<PathBuf>, Duration),
 }
 
+/// An answer to a [`Confirm`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Answer {
+    Go,
+    SaveThen,
+    Cancel,
+}
+
+/// Whether two paths name the same file (through links).
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
+}
+
 /// A plain path field, offered where no file dialog can open.
 struct PathPrompt {
     kind: DialogKind,
@@ -87,7 +162,11 @@ pub struct RayOfLightApp {
     background_tx: Sender<Background>,
     path_prompt: Option<PathPrompt>,
     view: View,
-    selected: Option<usize>,
+    selection: Selection,
+    /// A question waiting for an answer.
+    confirm: Option<Confirm>,
+    /// The user's choice for each conflict of the pending merge.
+    conflict_choices: Vec<Choice>,
     /// Anti-aliasing of the preview and of exports.
     aa: u32,
     /// The live preview's method (auto unless chosen in the Study window)
@@ -106,8 +185,6 @@ pub struct RayOfLightApp {
     hovered: Option<(u32, u32, [u8; 3])>,
     /// The window title last sent.
     title: String,
-    /// The window's close was held back for unsaved edits: ask.
-    confirm_close: bool,
     /// The user chose to quit without saving.
     allow_close: bool,
     /// Print the status figures to stderr once a second (RAYOFLIGHT_STATS).
@@ -132,13 +209,14 @@ impl RayOfLightApp {
             background,
             background_tx,
             title: String::new(),
-            confirm_close: false,
             allow_close: false,
             stats: std::env::var_os("RAYOFLIGHT_STATS").is_some(),
             last_stats: Instant::now(),
             path_prompt: None,
             view: View::default(),
-            selected: None,
+            selection: Selection::default(),
+            confirm: None,
+            conflict_choices: Vec::new(),
             aa: 1,
             methods: PreviewMethods::default(),
             rendered_dragging: false,
@@ -152,6 +230,107 @@ impl RayOfLightApp {
         app.watch();
         app.request_render();
         app
+    }
+
+    /// Carries out a command from a menu or a key. Commands that would drop
+    /// unsaved edits ask first.
+    pub fn run(&mut self, command: Command) {
+        if command.drops_edits() && self.doc.has_unsaved_edits() {
+            self.confirm = Some(Confirm::Discard(command));
+            return;
+        }
+        self.execute(command);
+    }
+
+    fn execute(&mut self, command: Command) {
+        match command {
+            Command::Open => self.start_dialog(DialogKind::Open),
+            Command::OpenPath => self.path_prompt = Some(PathPrompt::new(DialogKind::Open)),
+            Command::OpenFile(path) => self.open(&path),
+            Command::OpenBuiltin => self.replace_document(Document::builtin()),
+            Command::Reload => match self.doc.path().map(Path::to_owned) {
+                Some(path) => self.open(&path),
+                None => self.replace_document(Document::builtin()),
+            },
+            Command::Save => self.save(),
+            Command::SaveAs => self.start_dialog(DialogKind::SaveAs),
+            Command::SaveAsPath => self.path_prompt = Some(PathPrompt::new(DialogKind::SaveAs)),
+            Command::SaveTo(path) => {
+                let other_file = path.exists()
+                    && self
+                        .doc
+                        .path()
+                        .is_none_or(|current| !same_file(current, &path));
+                if other_file {
+                    self.confirm = Some(Confirm::Replace(path));
+                } else {
+                    self.save_as(&path);
+                }
+            }
+            Command::Export => self.start_dialog(DialogKind::Export),
+            Command::ExportPath => self.path_prompt = Some(PathPrompt::new(DialogKind::Export)),
+            Command::RevertEdits => {
+                self.doc.revert();
+                self.after_edit();
+            }
+            Command::Undo => {
+                if let Some(label) = self.doc.undo() {
+                    self.notify(format!("undid {label}"));
+                    self.after_edit();
+                }
+            }
+            Command::Redo => {
+                if let Some(label) = self.doc.redo() {
+                    self.notify(format!("redid {label}"));
+                    self.after_edit();
+                }
+            }
+            Command::Quit => {
+                self.allow_close = true;
+                self.ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+            Command::Fit => self.view.fit = true,
+            Command::OneToOne => {
+                self.view = View {
+                    fit: false,
+                    ..View::default()
+                }
+            }
+            Command::ZoomIn => {
+                self.view.zoom = (self.view.zoom * 1.25).min(64.0);
+                self.view.fit = false;
+            }
+            Command::ZoomOut => {
+                self.view.zoom = (self.view.zoom / 1.25).max(1.0 / 64.0);
+                self.view.fit = false;
+            }
+            Command::CancelRender => self.worker.cancel(),
+            Command::Study => {
+                self.study.open = true;
+                self.study.set_plan(self.doc.scene());
+            }
+        }
+    }
+
+    /// The scene changed (an edit, undo, redo, a reload): drop a selection
+    /// that no longer exists and render.
+    fn after_edit(&mut self) {
+        if self
+            .selection
+            .object
+            .is_some_and(|n| n >= self.doc.scene().objects.len())
+        {
+            self.selection = Selection::default();
+        }
+        self.request_render();
+    }
+
+    fn replace_document(&mut self, doc: Document) {
+        self.doc = doc;
+        self.selection = Selection::default();
+        self.view = View::default();
+        self.watch();
+        self.request_render();
     }
 
     /// (Re)starts watching the document's file, if it has one.
@@ -193,15 +372,25 @@ impl RayOfLightApp {
     /// while-dragging method when one is set and a button is held.
     fn request_render(&mut self) {
         let dragging = self.methods.dragging.is_some() && self.ctx.input(|i| i.pointer.any_down());
-        let options = self.methods.options(&self.doc.scene, dragging, self.aa);
+        let options = self.methods.options(self.doc.scene(), dragging, self.aa);
         self.rendered_dragging = dragging;
         let generation = self
             .worker
-            .request(Arc::new(self.doc.scene.clone()), options);
+            .request(Arc::new(self.doc.scene().clone()), options);
         self.study.superseded(generation);
         if self.study.open {
-            self.study.set_plan(&self.doc.scene);
+            self.study.set_plan(self.doc.scene());
         }
+    }
+
+    /// Selects the object seen at image position (`x`, `y`) and opens it
+    /// in the panel, once (a click in the picture).
+    pub fn pick(&mut self, x: f64, y: f64) {
+        let prepared = render::prepare(self.doc.scene(), &RenderOptions::default());
+        self.selection = Selection {
+            object: prepared.pick(x, y),
+            reveal: true,
+        };
     }
 
     /// The live preview's methods (for tests).
@@ -221,11 +410,11 @@ impl RayOfLightApp {
         );
         let scene = crate::study::StudyScene {
             name: name.clone(),
-            scene: self.doc.scene.clone(),
+            scene: self.doc.scene().clone(),
         };
         let generation = self.worker.study(scene, self.study.runs);
         self.study.started(generation, name);
-        self.study.set_plan(&self.doc.scene);
+        self.study.set_plan(self.doc.scene());
     }
 
     /// Does what the Study window asked.
@@ -245,32 +434,27 @@ impl RayOfLightApp {
         }
     }
 
-    /// Replaces the document by the file at `path`.
+    /// Replaces the document by the file at `path` (the caller asked about
+    /// unsaved edits). A file that does not load opens with its error shown.
     fn open(&mut self, path: &Path) {
-        if self.doc.has_unsaved_edits() {
-            self.notify("unsaved edits were discarded".into());
-        }
         match Document::open(path) {
-            Ok(doc) => {
-                self.doc = doc;
-                self.selected = None;
-                self.view = View::default();
-                self.watch();
-                self.request_render();
-            }
+            Ok(doc) => self.replace_document(doc),
             Err(e) => self.notify(e.to_string()),
         }
     }
 
     fn save(&mut self) {
-        if self.doc.path().is_none() {
-            self.start_dialog(DialogKind::SaveAs);
-            return;
-        }
         match self.doc.save() {
-            Ok(()) => self.notify("saved".into()),
-            Err(e) => self.notify(format!("save failed: {e}")),
+            Ok(Reload::Merged) => self.notify("merged the file's changes and saved".into()),
+            Ok(_) => self.notify("saved".into()),
+            Err(SaveError::NoPath) => self.start_dialog(DialogKind::SaveAs),
+            Err(SaveError::Conflict) => {
+                self.notify("the file changed on disk: choose between the versions".into())
+            }
+            Err(e) => self.notify(format!("not saved: {e}")),
         }
+        // A merge may have brought the file's changes in.
+        self.request_render();
     }
 
     fn save_as(&mut self, path: &Path) {
@@ -279,7 +463,7 @@ impl RayOfLightApp {
                 self.notify(format!("saved as {}", path.display()));
                 self.watch();
             }
-            Err(e) => self.notify(format!("save failed: {e}")),
+            Err(e) => self.notify(format!("not saved: {e}")),
         }
     }
 
@@ -290,7 +474,7 @@ impl RayOfLightApp {
             self.notify(e.to_string());
             return;
         }
-        let scene = self.doc.scene.clone();
+        let scene = self.doc.scene().clone();
         // Exports are exact whatever the preview uses: auto's options.
         let options = RenderOptions {
             threads: Some(Worker::default_threads()),
@@ -349,8 +533,8 @@ impl RayOfLightApp {
 
     fn path_chosen(&mut self, kind: DialogKind, path: PathBuf) {
         match kind {
-            DialogKind::Open => self.open(&path),
-            DialogKind::SaveAs => self.save_as(&path),
+            DialogKind::Open => self.run(Command::OpenFile(path)),
+            DialogKind::SaveAs => self.run(Command::SaveTo(path)),
             DialogKind::Export => self.export(path),
         }
     }
@@ -389,11 +573,15 @@ impl RayOfLightApp {
 
     fn file_event(&mut self, event: FileEvent) {
         match event {
-            FileEvent::Loaded(text, scene) => {
-                if self.doc.file_loaded(text, *scene) == Reload::Replaced {
-                    self.request_render();
+            FileEvent::Loaded(text, scene) => match self.doc.file_loaded(text, *scene) {
+                Reload::Replaced => self.after_edit(),
+                Reload::Merged => {
+                    self.notify("the file changed on disk: your edits were applied onto it".into());
+                    self.after_edit();
                 }
-            }
+                Reload::Conflict => self.conflict_choices.clear(),
+                Reload::Unchanged | Reload::Broken => {}
+            },
             FileEvent::Broken(error) => {
                 self.doc.file_broken(&error);
             }
@@ -402,123 +590,126 @@ impl RayOfLightApp {
     }
 
     fn shortcuts(&mut self, ctx: &egui::Context) {
-        if ctx.input_mut(|i| i.consume_shortcut(&OPEN)) {
-            self.start_dialog(DialogKind::Open);
+        // A question on screen takes the keys.
+        if self.confirm.is_some() || self.doc.conflict().is_some() || self.path_prompt.is_some() {
+            return;
         }
-        if ctx.input_mut(|i| i.consume_shortcut(&SAVE)) {
-            self.save();
+        let mut commands = Vec::new();
+        // Redo before undo: Ctrl+Shift+Z also matches Ctrl+Z.
+        for (shortcut, command) in [
+            (OPEN, Command::Open),
+            (SAVE, Command::Save),
+            (EXPORT, Command::Export),
+            (QUIT, Command::Quit),
+        ] {
+            if ctx.input_mut(|i| i.consume_shortcut(&shortcut)) {
+                commands.push(command);
+            }
         }
-        if ctx.input_mut(|i| i.consume_shortcut(&EXPORT)) {
-            self.start_dialog(DialogKind::Export);
+        // Undo and redo belong to a text field while one is being typed in.
+        if !ctx.egui_wants_keyboard_input() {
+            for (shortcut, command) in [
+                (REDO, Command::Redo),
+                (REDO_Y, Command::Redo),
+                (UNDO, Command::Undo),
+            ] {
+                if ctx.input_mut(|i| i.consume_shortcut(&shortcut)) {
+                    commands.push(command);
+                }
+            }
+            ctx.input(|i| {
+                for (key, command) in [
+                    (Key::F, Command::Fit),
+                    (Key::Num1, Command::OneToOne),
+                    (Key::Plus, Command::ZoomIn),
+                    (Key::Equals, Command::ZoomIn),
+                    (Key::Minus, Command::ZoomOut),
+                    (Key::Escape, Command::CancelRender),
+                ] {
+                    if i.key_pressed(key) && i.modifiers.is_none() {
+                        commands.push(command);
+                    }
+                }
+            });
         }
-        if ctx.input_mut(|i| i.consume_shortcut(&QUIT)) {
-            // Through the close request, so unsaved edits are asked about.
-            ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-        }
-        let dropped: Vec<PathBuf> = ctx.input(|i| {
+        let dropped: Option<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files
                 .iter()
                 .map(|f| f.path().to_owned())
-                .collect()
+                .next()
         });
-        if let Some(path) = dropped.into_iter().next() {
-            self.open(&path);
+        if let Some(path) = dropped {
+            commands.push(Command::OpenFile(path));
         }
-        if ctx.egui_wants_keyboard_input() {
-            return;
-        }
-        ctx.input(|i| {
-            if i.key_pressed(Key::F) {
-                self.view.fit = true;
-            }
-            if i.key_pressed(Key::Num1) {
-                self.view = View {
-                    fit: false,
-                    ..View::default()
-                };
-            }
-            if i.key_pressed(Key::Plus) || i.key_pressed(Key::Equals) {
-                self.view.zoom = (self.view.zoom * 1.25).min(64.0);
-                self.view.fit = false;
-            }
-            if i.key_pressed(Key::Minus) {
-                self.view.zoom = (self.view.zoom / 1.25).max(1.0 / 64.0);
-                self.view.fit = false;
-            }
-        });
-        if ctx.input(|i| i.key_pressed(Key::Escape)) {
-            self.worker.cancel();
+        for command in commands {
+            self.run(command);
         }
     }
 
     fn menu_bar(&mut self, ui: &mut egui::Ui) {
+        let mut chosen = None;
+        let mut pick = |ui: &mut egui::Ui, enabled: bool, text: &str, command: Command| {
+            if ui.add_enabled(enabled, egui::Button::new(text)).clicked() {
+                chosen = Some(command);
+                ui.close();
+            }
+        };
+        let dirty = self.doc.has_unsaved_edits();
+        let has_file = self.doc.path().is_some();
+        let undo = self.doc.undo_label().map(|l| format!("Undo {l}  Ctrl+Z"));
+        let redo = self
+            .doc
+            .redo_label()
+            .map(|l| format!("Redo {l}  Ctrl+Shift+Z"));
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
-                if ui.button("Open…  Ctrl+O").clicked() {
-                    self.start_dialog(DialogKind::Open);
-                }
-                if ui.button("Open path…").clicked() {
-                    self.path_prompt = Some(PathPrompt::new(DialogKind::Open));
-                }
-                if ui.button("Open built-in example").clicked() {
-                    self.doc = Document::builtin();
-                    self.watch();
-                    self.request_render();
-                }
+                pick(ui, true, "Open…  Ctrl+O", Command::Open);
+                pick(ui, true, "Open path…", Command::OpenPath);
+                pick(ui, true, "Open built-in example", Command::OpenBuiltin);
                 ui.menu_button("Recent", |ui| {
                     if self.recent.is_empty() {
                         ui.label("(none)");
                     }
-                    for path in self.recent.clone() {
-                        if ui.button(path.display().to_string()).clicked() {
-                            self.open(&path);
-                        }
+                    for path in &self.recent {
+                        pick(
+                            ui,
+                            true,
+                            &path.display().to_string(),
+                            Command::OpenFile(path.clone()),
+                        );
                     }
                 });
+                pick(ui, has_file, "Reload from disk", Command::Reload);
                 ui.separator();
-                if ui.button("Save  Ctrl+S").clicked() {
-                    self.save();
-                }
-                if ui.button("Save as…").clicked() {
-                    self.start_dialog(DialogKind::SaveAs);
-                }
-                if ui
-                    .add_enabled(
-                        self.doc.has_unsaved_edits(),
-                        egui::Button::new("Revert edits"),
-                    )
-                    .clicked()
-                {
-                    self.doc.revert();
-                    self.request_render();
-                }
+                pick(ui, true, "Save  Ctrl+S", Command::Save);
+                pick(ui, true, "Save as…", Command::SaveAs);
+                pick(ui, true, "Save as path…", Command::SaveAsPath);
+                pick(ui, dirty, "Revert edits", Command::RevertEdits);
                 ui.separator();
-                if ui.button("Export image…  Ctrl+E").clicked() {
-                    self.start_dialog(DialogKind::Export);
-                }
-                if ui.button("Export to path…").clicked() {
-                    self.path_prompt = Some(PathPrompt::new(DialogKind::Export));
-                }
+                pick(ui, true, "Export image…  Ctrl+E", Command::Export);
+                pick(ui, true, "Export to path…", Command::ExportPath);
                 ui.separator();
-                if ui.button("Quit  Ctrl+Q").clicked() {
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
-                }
+                pick(ui, true, "Quit  Ctrl+Q", Command::Quit);
+            });
+            ui.menu_button("Edit", |ui| {
+                pick(
+                    ui,
+                    undo.is_some(),
+                    undo.as_deref().unwrap_or("Undo  Ctrl+Z"),
+                    Command::Undo,
+                );
+                pick(
+                    ui,
+                    redo.is_some(),
+                    redo.as_deref().unwrap_or("Redo  Ctrl+Shift+Z"),
+                    Command::Redo,
+                );
             });
             ui.menu_button("View", |ui| {
-                if ui.button("Fit  F").clicked() {
-                    self.view.fit = true;
-                }
-                if ui.button("1:1  1").clicked() {
-                    self.view = View {
-                        fit: false,
-                        ..View::default()
-                    };
-                }
-                if ui.button("Study…").clicked() {
-                    self.study.open = true;
-                    self.study.set_plan(&self.doc.scene);
-                }
+                pick(ui, true, "Fit  F", Command::Fit);
+                pick(ui, true, "1:1  1", Command::OneToOne);
+                pick(ui, true, "Study…", Command::Study);
                 ui.separator();
                 ui.label("Anti-aliasing");
                 for aa in [1, 2, 3, 4] {
@@ -532,6 +723,14 @@ impl RayOfLightApp {
                 }
             });
         });
+        if let Some(command) = chosen {
+            // Quit goes through the window's close, which asks about edits.
+            if command == Command::Quit {
+                self.ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            } else {
+                self.run(command);
+            }
+        }
     }
 
     fn error_banner(&mut self, ui: &mut egui::Ui) {
@@ -587,7 +786,7 @@ impl RayOfLightApp {
                     ui.label(format!("{:.2} Mrays/s", rays as f64 / secs / 1e6));
                 }
                 ui.separator();
-                let camera = &self.doc.scene.camera;
+                let camera = &self.doc.scene().camera;
                 ui.label(format!("{}×{}", camera.width, camera.height));
                 ui.separator();
                 ui.label(match self.doc.state() {
@@ -624,9 +823,15 @@ impl RayOfLightApp {
             .default_size(320.0)
             .show(ui, |ui| {
                 egui::ScrollArea::vertical().show(ui, |ui| {
-                    let changed = panel::scene_panel(ui, &mut self.doc.scene, &mut self.selected);
-                    if changed {
-                        self.request_render();
+                    let out = panel::scene_panel(ui, &self.doc, &mut self.selection);
+                    if !out.edits.is_empty() {
+                        match self.doc.apply_step(out.edits, out.dragging) {
+                            Ok(()) => self.after_edit(),
+                            Err(e) => self.notify(e.to_string()),
+                        }
+                    }
+                    if out.drag_ended {
+                        self.doc.end_drag();
                     }
                 });
             });
@@ -702,100 +907,191 @@ impl RayOfLightApp {
                     let rgb = self.preview.image().get_pixel(x, y).0;
                     self.hovered = Some((x, y, rgb));
                     if response.clicked() {
-                        let prepared = render::prepare(&self.doc.scene, &RenderOptions::default());
-                        self.selected = prepared.pick(f64::from(rel.x), f64::from(rel.y));
+                        self.pick(f64::from(rel.x), f64::from(rel.y));
                     }
                 }
             }
         });
     }
 
-    /// Holds back closing the window while the panel has unsaved edits.
+    /// Holds back closing the window while there are unsaved edits: ask.
     fn guard_close(&mut self, ctx: &egui::Context) {
         if ctx.input(|i| i.viewport().close_requested())
             && self.doc.has_unsaved_edits()
             && !self.allow_close
         {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            self.confirm_close = true;
+            self.confirm = Some(Confirm::Discard(Command::Quit));
         }
     }
 
     fn modals(&mut self, ui: &mut egui::Ui) {
-        if self.confirm_close {
-            egui::Modal::new(egui::Id::unique("confirm-close")).show(ui.ctx(), |ui| {
+        if let Some(confirm) = self.confirm.clone() {
+            self.confirm_modal(ui, confirm);
+        }
+        if self.doc.conflict().is_some() {
+            self.conflict_modal(ui);
+        }
+        self.path_prompt_modal(ui);
+    }
+
+    fn confirm_modal(&mut self, ui: &mut egui::Ui, confirm: Confirm) {
+        let mut answer = None;
+        egui::Modal::new(egui::Id::unique("confirm")).show(ui.ctx(), |ui| match &confirm {
+            Confirm::Discard(command) => {
                 ui.heading("Unsaved edits");
-                ui.label("The panel has edits that are not in the scene file.");
-                ui.horizontal(|ui| {
-                    if self.doc.path().is_some() && ui.button("Save and quit").clicked() {
-                        self.save();
-                        if !self.doc.has_unsaved_edits() {
-                            self.allow_close = true;
-                            ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
-                        }
-                        self.confirm_close = false;
+                ui.label(format!(
+                    "{} has edits that are not saved. {}",
+                    self.doc.title(),
+                    match command {
+                        Command::Quit => "Quit anyway?",
+                        Command::Reload => "Reload the file and lose them?",
+                        _ => "Open another scene and lose them?",
                     }
-                    if ui.button("Quit without saving").clicked() {
-                        self.allow_close = true;
-                        self.confirm_close = false;
-                        ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                ));
+                ui.horizontal(|ui| {
+                    if ui.button("Save first").clicked() {
+                        answer = Some(Answer::SaveThen);
+                    }
+                    if ui.button("Discard edits").clicked() {
+                        answer = Some(Answer::Go);
                     }
                     if ui.button("Cancel").clicked() {
-                        self.confirm_close = false;
+                        answer = Some(Answer::Cancel);
                     }
                 });
-            });
-        }
-        if self.doc.has_conflict() {
-            egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
-                ui.heading("The file changed on disk");
-                ui.label(
-                    "The scene file was saved by another program, but the panel has unsaved edits.",
-                );
+            }
+            Confirm::Replace(path) => {
+                ui.heading("Replace the file?");
+                ui.label(format!("{} already exists.", path.display()));
                 ui.horizontal(|ui| {
-                    if ui.button("Load the file's version").clicked() {
-                        self.doc.take_file_version();
-                        self.request_render();
+                    if ui.button("Replace").clicked() {
+                        answer = Some(Answer::Go);
                     }
-                    if ui.button("Keep my edits").clicked() {
-                        self.doc.keep_edits();
+                    if ui.button("Cancel").clicked() {
+                        answer = Some(Answer::Cancel);
                     }
                 });
-            });
+            }
+        });
+        if ui.input(|i| i.key_pressed(Key::Escape)) {
+            answer = Some(Answer::Cancel);
         }
-        let mut chosen = None;
-        if let Some(prompt) = &mut self.path_prompt {
-            let mut close = false;
-            egui::Modal::new(egui::Id::unique("path-prompt")).show(ui.ctx(), |ui| {
-                ui.label(match prompt.kind {
-                    DialogKind::Open => "Open scene file:",
-                    DialogKind::SaveAs => "Save scene as:",
-                    DialogKind::Export => "Export image to (.png or .jpg):",
-                });
-                let edit = ui.text_edit_singleline(&mut prompt.text);
-                if !prompt.focused {
-                    edit.request_focus();
-                    prompt.focused = true;
+        let Some(answer) = answer else { return };
+        self.confirm = None;
+        match (answer, confirm) {
+            (Answer::Cancel, _) => {}
+            (Answer::Go, Confirm::Replace(path)) => self.save_as(&path),
+            (Answer::Go, Confirm::Discard(command)) => self.execute(command),
+            (Answer::SaveThen, Confirm::Discard(command)) => {
+                self.save();
+                // Saved (no conflict, no error): go on; else the edits stay.
+                if !self.doc.has_unsaved_edits() && self.doc.conflict().is_none() {
+                    self.execute(command);
                 }
-                if ui.input(|i| i.key_pressed(Key::Escape)) {
+            }
+            (Answer::SaveThen, Confirm::Replace(_)) => {}
+        }
+    }
+
+    /// The file changed on disk and some unsaved edits touch what it
+    /// changed: both values side by side, a choice for each.
+    fn conflict_modal(&mut self, ui: &mut egui::Ui) {
+        let Some(pending) = self.doc.conflict() else {
+            return;
+        };
+        let conflicts = pending.conflicts().to_vec();
+        self.conflict_choices
+            .resize(conflicts.len(), Choice::Theirs);
+        let mut done = None;
+        egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
+            ui.heading("The file changed on disk");
+            ui.label(
+                "Another program saved the scene file. Your other edits were applied onto its \
+                 version; these changed the same values. Choose, for each, which to keep:",
+            );
+            egui::Grid::new("conflicts").num_columns(3).show(ui, |ui| {
+                ui.strong("value");
+                ui.strong("yours");
+                ui.strong("the file's");
+                ui.end_row();
+                for (c, choice) in conflicts.iter().zip(self.conflict_choices.iter_mut()) {
+                    ui.label(&c.path);
+                    ui.add_enabled_ui(c.can_keep_yours, |ui| {
+                        ui.radio_value(choice, Choice::Mine, &c.yours);
+                    });
+                    ui.radio_value(choice, Choice::Theirs, &c.theirs);
+                    ui.end_row();
+                }
+            });
+            ui.horizontal(|ui| {
+                if ui.button("Apply these choices").clicked() {
+                    done = Some(self.conflict_choices.clone());
+                }
+                if ui.button("Keep all of mine").clicked() {
+                    done = Some(
+                        conflicts
+                            .iter()
+                            .map(|c| {
+                                if c.can_keep_yours {
+                                    Choice::Mine
+                                } else {
+                                    Choice::Theirs
+                                }
+                            })
+                            .collect(),
+                    );
+                }
+                if ui.button("Take all of the file's").clicked() {
+                    done = Some(vec![Choice::Theirs; conflicts.len()]);
+                }
+            });
+        });
+        if let Some(choices) = done {
+            match self.doc.resolve(&choices) {
+                Ok(_) => self.notify("merged".into()),
+                Err(e) => self.notify(format!("not saved: {e}")),
+            }
+            self.conflict_choices.clear();
+            self.after_edit();
+        }
+    }
+
+    fn path_prompt_modal(&mut self, ui: &mut egui::Ui) {
+        let mut chosen = None;
+        let Some(prompt) = &mut self.path_prompt else {
+            return;
+        };
+        let mut close = false;
+        egui::Modal::new(egui::Id::unique("path-prompt")).show(ui.ctx(), |ui| {
+            ui.label(match prompt.kind {
+                DialogKind::Open => "Open scene file:",
+                DialogKind::SaveAs => "Save scene as:",
+                DialogKind::Export => "Export image to (.png or .jpg):",
+            });
+            let edit = ui.text_edit_singleline(&mut prompt.text);
+            if !prompt.focused {
+                edit.request_focus();
+                prompt.focused = true;
+            }
+            if ui.input(|i| i.key_pressed(Key::Escape)) {
+                close = true;
+            }
+            ui.horizontal(|ui| {
+                let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+                if (ui.button("OK").clicked() || enter) && !prompt.text.trim().is_empty() {
+                    chosen = Some(PathBuf::from(prompt.text.trim()));
                     close = true;
                 }
-                ui.horizontal(|ui| {
-                    let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
-                    if (ui.button("OK").clicked() || enter) && !prompt.text.trim().is_empty() {
-                        chosen = Some(PathBuf::from(prompt.text.trim()));
-                        close = true;
-                    }
-                    if ui.button("Cancel").clicked() {
-                        close = true;
-                    }
-                });
-            });
-            if close {
-                let prompt = self.path_prompt.take();
-                if let (Some(prompt), Some(path)) = (prompt, chosen) {
-                    self.path_chosen(prompt.kind, path);
+                if ui.button("Cancel").clicked() {
+                    close = true;
                 }
+            });
+        });
+        if close {
+            let prompt = self.path_prompt.take();
+            if let (Some(prompt), Some(path)) = (prompt, chosen) {
+                self.path_chosen(prompt.kind, path);
             }
         }
     }

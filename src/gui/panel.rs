@@ -1,277 +1,362 @@
-//! The side panel: every value of the scene as a widget. Each function
-//! edits the scene in place and returns whether anything changed, so the
-//! app can ask for a new render at once.
+//! The side panel: every value of the scene as a widget.
+//!
+//! The panel holds no values of its own and never changes the scene: it
+//! shows the document's scene and returns the [`Edit`]s the user made this
+//! frame, which the app applies through the document (and so through undo).
+//! A widget that is only shown can therefore never change a value: drag
+//! ranges come from the loader's limits and never clamp a loaded value,
+//! numbers are shown in the shortest form that reads back exactly, and
+//! pressing Enter in a field without typing changes nothing.
 
-use crate::math::{Transform, TransformStep, Vec3};
-use crate::scene::{Illumination, Light, Material, Model, Object, Scene, Shape};
-use egui::{CollapsingHeader, DragValue, Ui};
+use std::ops::RangeInclusive;
 
-/// The whole panel. `selected` is the object picked in the image, opened
-/// and highlighted here.
-pub fn scene_panel(ui: &mut Ui, scene: &mut Scene, selected: &mut Option<usize>) -> bool {
-    let mut changed = false;
-    ui.heading("Illumination");
-    changed |= model_editor(ui, &mut scene.model);
-    ui.separator();
-    CollapsingHeader::new("Camera")
-        .default_open(true)
-        .show(ui, |ui| changed |= camera_editor(ui, scene));
-    ui.separator();
-    changed |= objects_editor(ui, &mut scene.objects, selected);
-    ui.separator();
-    changed |= lights_editor(ui, &mut scene.lights);
-    changed
+use super::document::Document;
+use crate::math::{TransformStep, Vec3};
+use crate::scene::edit::{
+    Axis, Channel, Coef, Edit, Field, Item, NewElement, Owner, StepAttr, Value, number_text,
+};
+use crate::scene::{Illumination, Model, Scene};
+use egui::{CollapsingHeader, DragValue, Response, Ui};
+
+/// The object picked in the picture.
+#[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
+pub struct Selection {
+    pub object: Option<usize>,
+    /// Open and scroll to it once (set by a pick, cleared when done).
+    pub reveal: bool,
 }
 
-fn model_editor(ui: &mut Ui, model: &mut Model) -> bool {
-    let mut changed = false;
+/// What the user did in the panel this frame.
+#[derive(Debug, Default)]
+pub struct PanelOutput {
+    /// Edits made together (one undo step), if any.
+    pub edits: Vec<Edit>,
+    /// The edits come from a drag still in progress.
+    pub dragging: bool,
+    /// A drag of a value ended this frame.
+    pub drag_ended: bool,
+}
+
+/// Collects the edits of one frame.
+struct Form<'s> {
+    scene: &'s Scene,
+    out: PanelOutput,
+}
+
+impl Form<'_> {
+    fn note(&mut self, response: &Response) {
+        if response.drag_stopped() {
+            self.out.drag_ended = true;
+        }
+    }
+
+    fn set(&mut self, field: Field, value: Value, response: &Response) {
+        self.out.dragging |= response.dragged();
+        self.out.edits.push(Edit::Set(field, value));
+    }
+
+    /// A number field. `range` is what dragging and typing may reach; a
+    /// loaded value outside it is shown as it is.
+    fn number(
+        &mut self,
+        ui: &mut Ui,
+        field: Field,
+        speed: f64,
+        range: RangeInclusive<f64>,
+        prefix: &str,
+    ) -> Response {
+        let Ok(Value::Number(old)) = field.get(self.scene) else {
+            return ui.label("?");
+        };
+        let mut value = old;
+        let response = ui.add(
+            DragValue::new(&mut value)
+                .speed(speed)
+                .range(range)
+                .clamp_existing_to_range(false)
+                .custom_formatter(|v, _| number_text(v))
+                .prefix(prefix),
+        );
+        self.note(&response);
+        if response.changed() && value.to_bits() != old.to_bits() {
+            self.set(field, Value::Number(value), &response);
+        }
+        response
+    }
+
+    /// An angle in radians (as the file holds it), shown in degrees.
+    fn angle(&mut self, ui: &mut Ui, field: Field) -> Response {
+        let Ok(Value::Number(radians)) = field.get(self.scene) else {
+            return ui.label("?");
+        };
+        let old = radians.to_degrees();
+        let mut degrees = old;
+        let response = ui.add(
+            DragValue::new(&mut degrees)
+                .speed(1.0)
+                .custom_formatter(|v, _| number_text(v))
+                .suffix("°"),
+        );
+        self.note(&response);
+        // Compared in degrees, as shown: Enter on an untouched field gives
+        // back the same degrees and no edit (the radians would not round
+        // trip through degrees).
+        if response.changed() && degrees.to_bits() != old.to_bits() {
+            self.set(field, Value::Number(degrees.to_radians()), &response);
+        }
+        response
+    }
+
+    fn integer(&mut self, ui: &mut Ui, field: Field, range: RangeInclusive<u64>) -> Response {
+        let Ok(Value::Integer(old)) = field.get(self.scene) else {
+            return ui.label("?");
+        };
+        let mut value = old;
+        let response = ui.add(
+            DragValue::new(&mut value)
+                .range(range)
+                .clamp_existing_to_range(false),
+        );
+        self.note(&response);
+        if response.changed() && value != old {
+            self.set(field, Value::Integer(value), &response);
+        }
+        response
+    }
+
+    fn edit(&mut self, edit: Edit) {
+        self.out.edits.push(edit);
+    }
+}
+
+/// The whole panel for `doc`'s scene.
+pub fn scene_panel(ui: &mut Ui, doc: &Document, selection: &mut Selection) -> PanelOutput {
+    let mut form = Form {
+        scene: doc.scene(),
+        out: PanelOutput::default(),
+    };
+    ui.add_enabled_ui(!doc.is_placeholder(), |ui| {
+        ui.heading("Illumination");
+        model_editor(ui, &mut form);
+        ui.separator();
+        CollapsingHeader::new("Camera")
+            .default_open(true)
+            .show(ui, |ui| camera_editor(ui, &mut form));
+        ui.separator();
+        objects_editor(ui, &mut form, doc, selection);
+        ui.separator();
+        lights_editor(ui, &mut form);
+    });
+    selection.reveal = false;
+    form.out
+}
+
+fn model_editor(ui: &mut Ui, form: &mut Form<'_>) {
+    let model = form.scene.model;
     ui.horizontal(|ui| {
         for illumination in Illumination::ALL {
-            changed |= ui
-                .selectable_value(&mut model.illumination, illumination, illumination.name())
-                .changed();
+            if ui
+                .selectable_label(model.illumination == illumination, illumination.name())
+                .clicked()
+                && model.illumination != illumination
+            {
+                form.edit(Edit::Set(Field::ModelType, Value::Model(illumination)));
+            }
         }
     });
     ui.add_enabled_ui(model.illumination == Illumination::Whitted, |ui| {
         ui.horizontal(|ui| {
             let label = ui.label("Reflection depth");
-            changed |= ui
-                .add(DragValue::new(&mut model.depth).range(0..=Model::MAX_DEPTH))
+            form.integer(ui, Field::ModelDepth, 0..=u64::from(Model::MAX_DEPTH))
                 .labelled_by(label.id)
-                .on_hover_text("Reflected rays followed from each primary ray (whitted only)")
-                .changed();
+                .on_hover_text("Reflected rays followed from each primary ray (whitted only)");
         });
     });
-    changed
 }
 
-fn camera_editor(ui: &mut Ui, scene: &mut Scene) -> bool {
-    let camera = &mut scene.camera;
-    let mut changed = false;
+fn camera_editor(ui: &mut Ui, form: &mut Form<'_>) {
     egui::Grid::new("camera").num_columns(2).show(ui, |ui| {
-        let label = ui.label("Width");
-        changed |= ui
-            .add(DragValue::new(&mut camera.width).range(1..=8192))
-            .labelled_by(label.id)
-            .changed();
-        ui.end_row();
-        let label = ui.label("Height");
-        changed |= ui
-            .add(DragValue::new(&mut camera.height).range(1..=8192))
-            .labelled_by(label.id)
-            .changed();
-        ui.end_row();
+        for (name, field) in [
+            ("Width", Field::CameraWidth),
+            ("Height", Field::CameraHeight),
+        ] {
+            let label = ui.label(name);
+            form.integer(ui, field, 1..=u64::from(u32::MAX))
+                .labelled_by(label.id);
+            ui.end_row();
+        }
         let label = ui.label("Eye distance");
-        changed |= ui
-            .add(
-                DragValue::new(&mut camera.eye_distance)
-                    .speed(0.05)
-                    .range(1e-6..=1e6),
-            )
-            .labelled_by(label.id)
-            .changed();
+        form.number(
+            ui,
+            Field::CameraEyeDistance,
+            0.05,
+            f64::MIN_POSITIVE..=f64::MAX,
+            "",
+        )
+        .labelled_by(label.id);
         ui.end_row();
     });
-    changed |= transform_editor(ui, "camera-transform", &mut camera.transform);
-    changed
+    transform_editor(ui, form, Owner::Camera, "camera-transform");
 }
 
-fn objects_editor(ui: &mut Ui, objects: &mut Vec<Object>, selected: &mut Option<usize>) -> bool {
-    let mut changed = false;
+fn objects_editor(ui: &mut Ui, form: &mut Form<'_>, doc: &Document, selection: &mut Selection) {
+    let scene = form.scene;
     ui.horizontal(|ui| {
-        ui.heading(format!("Objects ({})", objects.len()));
+        ui.heading(format!("Objects ({})", scene.objects.len()));
         if ui.small_button("+ sphere").clicked() {
-            objects.push(new_object(Shape::Sphere));
-            changed = true;
+            form.edit(Edit::add(scene, NewElement::Sphere));
         }
         if ui.small_button("+ plane").clicked() {
-            objects.push(new_object(Shape::Plane));
-            changed = true;
+            form.edit(Edit::add(scene, NewElement::Plane));
         }
     });
-    let mut remove = None;
-    for (index, object) in objects.iter_mut().enumerate() {
-        let is_selected = *selected == Some(index);
-        let title = format!("#{} {}", index + 1, object.shape.name());
-        let header = CollapsingHeader::new(if is_selected {
-            egui::RichText::new(title).strong()
-        } else {
-            egui::RichText::new(title)
-        })
-        .id_salt(("object", index));
-        let header = if is_selected {
-            header.open(Some(true))
-        } else {
-            header
-        };
+    for object in 0..scene.objects.len() {
+        let is_selected = selection.object == Some(object);
+        let title = egui::RichText::new(doc.object_label(object));
+        let mut header = CollapsingHeader::new(if is_selected { title.strong() } else { title })
+            .id_salt(("object", object));
+        // A pick in the picture opens the object once; after that the
+        // header folds and the panel scrolls as the user likes.
+        let reveal = is_selected && selection.reveal;
+        if reveal {
+            header = header.open(Some(true));
+        }
         let response = header.show(ui, |ui| {
-            changed |= color_editor(ui, &mut object.color);
-            changed |= material_editor(ui, index, &mut object.material);
-            changed |= transform_editor(ui, ("object-transform", index), &mut object.transform);
+            color_editor(ui, form, |channel| Field::Color { object, channel });
+            material_editor(ui, form, object);
+            transform_editor(
+                ui,
+                form,
+                Owner::Object(object),
+                ("object-transform", object),
+            );
             if ui.small_button("Remove object").clicked() {
-                remove = Some(index);
+                form.edit(Edit::Remove(Item::Object(object)));
             }
         });
         if response.header_response.clicked() {
-            *selected = Some(index);
+            selection.object = Some(object);
         }
-        if is_selected {
+        if reveal {
             response.header_response.scroll_to_me(None);
         }
     }
-    if let Some(index) = remove {
-        objects.remove(index);
-        *selected = None;
-        changed = true;
-    }
-    changed
 }
 
-fn new_object(shape: Shape) -> Object {
-    Object {
-        shape,
-        color: Vec3::ONE,
-        material: Material::default(),
-        transform: Transform::default(),
-    }
-}
-
-fn lights_editor(ui: &mut Ui, lights: &mut Vec<Light>) -> bool {
-    let mut changed = false;
+fn lights_editor(ui: &mut Ui, form: &mut Form<'_>) {
+    let scene = form.scene;
     ui.horizontal(|ui| {
-        ui.heading(format!("Lights ({})", lights.len()));
+        ui.heading(format!("Lights ({})", scene.lights.len()));
         if ui.small_button("+ light").clicked() {
-            lights.push(Light {
-                position: Vec3::new(0.0, -5.0, -5.0),
-                color: Vec3::ONE,
-            });
-            changed = true;
+            form.edit(Edit::add(scene, NewElement::Light));
         }
     });
-    let mut remove = None;
-    for (index, light) in lights.iter_mut().enumerate() {
-        CollapsingHeader::new(format!("Light {}", index + 1))
-            .id_salt(("light", index))
-            .default_open(lights_open_by_default(index))
+    for light in 0..scene.lights.len() {
+        CollapsingHeader::new(format!("Light {}", light + 1))
+            .id_salt(("light", light))
+            .default_open(light < 4)
             .show(ui, |ui| {
                 ui.horizontal(|ui| {
                     ui.label("Position");
-                    changed |= vec3_editor(ui, &mut light.position, 0.05);
+                    for axis in [Axis::X, Axis::Y, Axis::Z] {
+                        let field = Field::LightPosition { light, axis };
+                        let prefix = format!("{} ", axis.name());
+                        form.number(ui, field, 0.05, f64::MIN..=f64::MAX, &prefix);
+                    }
                 });
-                changed |= color_editor(ui, &mut light.color);
+                color_editor(ui, form, |channel| Field::LightColor { light, channel });
                 if ui.small_button("Remove light").clicked() {
-                    remove = Some(index);
+                    form.edit(Edit::Remove(Item::Light(light)));
                 }
             });
     }
-    if let Some(index) = remove {
-        lights.remove(index);
-        changed = true;
-    }
-    changed
-}
-
-fn lights_open_by_default(index: usize) -> bool {
-    index < 4
 }
 
 /// A colour: a picker for values in [0, 1] and exact fields, which also
 /// take values above 1 (a light of colour 2 is twice as bright).
-fn color_editor(ui: &mut Ui, color: &mut Vec3) -> bool {
-    let mut changed = false;
+fn color_editor(ui: &mut Ui, form: &mut Form<'_>, field: impl Fn(Channel) -> Field) {
+    let channels = [Channel::Red, Channel::Green, Channel::Blue];
+    let value = |channel| match field(channel).get(form.scene) {
+        Ok(Value::Number(v)) => v,
+        _ => 0.0,
+    };
+    let color = Vec3::new(
+        value(Channel::Red),
+        value(Channel::Green),
+        value(Channel::Blue),
+    );
     ui.horizontal(|ui| {
         ui.label("Colour");
-        let mut rgb = [color.x as f32, color.y as f32, color.z as f32];
-        if ui.color_edit_button_rgb(&mut rgb).changed() {
-            *color = Vec3::new(f64::from(rgb[0]), f64::from(rgb[1]), f64::from(rgb[2]));
-            changed = true;
+        let old = [color.x as f32, color.y as f32, color.z as f32];
+        let mut rgb = old;
+        let response = ui.color_edit_button_rgb(&mut rgb);
+        if response.changed() {
+            // Only the channels the picker moved: the others keep their
+            // exact values (f32 would round them).
+            for (i, channel) in channels.into_iter().enumerate() {
+                if rgb[i] != old[i] {
+                    form.set(field(channel), Value::Number(f64::from(rgb[i])), &response);
+                }
+            }
         }
-        for (value, name) in [
-            (&mut color.x, "R"),
-            (&mut color.y, "G"),
-            (&mut color.z, "B"),
-        ] {
-            changed |= ui
-                .add(
-                    DragValue::new(value)
-                        .speed(0.01)
-                        .range(0.0..=f64::MAX)
-                        .prefix(format!("{name} ")),
-                )
-                .changed();
+        for channel in channels {
+            let prefix = format!("{} ", &channel.name()[..1].to_uppercase());
+            form.number(ui, field(channel), 0.01, 0.0..=f64::MAX, &prefix);
         }
     });
-    changed
 }
 
-fn material_editor(ui: &mut Ui, index: usize, material: &mut Material) -> bool {
-    let mut changed = false;
-    egui::Grid::new(("material", index))
+fn material_editor(ui: &mut Ui, form: &mut Form<'_>, object: usize) {
+    egui::Grid::new(("material", object))
         .num_columns(2)
         .show(ui, |ui| {
-            for (name, value, max, hint) in [
-                ("ka", &mut material.ka, 1.0, "ambient coefficient"),
-                ("kd", &mut material.kd, 1.0, "diffuse coefficient"),
-                (
-                    "ks",
-                    &mut material.ks,
-                    1.0,
-                    "specular and reflection coefficient",
-                ),
-                ("m", &mut material.m, 200.0, "specular exponent (shininess)"),
+            for (coef, hint) in [
+                (Coef::Ka, "ambient coefficient"),
+                (Coef::Kd, "diffuse coefficient"),
+                (Coef::Ks, "specular and reflection coefficient"),
+                (Coef::M, "specular exponent (shininess)"),
             ] {
-                let label = ui.label(name).on_hover_text(hint);
-                changed |= ui
-                    .add(egui::Slider::new(value, 0.0..=max).clamping(egui::SliderClamping::Never))
-                    .labelled_by(label.id)
-                    .changed();
-                if *value < 0.0 {
-                    *value = 0.0;
-                }
+                let label = ui.label(coef.name()).on_hover_text(hint);
+                let speed = if coef == Coef::M { 0.5 } else { 0.01 };
+                form.number(
+                    ui,
+                    Field::Material { object, coef },
+                    speed,
+                    0.0..=f64::MAX,
+                    "",
+                )
+                .labelled_by(label.id);
                 ui.end_row();
             }
         });
-    changed
 }
 
-fn vec3_editor(ui: &mut Ui, v: &mut Vec3, speed: f64) -> bool {
-    let mut changed = false;
-    for (value, name) in [(&mut v.x, "x"), (&mut v.y, "y"), (&mut v.z, "z")] {
-        changed |= ui
-            .add(
-                DragValue::new(value)
-                    .speed(speed)
-                    .prefix(format!("{name} ")),
-            )
-            .changed();
-    }
-    changed
-}
-
-/// The steps of a transformation, editable, reorderable by removal and
-/// addition. A singular result (a zero scale) is not applied.
+/// The steps of a transformation: each editable or removable, new ones
+/// appended.
 fn transform_editor(
     ui: &mut Ui,
+    form: &mut Form<'_>,
+    owner: Owner,
     id: impl std::hash::Hash + std::fmt::Debug,
-    transform: &mut Transform,
-) -> bool {
-    let mut steps = transform.steps().to_vec();
-    let mut edited = false;
-    let mut remove = None;
+) {
+    let steps: Vec<TransformStep> = match owner {
+        Owner::Camera => form.scene.camera.transform.steps().to_vec(),
+        Owner::Object(n) => form.scene.objects[n].transform.steps().to_vec(),
+    };
     let title = match steps.len() {
         1 => "Transformation (1 step)".to_owned(),
         n => format!("Transformation ({n} steps)"),
     };
     CollapsingHeader::new(title).id_salt(id).show(ui, |ui| {
-        for (index, step) in steps.iter_mut().enumerate() {
+        for (k, step) in steps.iter().enumerate() {
             ui.horizontal(|ui| {
-                edited |= step_editor(ui, step);
+                step_editor(ui, form, owner, k, step);
                 if ui
-                    .small_button("✖")
+                    .small_button("×")
                     .on_hover_text("Remove this step")
                     .clicked()
                 {
-                    remove = Some(index);
+                    form.edit(Edit::Remove(Item::Step(owner, k)));
                 }
             });
         }
@@ -284,66 +369,40 @@ fn transform_editor(
                 ("rotate-z", TransformStep::RotateZ(0.0)),
                 ("scale", TransformStep::UniformScale(1.0)),
             ] {
-                if ui.small_button(label).clicked() {
-                    steps.push(step);
-                    edited = true;
+                if ui.small_button(label).clicked()
+                    && let Ok(edit) = Edit::add_step(form.scene, owner, step)
+                {
+                    form.edit(edit);
                 }
             }
         });
     });
-    if let Some(index) = remove {
-        steps.remove(index);
-        edited = true;
-    }
-    if !edited {
-        return false;
-    }
-    match Transform::from_steps(steps) {
-        Ok(t) => {
-            *transform = t;
-            true
-        }
-        Err(_) => false,
-    }
 }
 
-fn step_editor(ui: &mut Ui, step: &mut TransformStep) -> bool {
+fn step_editor(ui: &mut Ui, form: &mut Form<'_>, owner: Owner, k: usize, step: &TransformStep) {
+    let field = |attr| Field::Step {
+        owner,
+        step: k,
+        attr,
+    };
+    let xyz = |ui: &mut Ui, form: &mut Form<'_>, speed| {
+        for (attr, name) in [
+            (StepAttr::X, "x "),
+            (StepAttr::Y, "y "),
+            (StepAttr::Z, "z "),
+        ] {
+            form.number(ui, field(attr), speed, f64::MIN..=f64::MAX, name);
+        }
+    };
+    ui.label(crate::scene::edit::step_name(step));
     match step {
-        TransformStep::Translate(v) => {
-            ui.label("translate");
-            vec3_editor(ui, v, 0.05)
+        TransformStep::Translate(_) => xyz(ui, form, 0.05),
+        TransformStep::Scale(_) => xyz(ui, form, 0.01),
+        TransformStep::RotateX(_) | TransformStep::RotateY(_) | TransformStep::RotateZ(_) => {
+            form.angle(ui, field(StepAttr::Angle));
         }
-        TransformStep::RotateX(a) => {
-            ui.label("rotate-x");
-            angle_editor(ui, a)
-        }
-        TransformStep::RotateY(a) => {
-            ui.label("rotate-y");
-            angle_editor(ui, a)
-        }
-        TransformStep::RotateZ(a) => {
-            ui.label("rotate-z");
-            angle_editor(ui, a)
-        }
-        TransformStep::UniformScale(f) => {
-            ui.label("scale");
-            ui.add(DragValue::new(f).speed(0.01)).changed()
-        }
-        TransformStep::Scale(v) => {
-            ui.label("scale");
-            vec3_editor(ui, v, 0.01)
+        TransformStep::UniformScale(_) => {
+            form.number(ui, field(StepAttr::Factor), 0.01, f64::MIN..=f64::MAX, "");
         }
     }
-}
-
-/// An angle shown in degrees, stored in radians as the file says.
-fn angle_editor(ui: &mut Ui, radians: &mut f64) -> bool {
-    let mut degrees = radians.to_degrees();
-    let changed = ui
-        .add(DragValue::new(&mut degrees).speed(1.0).suffix("°"))
-        .changed();
-    if changed {
-        *radians = degrees.to_radians();
-    }
-    changed
 }

@@ -3,20 +3,38 @@
 //! The parent directory is watched, not the file: editors that save by
 //! writing a temporary file and renaming it over the scene (vim, VS Code,
 //! `sed -i`) replace the file's inode, which a watch on the file itself
-//! would lose. Events are debounced (notify-debouncer-full) and filtered by
-//! file name and kind — opening or reading the file is no change, and the
-//! watcher's own reads must not wake it again — then the file is read and
-//! parsed completely on the watcher's thread, and only the result is handed
-//! to the app.
+//! would lose. A symbolic link's target directory is watched too, so edits
+//! made to the target show. Events are debounced (notify-debouncer-full)
+//! and filtered by file name and kind — opening or reading the file is no
+//! change, and the watcher's own reads must not wake it again — then the
+//! file is read and parsed completely on a background thread, and only the
+//! result is handed to the app.
+//!
+//! A directory that is deleted takes its watch with it. A second thread
+//! therefore checks every [`POLL`] whether the watched directories are
+//! still the same ones (watching them again when they come back, or when a
+//! link now points elsewhere) and whether the file's size, time or inode
+//! changed, and reports a change that events missed.
+//!
+//! Every change is reported, even one back to a content reported before
+//! (only a repeat of the very same bytes and stamp is not): the document
+//! compares what it gets with the text it last read or wrote, which the
+//! watcher cannot know.
 
+use crate::output::through_links;
 use crate::scene::{self, LoadError, Scene};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
 use std::path::{Path, PathBuf};
-use std::time::Duration;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, SystemTime};
 
 /// Quiet time after the last event before the file is read.
 pub const DEBOUNCE: Duration = Duration::from_millis(100);
+
+/// How often the directories and the file are checked besides events.
+pub const POLL: Duration = Duration::from_millis(250);
 
 /// What happened to the watched file.
 #[derive(Debug)]
@@ -29,10 +47,18 @@ pub enum FileEvent {
     Missing,
 }
 
+type Watcher = Debouncer<notify::RecommendedWatcher, RecommendedCache>;
+
 /// Watches one scene file until dropped.
 pub struct SceneWatcher {
-    _debouncer: Debouncer<notify::RecommendedWatcher, RecommendedCache>,
     path: PathBuf,
+    stop: Arc<AtomicBool>,
+}
+
+impl Drop for SceneWatcher {
+    fn drop(&mut self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -42,60 +68,219 @@ pub struct WatchError {
     source: notify::Error,
 }
 
+/// What identifies a file or directory on disk between two looks.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Stamp {
+    len: u64,
+    modified: Option<SystemTime>,
+    #[cfg(unix)]
+    inode: (u64, u64),
+}
+
+fn stamp(path: &Path) -> Option<Stamp> {
+    let meta = std::fs::metadata(path).ok()?;
+    Some(Stamp {
+        len: meta.len(),
+        modified: meta.modified().ok(),
+        #[cfg(unix)]
+        inode: {
+            use std::os::unix::fs::MetadataExt;
+            (meta.dev(), meta.ino())
+        },
+    })
+}
+
+/// Which directory a path is: its inode where there are inodes (a
+/// directory deleted and made again is another one), else whether it is
+/// there. Its times change with every file saved in it and are left out.
+fn identity(path: &Path) -> Option<u64> {
+    let meta = std::fs::metadata(path).ok()?;
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some(hash(&(meta.dev(), meta.ino())))
+    }
+    #[cfg(not(unix))]
+    {
+        Some(u64::from(meta.is_dir()))
+    }
+}
+
+fn hash(value: &impl std::hash::Hash) -> u64 {
+    let mut h = std::hash::DefaultHasher::new();
+    value.hash(&mut h);
+    std::hash::Hasher::finish(&h)
+}
+
+fn parent(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// The directories to watch for `path`: its own and, through links, its
+/// target's.
+fn directories(path: &Path) -> Vec<PathBuf> {
+    let mut dirs = vec![parent(path)];
+    let target = parent(&through_links(path));
+    if !dirs.contains(&target) {
+        dirs.push(target);
+    }
+    dirs
+}
+
+/// The directories being watched, with the identity each had then.
+struct Watched {
+    watcher: Watcher,
+    dirs: Vec<(PathBuf, Option<u64>)>,
+}
+
+impl Watched {
+    /// Watches the directories `path` needs now; returns whether any watch
+    /// changed (a directory came back, a link points elsewhere).
+    fn refresh(&mut self, path: &Path) -> Result<bool, notify::Error> {
+        let wanted: Vec<(PathBuf, Option<u64>)> = directories(path)
+            .into_iter()
+            .map(|d| {
+                let id = identity(&d);
+                (d, id)
+            })
+            .collect();
+        if wanted == self.dirs {
+            return Ok(false);
+        }
+        for (dir, _) in &self.dirs {
+            let _ = self.watcher.unwatch(dir);
+        }
+        let mut result = Ok(());
+        for (dir, s) in &wanted {
+            if s.is_some()
+                && let Err(e) = self.watcher.watch(dir, RecursiveMode::NonRecursive)
+            {
+                result = Err(e);
+            }
+        }
+        self.dirs = wanted;
+        result.map(|()| true)
+    }
+}
+
 impl SceneWatcher {
-    /// Starts watching `path`; `on_event` runs on the watcher's thread.
+    /// Starts watching `path`; `on_event` runs on a watcher thread.
     pub fn new(
         path: &Path,
-        on_event: impl Fn(FileEvent) + Send + 'static,
+        on_event: impl Fn(FileEvent) + Send + Sync + 'static,
     ) -> Result<SceneWatcher, WatchError> {
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
-        let dir = match path.parent() {
-            Some(d) if !d.as_os_str().is_empty() => d.to_owned(),
-            _ => PathBuf::from("."),
-        };
-        let name = path.file_name().map(|n| n.to_owned());
-        let target = path.clone();
-        // What was last reported: a burst of events that leaves the file as
-        // it was reported is not reported again.
-        let mut last: Option<String> = None;
-        let mut debouncer = new_debouncer(DEBOUNCE, None, move |result: DebounceEventResult| {
-            let Ok(events) = result else { return };
-            let ours = events.iter().any(|e| {
-                !matches!(e.kind, EventKind::Access(_))
-                    && e.paths.iter().any(|p| p.file_name() == name.as_deref())
-            });
-            if !ours {
-                return;
-            }
-            let event = read(&target);
-            let key = match &event {
-                FileEvent::Loaded(text, _) => format!("loaded\n{text}"),
-                FileEvent::Broken(e) => format!("broken\n{e}"),
-                FileEvent::Missing => "missing".to_owned(),
-            };
-            if last.as_ref() != Some(&key) {
-                last = Some(key);
-                on_event(event);
-            }
-        })
-        .map_err(|source| WatchError {
+        let on_event = Arc::new(on_event);
+        let error = |source| WatchError {
             path: path.clone(),
             source,
-        })?;
-        debouncer
-            .watch(&dir, RecursiveMode::NonRecursive)
-            .map_err(|source| WatchError {
-                path: path.clone(),
-                source,
-            })?;
-        Ok(SceneWatcher {
-            _debouncer: debouncer,
-            path,
-        })
+        };
+
+        // The file's stamp when it was last read for a report, and what the
+        // report said: a burst of events that leaves the file exactly as
+        // reported (same bytes, same stamp) is not reported again, and the
+        // poll reports only stamps no report has seen. A file written back
+        // to a content reported before has a new stamp and is reported.
+        let seen: Arc<Mutex<(Option<Stamp>, Option<u64>)>> =
+            Arc::new(Mutex::new((stamp(&path), None)));
+        let report = {
+            let on_event = on_event.clone();
+            let target = path.clone();
+            let seen = seen.clone();
+            move || {
+                let now = stamp(&target);
+                let event = read(&target);
+                let key = match &event {
+                    FileEvent::Loaded(text, _) => hash(&("loaded", text)),
+                    FileEvent::Broken(e) => hash(&("broken", e.to_string())),
+                    FileEvent::Missing => hash(&"missing"),
+                };
+                if let Ok(mut seen) = seen.lock() {
+                    if *seen == (now.clone(), Some(key)) {
+                        return;
+                    }
+                    *seen = (now, Some(key));
+                }
+                on_event(event);
+            }
+        };
+        let events_path = path.clone();
+        let on_notify = {
+            let report = report.clone();
+            move |result: DebounceEventResult| {
+                let Ok(events) = result else { return };
+                let names = [
+                    events_path.file_name().map(ToOwned::to_owned),
+                    through_links(&events_path)
+                        .file_name()
+                        .map(ToOwned::to_owned),
+                ];
+                let ours = events.iter().any(|e| {
+                    !matches!(e.kind, EventKind::Access(_))
+                        && e.paths
+                            .iter()
+                            .any(|p| names.iter().flatten().any(|n| p.file_name() == Some(n)))
+                });
+                if ours {
+                    report();
+                }
+            }
+        };
+        let watcher = new_debouncer(DEBOUNCE, None, on_notify).map_err(error)?;
+        let mut watched = Watched {
+            watcher,
+            dirs: Vec::new(),
+        };
+        watched.refresh(&path).map_err(error)?;
+
+        let stop = Arc::new(AtomicBool::new(false));
+        let poll_stop = stop.clone();
+        let poll_path = path.clone();
+        let watched = Arc::new(Mutex::new(watched));
+        std::thread::Builder::new()
+            .name("scene-watcher-poll".to_owned())
+            .spawn(move || poll(&poll_path, &watched, &seen, &poll_stop, report))
+            .map_err(|e| error(notify::Error::io(e)))?;
+        Ok(SceneWatcher { path, stop })
     }
 
     pub fn path(&self) -> &Path {
         &self.path
+    }
+}
+
+/// The second look: directories watched again when they change, and the
+/// file's stamp compared with the one last `seen` by a report, every
+/// [`POLL`] until `stop`. A new stamp is reported once it has held still
+/// for one poll (a save in progress is not read half written).
+fn poll(
+    path: &Path,
+    watched: &Mutex<Watched>,
+    seen: &Mutex<(Option<Stamp>, Option<u64>)>,
+    stop: &AtomicBool,
+    report: impl Fn(),
+) {
+    let mut settling: Option<Option<Stamp>> = None;
+    while !stop.load(Ordering::Relaxed) {
+        std::thread::sleep(POLL);
+        if stop.load(Ordering::Relaxed) {
+            return;
+        }
+        let rewatched = watched
+            .lock()
+            .map(|mut w| w.refresh(path).unwrap_or(true))
+            .unwrap_or(false);
+        let now = stamp(path);
+        let known = seen.lock().map(|s| s.0 == now).unwrap_or(true);
+        if rewatched || (!known && settling.as_ref() == Some(&now)) {
+            settling = None;
+            report();
+        } else {
+            settling = (!known).then_some(now);
+        }
     }
 }
 

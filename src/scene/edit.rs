@@ -860,6 +860,16 @@ enum Restore {
 }
 
 impl Undo {
+    /// An undo that applies `edit` (with no origin to restore): for steps
+    /// built from edits rather than from applying them, such as undoing a
+    /// reload from disk.
+    pub fn from_edit(edit: Edit) -> Undo {
+        Undo {
+            edit,
+            restore: Restore::Nothing,
+        }
+    }
+
     /// The inverse edit.
     pub fn edit(&self) -> &Edit {
         &self.edit

@@ -9,11 +9,13 @@
 //!
 //! [`edit`] is the one way a scene changes (the app's panel and undo, the
 //! command line's `edit` and `--set`); [`splice`] writes those changes back
-//! into the file's text, keeping every byte that was not edited.
+//! into the file's text, keeping every byte that was not edited; [`merge`]
+//! replays unsaved edits onto a version of the file another program saved.
 
 pub mod edit;
 mod error;
 mod load;
+pub mod merge;
 pub mod splice;
 
 pub use error::{LoadError, LoadErrorKind, Position};

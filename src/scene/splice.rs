@@ -103,8 +103,9 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
 }
 
 /// The first words of the comment directly above each object (spheres and
-/// planes in file order), for naming it in the panel ("RED" for `<!-- RED
-/// sphere, left -->`). `None` where no comment touches the object.
+/// planes in file order), for naming it in the panel: up to three, before
+/// any punctuation ("RED sphere" for `<!-- RED sphere, left -->`). `None`
+/// where no comment touches the object.
 pub fn object_labels(text: &str) -> Vec<Option<String>> {
     let Ok(doc) = Doc::scan(text) else {
         return Vec::new();
@@ -114,11 +115,15 @@ pub fn object_labels(text: &str) -> Vec<Option<String>> {
         .map(|node| {
             let comment = doc.comments_above(doc.node(node).start).last()?.clone();
             let inner = doc.text.get(comment.start + 4..comment.end - 3)?;
-            let words: Vec<&str> = inner.split_whitespace().take(3).collect();
-            let label = words
-                .join(" ")
-                .trim_end_matches([',', '.', ':', ';', '-'])
-                .to_owned();
+            // Up to the first punctuation, at most three words.
+            let phrase = inner
+                .split([',', '.', ':', ';', '(', '-', '\n'])
+                .find(|p| !p.trim().is_empty())?;
+            let label = phrase
+                .split_whitespace()
+                .take(3)
+                .collect::<Vec<_>>()
+                .join(" ");
             (!label.is_empty()).then_some(label)
         })
         .collect()
