@@ -10,14 +10,17 @@
 //! `--out` and `--time` before clap sees them: clap would read `-out` as
 //! `-o ut`.
 
+use super::edit::{self, EditArg};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
-use clap::{Args, Parser, Subcommand};
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use rayoflight::scene::edit::EditError;
 use rayoflight::study::{self, Method};
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 pub const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N] [--method NAME]
+       rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]… [-out FILE]
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
        rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
@@ -45,6 +48,10 @@ Options:
   -V, --version      the version
 
 Subcommands:
+  edit               change values of a scene file, add or remove elements,
+                     keeping every other byte: --set PATH=VALUE, --remove
+                     PATH, --add sphere|plane|light, applied in the order
+                     given; the file is rewritten in place, or -out FILE
   export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
   plan               what 'auto' will do for the scene, and why (renders
                      use it: precision, BVH and culling, early stop, terms)
@@ -77,6 +84,8 @@ pub enum Command {
     },
     /// `plan scene.xml`: print what `auto` decides for the scene.
     Plan { scene: PathBuf },
+    /// `edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]…`.
+    Edit(EditArgs),
     /// `bench [--threads N] [--runs K] [--csv FILE] [--no-pov]`.
     Bench(super::bench::BenchArgs),
     /// `study [--out DIR] [--runs K] [--threads N] [scene.xml…]`.
@@ -96,6 +105,16 @@ pub struct RenderArgs {
     pub method: Option<Method>,
 }
 
+/// `rayoflight edit`: what to change in a scene file, and where to write it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EditArgs {
+    pub scene: PathBuf,
+    /// Where the edited scene goes; `None`: the scene file itself.
+    pub out: Option<PathBuf>,
+    /// The `--set`, `--remove` and `--add`, in the order given; never empty.
+    pub edits: Vec<EditArg>,
+}
+
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
     /// `--no-gui`, `--threads`, `--aa`, `--method`. In the GUI build,
@@ -111,7 +130,8 @@ impl RenderArgs {
     }
 }
 
-/// A command line that does not parse: exit status 2.
+/// A command line that does not parse, or an edit the scene refuses: exit
+/// status 2.
 #[derive(Debug, Clone, PartialEq)]
 pub enum UsageError {
     /// No scene where the command needs one: the usage is printed.
@@ -122,6 +142,9 @@ pub enum UsageError {
         message: String,
         command: Option<&'static str>,
     },
+    /// A `--set`, `--remove` or `--add` whose path or value the edit engine
+    /// refuses, for this scene (`object[5]: the scene has 3 objects`).
+    Edit { scene: PathBuf, error: EditError },
 }
 
 // ----- what clap reads -----
@@ -187,6 +210,19 @@ enum Sub {
     ///
     /// Also thread scaling, cost against object count and peak memory.
     Bench(BenchFlags),
+    /// Change values of a scene file, add or remove elements, and write it.
+    ///
+    /// The edits apply in the order given, and the file keeps every byte
+    /// they do not change: comments, formatting, the spelling of other
+    /// numbers. It is rewritten in place (atomically, keeping its mode;
+    /// through a symbolic link, the file it points to), or written to
+    /// -out FILE. An edit that changes nothing leaves the file untouched.
+    #[command(
+        override_usage = "rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… \
+                          [--add KIND]… [-out FILE]",
+        after_help = edit::PATHS
+    )]
+    Edit(EditFlags),
     /// Speed against accuracy: every render method on the study scenes.
     ///
     /// Measures each method (f32, textbook quadratic, offsets,
@@ -195,6 +231,25 @@ enum Sub {
     /// given. Prints a table on stdout and writes DIR/study.csv, the chart
     /// DIR/study.png and a picture of each failure. See docs/study.md.
     Study(StudyFlags),
+}
+
+#[derive(Args, Debug)]
+struct EditFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// Set a value: object[2].material.ka=0.5, model.type=phong.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
+    /// Remove an element: object[2], light[1], object[1].transformation[2].
+    #[arg(long, value_name = "PATH")]
+    remove: Vec<String>,
+    /// Add an element with default values, after the last of its kind:
+    /// sphere, plane or light.
+    #[arg(long, value_name = "KIND")]
+    add: Vec<String>,
+    /// Write the edited scene to FILE instead of the scene file.
+    #[arg(short, long, value_name = "FILE")]
+    out: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -254,6 +309,12 @@ fn aa(text: &str) -> Result<u32, String> {
         .ok_or_else(|| format!("expects an integer from 1 to {max}"))
 }
 
+fn path_value(text: &str) -> Result<(String, String), String> {
+    text.split_once('=')
+        .map(|(path, value)| (path.to_owned(), value.to_owned()))
+        .ok_or_else(|| "expects PATH=VALUE, such as object[1].material.ka=0.5".to_owned())
+}
+
 fn method(text: &str) -> Result<Method, String> {
     study::method(text).ok_or_else(|| {
         let names: Vec<_> = study::methods().iter().map(|m| m.name).collect();
@@ -268,17 +329,24 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
     let args = brief_spellings(args);
     let subcommand = subcommand_named(&args);
     let program = std::iter::once(OsString::from("rayoflight"));
-    let cli = match Cli::try_parse_from(program.chain(args)) {
+    let clap_error = |e: clap::Error| match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            Ok(Command::Print(e.render().to_string()))
+        }
+        _ => Err(UsageError::Invalid {
+            message: clap_message(&e),
+            command: subcommand,
+        }),
+    };
+    // The matches as well as the structs: the edits' order is in the
+    // matches only.
+    let matches = match Cli::command().try_get_matches_from(program.chain(args)) {
+        Ok(matches) => matches,
+        Err(e) => return clap_error(e),
+    };
+    let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
-        Err(e) if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) => {
-            return Ok(Command::Print(e.render().to_string()));
-        }
-        Err(e) => {
-            return Err(UsageError::Invalid {
-                message: clap_message(&e),
-                command: subcommand,
-            });
-        }
+        Err(e) => return clap_error(e),
     };
     Ok(match cli.command {
         None => {
@@ -295,6 +363,23 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         }
         Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
         Some(Sub::Plan { scene }) => Command::Plan { scene },
+        Some(Sub::Edit(e)) => {
+            let matches = matches
+                .subcommand_matches("edit")
+                .expect("clap matched the edit subcommand");
+            let given = in_order(matches, e.set, e.remove, e.add);
+            if given.is_empty() {
+                return Err(UsageError::Invalid {
+                    message: "nothing to do: give at least one --set, --remove or --add".to_owned(),
+                    command: subcommand,
+                });
+            }
+            Command::Edit(EditArgs {
+                edits: edit_args(given, &e.scene)?,
+                scene: e.scene,
+                out: e.out,
+            })
+        }
         Some(Sub::Bench(b)) => Command::Bench(super::bench::BenchArgs {
             threads: b
                 .threads
@@ -310,6 +395,56 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             scenes: s.scenes,
         }),
     })
+}
+
+/// An edit flag as given, before its path is read.
+enum Given {
+    Set(String, String),
+    Remove(String),
+    Add(String),
+}
+
+/// The `--set`, `--remove` and `--add` of `matches`, in the order given on
+/// the command line: clap collects each flag's values apart, and their
+/// indices put them back in order.
+fn in_order(
+    matches: &ArgMatches,
+    set: Vec<(String, String)>,
+    remove: Vec<String>,
+    add: Vec<String>,
+) -> Vec<Given> {
+    let indices = |id: &str| matches.indices_of(id).into_iter().flatten();
+    let mut given: Vec<(usize, Given)> = Vec::new();
+    given.extend(
+        indices("set")
+            .zip(set)
+            .map(|(i, (p, v))| (i, Given::Set(p, v))),
+    );
+    given.extend(
+        indices("remove")
+            .zip(remove)
+            .map(|(i, p)| (i, Given::Remove(p))),
+    );
+    given.extend(indices("add").zip(add).map(|(i, k)| (i, Given::Add(k))));
+    given.sort_by_key(|(i, _)| *i);
+    given.into_iter().map(|(_, g)| g).collect()
+}
+
+/// The edits read: their paths, values and kinds checked (not yet against
+/// the scene).
+fn edit_args(given: Vec<Given>, scene: &Path) -> Result<Vec<EditArg>, UsageError> {
+    given
+        .into_iter()
+        .map(|g| match g {
+            Given::Set(path, value) => EditArg::set(&path, &value),
+            Given::Remove(path) => EditArg::remove(&path),
+            Given::Add(kind) => EditArg::add(&kind),
+        })
+        .collect::<Result<_, _>>()
+        .map_err(|error| UsageError::Edit {
+            scene: scene.to_owned(),
+            error,
+        })
 }
 
 /// The arguments with the brief's `-out` and `-time` spelled `--out` and
@@ -335,7 +470,7 @@ fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
 }
 
 /// The subcommands' names, as clap derives them from `Sub`.
-const SUBCOMMANDS: [&str; 4] = ["export-pov", "plan", "bench", "study"];
+const SUBCOMMANDS: [&str; 5] = ["export-pov", "plan", "bench", "edit", "study"];
 
 /// The subcommand the arguments run, if any: only the first argument can
 /// name one (`args_conflicts_with_subcommands`).
@@ -406,7 +541,6 @@ fn clap_message(e: &clap::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::CommandFactory;
 
     fn p(args: &[&str]) -> Result<Command, UsageError> {
         parse(args.iter().map(OsString::from))
@@ -592,6 +726,47 @@ mod tests {
         assert!(s.scenes.is_empty());
         assert!(p(&["study", "--aa", "2"]).is_err());
         assert!(p(&["study", "--csv", "x.csv"]).is_err());
+    }
+
+    #[test]
+    fn edit_keeps_the_order_of_its_flags() {
+        let Ok(Command::Edit(e)) = p(&[
+            "edit",
+            "s.xml",
+            "--remove",
+            "light[1]",
+            "--set",
+            "model.depth=3",
+            "--add",
+            "sphere",
+            "--set=object[1].color.red=0.5",
+            "-out",
+            "o.xml",
+        ]) else {
+            panic!()
+        };
+        let expected = [
+            EditArg::remove("light[1]"),
+            EditArg::set("model.depth", "3"),
+            EditArg::add("sphere"),
+            EditArg::set("object[1].color.red", "0.5"),
+        ];
+        assert_eq!(e.edits, expected.map(Result::unwrap));
+        assert_eq!((e.scene, e.out), ("s.xml".into(), Some("o.xml".into())));
+    }
+
+    #[test]
+    fn edit_refuses_what_it_cannot_read() {
+        assert!(message(p(&["edit", "s.xml"])).starts_with("nothing to do"));
+        assert!(
+            message(p(&["edit", "s.xml", "--set", "model.depth"])).starts_with("--set expects")
+        );
+        assert!(p(&["edit", "--set", "model.depth=3"]).is_err(), "no scene");
+        let Err(UsageError::Edit { scene, error }) = p(&["edit", "s.xml", "--add", "cube"]) else {
+            panic!()
+        };
+        assert_eq!(scene, PathBuf::from("s.xml"));
+        assert_eq!(error.to_string(), "cube: can add sphere, plane or light");
     }
 
     #[test]

@@ -5,9 +5,11 @@
 
 mod args;
 mod bench;
+mod edit;
 mod study;
 
-use args::{Command, RenderArgs, USAGE, UsageError};
+use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
+use rayoflight::scene::{edit::Edited, splice};
 use rayoflight::{output, pov, render, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -47,6 +49,10 @@ pub fn main() -> ExitCode {
             eprintln!("rayoflight: {message}; see '{help}'");
             ExitCode::from(2)
         }
+        Err(Failure::Usage(UsageError::Edit { scene, error })) => {
+            eprintln!("rayoflight: {}: {error}", scene.display());
+            ExitCode::from(2)
+        }
         Err(Failure::Error(msg)) => {
             eprintln!("{msg}");
             ExitCode::from(1)
@@ -61,6 +67,7 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             Ok(())
         }
         Command::ExportPov { scene, out } => export_pov(&scene, out),
+        Command::Edit(args) => edit_scene(&args),
         Command::Plan { scene } => {
             let scene = scene::load(&scene).map_err(fail)?;
             for d in render::auto(&scene).decisions {
@@ -143,6 +150,28 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
     }
 }
 
+/// `rayoflight edit`: applies the edits and writes the scene's text back
+/// with only what they change changed, in place or to `-out`.
+fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
+    let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
+    let mut edited = Edited::new(loaded);
+    edit::apply(&mut edited, &args.edits).map_err(|error| {
+        Failure::Usage(UsageError::Edit {
+            scene: args.scene.clone(),
+            error,
+        })
+    })?;
+    let new_text = splice::save(&text, &args.scene, &edited)
+        .map_err(|e| Failure::Error(format!("{}: {e}", args.scene.display())))?;
+    let out = args.out.as_deref().unwrap_or(&args.scene);
+    // Edits that change nothing (a value set to the one it has) leave the
+    // scene file untouched, its modification time included.
+    if new_text == text && same_file(&args.scene, out) {
+        return Ok(());
+    }
+    output::write_atomic(out, new_text.as_bytes()).map_err(fail)
+}
+
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
     refuse_same_file(scene_path, &out)?;
@@ -156,17 +185,22 @@ fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
 /// `./a/../s.xml` and symbolic links are caught), and on Unix the inode
 /// (hard links).
 fn refuse_same_file(scene: &Path, out: &Path) -> Result<(), Failure> {
-    let same = match (scene.canonicalize(), canonical_target(out)) {
-        (Ok(a), Some(b)) => a == b || same_inode(&a, &b),
-        _ => false,
-    };
-    if same {
+    if same_file(scene, out) {
         return Err(Failure::Error(format!(
             "{}: refusing to overwrite the scene file with the output",
             out.display()
         )));
     }
     Ok(())
+}
+
+/// Whether `out` names the existing file `scene`, by another path or
+/// through a link.
+fn same_file(scene: &Path, out: &Path) -> bool {
+    match (scene.canonicalize(), canonical_target(out)) {
+        (Ok(a), Some(b)) => a == b || same_inode(&a, &b),
+        _ => false,
+    }
 }
 
 /// Canonical form of a path that may not exist yet: its parent made
