@@ -410,3 +410,125 @@ fn edit_help_lists_the_paths() {
     assert!(help.contains("Usage: rayoflight edit scene.xml"), "{help}");
     assert!(help.contains("object[N].material.<ka|kd|ks|m>"), "{help}");
 }
+
+// ----- --set on a render -----
+
+fn pixels(dir: &Path, name: &str) -> image::RgbImage {
+    image::open(dir.join(name)).unwrap().to_rgb8()
+}
+
+#[test]
+fn set_on_a_render_gives_the_image_of_the_edited_file() {
+    let (dir, scene) = workdir();
+    let sets = ["object[2].material.ka=0.9", "light[1].x=-3"];
+    // No --no-gui: --set alone makes the render headless, in the GUI build
+    // too (there is no display here).
+    let o = rayoflight(
+        dir.path(),
+        &[
+            "s.xml", "--set", sets[0], "--set", sets[1], "-out", "set.png",
+        ],
+    );
+    succeeds(&o);
+    assert_eq!(fs::read_to_string(&scene).unwrap(), SCENE, "never written");
+
+    let edit = [
+        "edit", "s.xml", "--set", sets[0], "--set", sets[1], "-out", "e.xml",
+    ];
+    succeeds(&rayoflight(dir.path(), &edit));
+    succeeds(&rayoflight(
+        dir.path(),
+        &["--no-gui", "e.xml", "-out", "e.png"],
+    ));
+    succeeds(&rayoflight(
+        dir.path(),
+        &["--no-gui", "s.xml", "-out", "plain.png"],
+    ));
+    assert_eq!(
+        fs::read(dir.path().join("set.png")).unwrap(),
+        fs::read(dir.path().join("e.png")).unwrap()
+    );
+    assert_ne!(
+        pixels(dir.path(), "set.png"),
+        pixels(dir.path(), "plain.png")
+    );
+    assert_eq!(fs::read_to_string(&scene).unwrap(), SCENE);
+}
+
+#[test]
+fn set_works_with_the_other_render_flags() {
+    let (dir, scene) = workdir();
+    let set = "object[1].color.blue=1";
+    succeeds(&rayoflight(
+        dir.path(),
+        &["edit", "s.xml", "--set", set, "-out", "e.xml"],
+    ));
+    for (args, out) in [
+        (
+            &[
+                "s.xml", "--set", set, "--method", "default", "-out", "a.png",
+            ][..],
+            "a.png",
+        ),
+        (
+            &["--threads", "1", "s.xml", "--set", set, "-out", "b.png"],
+            "b.png",
+        ),
+        (&["-time", "s.xml", "--set", set, "-out", "c.png"], "c.png"),
+    ] {
+        succeeds(&rayoflight(dir.path(), args));
+        assert_eq!(
+            pixels(dir.path(), out),
+            pixels(dir.path(), "a.png"),
+            "{args:?}"
+        );
+    }
+    succeeds(&rayoflight(
+        dir.path(),
+        &["--no-gui", "e.xml", "-out", "e.png"],
+    ));
+    assert_eq!(pixels(dir.path(), "a.png"), pixels(dir.path(), "e.png"));
+    // Without -out, the image goes next to the scene as usual.
+    succeeds(&rayoflight(dir.path(), &["s.xml", "--set", set]));
+    assert_eq!(pixels(dir.path(), "s.png"), pixels(dir.path(), "e.png"));
+    assert_eq!(fs::read_to_string(&scene).unwrap(), SCENE);
+}
+
+#[test]
+fn a_refused_set_on_a_render_writes_no_image() {
+    for (args, message) in [
+        (
+            &["s.xml", "--set", "object[9].color.red=1"][..],
+            "rayoflight: s.xml: object[9]: the scene has 2 objects\n",
+        ),
+        (
+            &["s.xml", "--set", "camera.eyeDistance=0", "-out", "x.png"],
+            "rayoflight: s.xml: camera.eyeDistance: must be > 0, got 0\n",
+        ),
+        (
+            &["s.xml", "--set", "light[1].x"],
+            "rayoflight: --set expects PATH=VALUE, such as object[1].material.ka=0.5, \
+             not \"light[1].x\"; see 'rayoflight --help'\n",
+        ),
+        (
+            &["s.xml", "--remove", "light[1]"],
+            "rayoflight: unknown flag '--remove'; see 'rayoflight --help'\n",
+        ),
+    ] {
+        let (dir, scene) = workdir();
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert_eq!(stderr(&o), message);
+        assert_eq!(files_in(dir.path()), ["s.xml"]);
+        assert_eq!(fs::read_to_string(&scene).unwrap(), SCENE);
+    }
+    // --set with no scene: the usage.
+    let (dir, _) = workdir();
+    let o = rayoflight(dir.path(), &["--set", "model.depth=1"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).starts_with("Usage: rayoflight"),
+        "{}",
+        stderr(&o)
+    );
+}

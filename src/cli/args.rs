@@ -19,7 +19,8 @@ use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
 pub const USAGE: &str = "\
-Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N] [--method NAME]
+Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
+                  [--threads N] [--aa N] [--method NAME] [--no-gui]
        rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]… [-out FILE]
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
@@ -39,6 +40,9 @@ Options:
                      (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp).
                      Default: the scene's path with the extension .png
   -time, --time      print the render time (prepare + trace) as 'render: N ns'
+  --set PATH=VALUE   render with a value changed (object[2].material.ka=0.5),
+                     in memory only: the scene file is not written.
+                     Repeatable; the paths are listed by 'rayoflight edit --help'
   --threads N        render threads (default: one per core)
   --aa N             N×N rays per pixel, 1 to 16 (default 1: the pixel centre)
   --method NAME      render with a study method instead of auto (default,
@@ -103,6 +107,8 @@ pub struct RenderArgs {
     pub aa: Option<u32>,
     /// A study method to render with instead of `auto` (`--method`).
     pub method: Option<Method>,
+    /// `--set`: values changed in memory before rendering, in order.
+    pub edits: Vec<EditArg>,
 }
 
 /// `rayoflight edit`: what to change in a scene file, and where to write it.
@@ -117,8 +123,8 @@ pub struct EditArgs {
 
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
-    /// `--no-gui`, `--threads`, `--aa`, `--method`. In the GUI build,
-    /// anything else opens the app (the headless build never asks).
+    /// `--no-gui`, `--threads`, `--aa`, `--method`, `--set`. In the GUI
+    /// build, anything else opens the app (the headless build never asks).
     #[cfg_attr(not(feature = "gui"), allow(dead_code))]
     pub fn headless(&self) -> bool {
         self.out.is_some()
@@ -127,6 +133,7 @@ impl RenderArgs {
             || self.threads.is_some()
             || self.aa.is_some()
             || self.method.is_some()
+            || !self.edits.is_empty()
     }
 }
 
@@ -186,6 +193,9 @@ struct RenderFlags {
     method: Option<Method>,
     #[arg(long)]
     no_gui: bool,
+    /// Render with this value changed, in memory only.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -349,18 +359,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         Err(e) => return clap_error(e),
     };
     Ok(match cli.command {
-        None => {
-            let r = cli.render;
-            Command::Render(RenderArgs {
-                scene: r.scene,
-                out: r.out,
-                time: r.time,
-                no_gui: r.no_gui,
-                threads: r.threads,
-                aa: r.aa,
-                method: r.method,
-            })
-        }
+        None => Command::Render(render_args(cli.render)?),
         Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
         Some(Sub::Plan { scene }) => Command::Plan { scene },
         Some(Sub::Edit(e)) => {
@@ -394,6 +393,28 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             threads: s.threads,
             scenes: s.scenes,
         }),
+    })
+}
+
+fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
+    let edits = match &r.scene {
+        Some(scene) => {
+            let given = r.set.into_iter().map(|(p, v)| Given::Set(p, v));
+            edit_args(given.collect(), scene)?
+        }
+        // --set makes the render headless, which needs a scene.
+        None if !r.set.is_empty() => return Err(UsageError::NoScene),
+        None => Vec::new(),
+    };
+    Ok(RenderArgs {
+        scene: r.scene,
+        out: r.out,
+        time: r.time,
+        no_gui: r.no_gui,
+        threads: r.threads,
+        aa: r.aa,
+        method: r.method,
+        edits,
     })
 }
 
@@ -726,6 +747,33 @@ mod tests {
         assert!(s.scenes.is_empty());
         assert!(p(&["study", "--aa", "2"]).is_err());
         assert!(p(&["study", "--csv", "x.csv"]).is_err());
+    }
+
+    #[test]
+    fn set_on_a_render_is_read_and_makes_it_headless() {
+        let Ok(Command::Render(r)) = p(&[
+            "s.xml",
+            "--set",
+            "model.depth=3",
+            "--set=light[1].x=-2",
+            "--threads",
+            "2",
+        ]) else {
+            panic!()
+        };
+        let expected = [
+            EditArg::set("model.depth", "3"),
+            EditArg::set("light[1].x", "-2"),
+        ];
+        assert_eq!(r.edits, expected.map(Result::unwrap));
+        assert!(r.headless());
+        assert_eq!(p(&["--set", "model.depth=3"]), Err(UsageError::NoScene));
+        assert!(message(p(&["s.xml", "--set", "model.depth"])).starts_with("--set expects"));
+        assert!(matches!(
+            p(&["s.xml", "--set", "model.dept=3"]),
+            Err(UsageError::Edit { .. })
+        ));
+        assert!(p(&["s.xml", "--remove", "light[1]"]).is_err(), "edit only");
     }
 
     #[test]

@@ -9,7 +9,8 @@ mod edit;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
-use rayoflight::scene::{edit::Edited, splice};
+use rayoflight::scene::edit::{EditError, Edited};
+use rayoflight::scene::splice;
 use rayoflight::{output, pov, render, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -111,20 +112,23 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     refuse_same_file(&scene_path, &out)?;
     output::format_for(&out).map_err(fail)?;
 
-    let scene = scene::load(&scene_path).map_err(fail)?;
+    let mut edited = Edited::new(scene::load(&scene_path).map_err(fail)?);
+    // --set: in memory only, the scene file is never written.
+    edit::apply(&mut edited, &r.edits).map_err(refused(&scene_path))?;
+    let scene = edited.scene();
     let start = Instant::now();
     // `auto`: the exact options this scene needs (the reference image),
     // unless a study method is asked for.
     let options = match &r.method {
-        Some(method) => method.options_for(&scene),
-        None => render::auto(&scene).options,
+        Some(method) => method.options_for(scene),
+        None => render::auto(scene).options,
     };
     let options = render::RenderOptions {
         threads: r.threads,
         aa: r.aa.unwrap_or(options.aa),
         ..options
     };
-    let image = render::render(&scene, &options).map_err(fail)?;
+    let image = render::render(scene, &options).map_err(fail)?;
     let elapsed = start.elapsed();
     output::save(&image, &out).map_err(fail)?;
     if r.time {
@@ -155,12 +159,7 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
 fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
     let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
     let mut edited = Edited::new(loaded);
-    edit::apply(&mut edited, &args.edits).map_err(|error| {
-        Failure::Usage(UsageError::Edit {
-            scene: args.scene.clone(),
-            error,
-        })
-    })?;
+    edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
     let new_text = splice::save(&text, &args.scene, &edited)
         .map_err(|e| Failure::Error(format!("{}: {e}", args.scene.display())))?;
     let out = args.out.as_deref().unwrap_or(&args.scene);
@@ -170,6 +169,12 @@ fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
         return Ok(());
     }
     output::write_atomic(out, new_text.as_bytes()).map_err(fail)
+}
+
+/// An edit `scene` refuses: a usage error (exit 2) that names the scene.
+fn refused(scene: &Path) -> impl FnOnce(EditError) -> Failure {
+    let scene = scene.to_owned();
+    |error| Failure::Usage(UsageError::Edit { scene, error })
 }
 
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
