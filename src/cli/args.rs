@@ -1,15 +1,83 @@
-//! Command-line parsing, by hand: the brief's single-dash long options
-//! (`-out`, `-time`) sit beside GNU-style flags, which argument-parsing
-//! crates cannot mix.
+//! Command-line parsing with clap (derive), in two steps:
+//!
+//! 1. clap reads the arguments into the `Cli` structs below, which mirror
+//!    the flags one to one (and give each subcommand its `--help`);
+//! 2. [`parse`] resolves them into one [`Command`], with every default
+//!    applied and every rule across flags checked. That value is all the
+//!    rest of the binary sees.
+//!
+//! The brief's single-dash long options `-out` and `-time` are rewritten to
+//! `--out` and `--time` before clap sees them: clap would read `-out` as
+//! `-o ut`.
 
+use super::edit::{self, EditArg};
+use clap::error::{ContextKind, ContextValue, ErrorKind};
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use rayoflight::scene::edit::EditError;
+use rayoflight::study::{self, Method};
 use std::ffi::OsString;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+pub const USAGE: &str = "\
+Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
+                  [--threads N] [--aa N] [--method NAME] [--no-gui]
+       rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]… [-out FILE]
+       rayoflight export-pov scene.xml [-out scene.pov]
+       rayoflight plan scene.xml
+       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
+       rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]
+       rayoflight --help | --version";
+
+/// The top-level `--help`, written by hand: it shows the brief's
+/// single-dash spellings, which clap's generated help cannot. Each
+/// subcommand's `--help` is clap's, from the doc comments below.
+const HELP: &str = "\
+Renders an XML scene (spheres, planes, lights, one camera, an illumination
+model) to an image.
+
+Options:
+  -out, --out FILE   image to write; the format follows the extension
+                     (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp).
+                     Default: the scene's path with the extension .png
+  -time, --time      print the render time (prepare + trace) as 'render: N ns'
+  --set PATH=VALUE   render with a value changed (object[2].material.ka=0.5),
+                     in memory only: the scene file is not written.
+                     Repeatable; the paths are listed by 'rayoflight edit --help'
+  --threads N        render threads (default: one per core)
+  --aa N             N×N rays per pixel, 1 to 16 (default 1: the pixel centre)
+  --method NAME      render with a study method instead of auto (default,
+                     auto, f32, textbook, draft, …; see docs/study.md)
+  --no-gui           never open a window (the headless build never does)
+  -h, --help         this help ('rayoflight SUBCOMMAND --help' for each one)
+  -V, --version      the version
+
+Subcommands:
+  edit               change values of a scene file, add or remove elements,
+                     keeping every other byte: --set PATH=VALUE, --remove
+                     PATH, --add sphere|plane|light, applied in the order
+                     given; the file is rewritten in place, or -out FILE
+  export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
+  plan               what 'auto' will do for the scene, and why (renders
+                     use it: precision, BVH and culling, early stop, terms)
+  bench              time the bench scenes (against POV-Ray when installed),
+                     thread scaling, cost against object count, peak memory;
+                     --runs K (default 3), --csv FILE, --no-pov
+  study              speed against accuracy: every method (f32, textbook
+                     quadratic, offsets, anti-aliasing, depth cut, early
+                     stop, draft, auto) on the study scenes, or on the scene
+                     files given; a table on stdout, DIR/study.csv, the chart
+                     DIR/study.png and a picture of each failure
+                     (--out DIR, default ./study; --runs K, default 3)
+
+A scene file named like a subcommand is given as a path: ./bench.
+
+Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
 
 /// What the user asked for.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub enum Command {
-    Help,
-    Version,
+    /// `--help` or `--version`: print this text on stdout.
+    Print(String),
     /// Render a scene (headless), or open the app on it (GUI build, no
     /// headless flag).
     Render(RenderArgs),
@@ -19,16 +87,16 @@ pub enum Command {
         out: Option<PathBuf>,
     },
     /// `plan scene.xml`: print what `auto` decides for the scene.
-    Plan {
-        scene: PathBuf,
-    },
+    Plan { scene: PathBuf },
+    /// `edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]…`.
+    Edit(EditArgs),
     /// `bench [--threads N] [--runs K] [--csv FILE] [--no-pov]`.
     Bench(super::bench::BenchArgs),
     /// `study [--out DIR] [--runs K] [--threads N] [scene.xml…]`.
     Study(super::study::StudyArgs),
 }
 
-#[derive(Debug, Clone, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct RenderArgs {
     /// The scene file; `None` means the built-in example (app only).
     pub scene: Option<PathBuf>,
@@ -38,13 +106,25 @@ pub struct RenderArgs {
     pub threads: Option<usize>,
     pub aa: Option<u32>,
     /// A study method to render with instead of `auto` (`--method`).
-    pub method: Option<rayoflight::study::Method>,
+    pub method: Option<Method>,
+    /// `--set`: values changed in memory before rendering, in order.
+    pub edits: Vec<EditArg>,
+}
+
+/// `rayoflight edit`: what to change in a scene file, and where to write it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EditArgs {
+    pub scene: PathBuf,
+    /// Where the edited scene goes; `None`: the scene file itself.
+    pub out: Option<PathBuf>,
+    /// The `--set`, `--remove` and `--add`, in the order given; never empty.
+    pub edits: Vec<EditArg>,
 }
 
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
-    /// `--no-gui`, `--threads`, `--aa`, `--method`. In the GUI build,
-    /// anything else opens the app (the headless build never asks).
+    /// `--no-gui`, `--threads`, `--aa`, `--method`, `--set`. In the GUI
+    /// build, anything else opens the app (the headless build never asks).
     #[cfg_attr(not(feature = "gui"), allow(dead_code))]
     pub fn headless(&self) -> bool {
         self.out.is_some()
@@ -53,200 +133,430 @@ impl RenderArgs {
             || self.threads.is_some()
             || self.aa.is_some()
             || self.method.is_some()
+            || !self.edits.is_empty()
     }
 }
 
-/// A command line that does not parse: exit status 2.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
-#[error("{0}")]
-pub struct UsageError(pub String);
-
-fn usage(msg: impl Into<String>) -> UsageError {
-    UsageError(msg.into())
+/// A command line that does not parse, or an edit the scene refuses: exit
+/// status 2.
+#[derive(Debug, Clone, PartialEq)]
+pub enum UsageError {
+    /// No scene where the command needs one: the usage is printed.
+    NoScene,
+    /// Arguments that do not fit the command. `command` is the subcommand
+    /// whose `--help` to point to (`None`: the top-level one).
+    Invalid {
+        message: String,
+        command: Option<&'static str>,
+    },
+    /// A `--set`, `--remove` or `--add` whose path or value the edit engine
+    /// refuses, for this scene (`object[5]: the scene has 3 objects`).
+    Edit { scene: PathBuf, error: EditError },
 }
+
+// ----- what clap reads -----
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "rayoflight",
+    version,
+    override_help = format!("{USAGE}\n\n{HELP}"),
+    // `rayoflight scene.xml` renders, `rayoflight bench` runs the bench: a
+    // first argument that is not a subcommand's name is the scene.
+    args_conflicts_with_subcommands = true,
+    subcommand_value_name = "SUBCOMMAND",
+    disable_help_subcommand = true
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Sub>,
+    #[command(flatten)]
+    render: RenderFlags,
+}
+
+/// The render's flags: `rayoflight [-time] scene.xml [-out image.png] …`.
+#[derive(Args, Debug)]
+struct RenderFlags {
+    /// The scene file (none: the app opens on the built-in example).
+    scene: Option<PathBuf>,
+    /// The image to write; its extension picks the format.
+    #[arg(short, long, value_name = "FILE")]
+    out: Option<PathBuf>,
+    /// Print the render time as 'render: N ns'.
+    #[arg(long)]
+    time: bool,
+    #[arg(long, value_name = "N", value_parser = threads)]
+    threads: Option<usize>,
+    #[arg(long, value_name = "N", value_parser = aa)]
+    aa: Option<u32>,
+    #[arg(long, value_name = "NAME", value_parser = method)]
+    method: Option<Method>,
+    #[arg(long)]
+    no_gui: bool,
+    /// Render with this value changed, in memory only.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Sub {
+    /// Write the scene as a POV-Ray 3.7 file, for cross-checking.
+    ExportPov {
+        /// The scene file.
+        scene: PathBuf,
+        /// The POV-Ray file to write [default: the scene's path with .pov]
+        #[arg(short, long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
+    /// Print what 'auto' will do for the scene, and why.
+    ///
+    /// Precision, BVH and tile culling, early stop, zero terms: each
+    /// decision with the scene's numbers. Renders use these options.
+    Plan {
+        /// The scene file.
+        scene: PathBuf,
+    },
+    /// Time the bench scenes, against POV-Ray when it is installed.
+    ///
+    /// Also thread scaling, cost against object count and peak memory.
+    Bench(BenchFlags),
+    /// Change values of a scene file, add or remove elements, and write it.
+    ///
+    /// The edits apply in the order given, and the file keeps every byte
+    /// they do not change: comments, formatting, the spelling of other
+    /// numbers. It is rewritten in place (atomically, keeping its mode;
+    /// through a symbolic link, the file it points to), or written to
+    /// -out FILE. An edit that changes nothing leaves the file untouched.
+    #[command(
+        override_usage = "rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… \
+                          [--add KIND]… [-out FILE]",
+        after_help = edit::PATHS
+    )]
+    Edit(EditFlags),
+    /// Speed against accuracy: every render method on the study scenes.
+    ///
+    /// Measures each method (f32, textbook quadratic, offsets,
+    /// anti-aliasing, depth cut, early stop, draft, auto) against the
+    /// default image, on the built-in study scenes or on the scene files
+    /// given. Prints a table on stdout and writes DIR/study.csv, the chart
+    /// DIR/study.png and a picture of each failure. See docs/study.md.
+    Study(StudyFlags),
+}
+
+#[derive(Args, Debug)]
+struct EditFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// Set a value: object[2].material.ka=0.5, model.type=phong.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
+    /// Remove an element: object[2], light[1], object[1].transformation[2].
+    #[arg(long, value_name = "PATH")]
+    remove: Vec<String>,
+    /// Add an element with default values, after the last of its kind:
+    /// sphere, plane or light.
+    #[arg(long, value_name = "KIND")]
+    add: Vec<String>,
+    /// Write the edited scene to FILE instead of the scene file.
+    #[arg(short, long, value_name = "FILE")]
+    out: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct BenchFlags {
+    /// Render threads [default: one per core]
+    #[arg(long, value_name = "N", value_parser = threads)]
+    threads: Option<usize>,
+    /// Runs per measurement; the median is reported.
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs)]
+    runs: usize,
+    /// Also write the results as CSV to FILE.
+    #[arg(long, short = 'o', visible_alias = "out", value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Do not render with POV-Ray, even where it is installed.
+    #[arg(long)]
+    no_pov: bool,
+}
+
+#[derive(Args, Debug)]
+struct StudyFlags {
+    /// Where study.csv, study.png and the failure pictures go (created).
+    #[arg(short, long, value_name = "DIR", default_value = "study")]
+    out: PathBuf,
+    /// Runs per measurement; the median is reported.
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs)]
+    runs: usize,
+    /// Render threads [default: one per core]
+    #[arg(long, value_name = "N", value_parser = threads)]
+    threads: Option<usize>,
+    /// Scene files to study [default: the built-in study scenes]
+    #[arg(value_name = "SCENE")]
+    scenes: Vec<PathBuf>,
+}
+
+// Value parsers. Their messages complete "--flag …, not "value"" (see
+// `clap_message`).
+
+fn threads(text: &str) -> Result<usize, String> {
+    text.parse()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| "expects an integer >= 1".to_owned())
+}
+
+fn runs(text: &str) -> Result<usize, String> {
+    text.parse()
+        .ok()
+        .filter(|n| (1..=1000).contains(n))
+        .ok_or_else(|| "expects an integer from 1 to 1000".to_owned())
+}
+
+fn aa(text: &str) -> Result<u32, String> {
+    let max = rayoflight::render::MAX_AA;
+    text.parse()
+        .ok()
+        .filter(|n| (1..=max).contains(n))
+        .ok_or_else(|| format!("expects an integer from 1 to {max}"))
+}
+
+fn path_value(text: &str) -> Result<(String, String), String> {
+    text.split_once('=')
+        .map(|(path, value)| (path.to_owned(), value.to_owned()))
+        .ok_or_else(|| "expects PATH=VALUE, such as object[1].material.ka=0.5".to_owned())
+}
+
+fn method(text: &str) -> Result<Method, String> {
+    study::method(text).ok_or_else(|| {
+        let names: Vec<_> = study::methods().iter().map(|m| m.name).collect();
+        format!("expects one of {}", names.join(", "))
+    })
+}
+
+// ----- resolving -----
 
 /// Parses the arguments after the program name.
 pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageError> {
-    let mut args = args.into_iter();
-    let mut r = RenderArgs::default();
-    let mut positionals: Vec<PathBuf> = Vec::new();
-    let mut help = false;
-    let mut version = false;
-    let mut runs: Option<usize> = None;
-    let mut csv: Option<PathBuf> = None;
-    let mut no_pov = false;
-    let mut only_positionals = false;
-
-    while let Some(arg) = args.next() {
-        let Some(text) = arg
-            .to_str()
-            .filter(|t| t.starts_with('-') && !only_positionals)
-        else {
-            positionals.push(PathBuf::from(arg));
-            continue;
-        };
-        // `--flag=value` form.
-        let (flag, inline) = match text.split_once('=') {
-            Some((f, v)) if f.starts_with("--") => (f, Some(v.to_owned())),
-            _ => (text, None),
-        };
-        let mut value = |name: &str| -> Result<String, UsageError> {
-            match inline.clone() {
-                Some(v) => Ok(v),
-                None => args
-                    .next()
-                    .map(|v| v.to_string_lossy().into_owned())
-                    .ok_or_else(|| usage(format!("{name} needs a value"))),
-            }
-        };
-        match flag {
-            "--" => only_positionals = true,
-            "-" => positionals.push(PathBuf::from(text)),
-            "-h" | "--help" => help = true,
-            "-V" | "--version" => version = true,
-            "-out" | "--out" | "-o" => {
-                if r.out.is_some() {
-                    return Err(usage("-out given twice"));
-                }
-                r.out = Some(PathBuf::from(value(flag)?));
-            }
-            "-time" | "--time" => r.time = true,
-            "--runs" => {
-                let v = value(flag)?;
-                runs = Some(
-                    v.parse()
-                        .ok()
-                        .filter(|&n: &usize| (1..=1000).contains(&n))
-                        .ok_or_else(|| {
-                            usage(format!(
-                                "--runs expects an integer from 1 to 1000, not {v:?}"
-                            ))
-                        })?,
-                );
-            }
-            "--csv" => csv = Some(PathBuf::from(value(flag)?)),
-            "--no-pov" => no_pov = true,
-            "--no-gui" => r.no_gui = true,
-            "--threads" => {
-                let v = value(flag)?;
-                r.threads = Some(v.parse().ok().filter(|&n: &usize| n >= 1).ok_or_else(|| {
-                    usage(format!("--threads expects an integer >= 1, not {v:?}"))
-                })?);
-            }
-            "--aa" => {
-                let v = value(flag)?;
-                let max = rayoflight::render::MAX_AA;
-                r.aa = Some(
-                    v.parse()
-                        .ok()
-                        .filter(|n| (1..=max).contains(n))
-                        .ok_or_else(|| {
-                            usage(format!(
-                                "--aa expects an integer from 1 to {max}, not {v:?}"
-                            ))
-                        })?,
-                );
-            }
-            "--method" => {
-                let v = value(flag)?;
-                r.method = Some(rayoflight::study::method(&v).ok_or_else(|| {
-                    let names: Vec<_> = rayoflight::study::methods()
-                        .iter()
-                        .map(|m| m.name)
-                        .collect();
-                    usage(format!(
-                        "--method expects one of {}, not {v:?}",
-                        names.join(", ")
-                    ))
-                })?);
-            }
-            _ => return Err(usage(format!("unknown flag '{text}'"))),
+    let args = brief_spellings(args);
+    let subcommand = subcommand_named(&args);
+    let program = std::iter::once(OsString::from("rayoflight"));
+    let clap_error = |e: clap::Error| match e.kind() {
+        ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
+            Ok(Command::Print(e.render().to_string()))
         }
-    }
-
-    if help {
-        return Ok(Command::Help);
-    }
-    if version {
-        return Ok(Command::Version);
-    }
-    let mut positionals = positionals.into_iter();
-    let first = positionals.next();
-    let subcommand = first
-        .as_deref()
-        .and_then(|p| p.to_str())
-        .filter(|p| ["bench", "study", "export-pov", "plan"].contains(p));
-    if let (Some(name), Some(_)) = (subcommand, &r.method) {
-        return Err(usage(format!(
-            "--method belongs to rendering, not to '{name}'"
-        )));
-    }
-    if first.as_deref() == Some(std::path::Path::new("bench")) {
-        if let Some(extra) = positionals.next() {
-            return Err(usage(format!("unexpected argument '{}'", extra.display())));
+        _ => Err(UsageError::Invalid {
+            message: clap_message(&e),
+            command: subcommand,
+        }),
+    };
+    // The matches as well as the structs: the edits' order is in the
+    // matches only.
+    let matches = match Cli::command().try_get_matches_from(program.chain(args)) {
+        Ok(matches) => matches,
+        Err(e) => return clap_error(e),
+    };
+    let cli = match Cli::from_arg_matches(&matches) {
+        Ok(cli) => cli,
+        Err(e) => return clap_error(e),
+    };
+    Ok(match cli.command {
+        None => Command::Render(render_args(cli.render)?),
+        Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
+        Some(Sub::Plan { scene }) => Command::Plan { scene },
+        Some(Sub::Edit(e)) => {
+            let matches = matches
+                .subcommand_matches("edit")
+                .expect("clap matched the edit subcommand");
+            let given = in_order(matches, e.set, e.remove, e.add);
+            if given.is_empty() {
+                return Err(UsageError::Invalid {
+                    message: "nothing to do: give at least one --set, --remove or --add".to_owned(),
+                    command: subcommand,
+                });
+            }
+            Command::Edit(EditArgs {
+                edits: edit_args(given, &e.scene)?,
+                scene: e.scene,
+                out: e.out,
+            })
         }
-        if r.time || r.aa.is_some() || (csv.is_some() && r.out.is_some()) {
-            return Err(usage(
-                "bench takes --threads, --runs, --csv (or -out) and --no-pov",
-            ));
-        }
-        return Ok(Command::Bench(super::bench::BenchArgs {
-            threads: r
+        Some(Sub::Bench(b)) => Command::Bench(super::bench::BenchArgs {
+            threads: b
                 .threads
                 .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
-            runs: runs.unwrap_or(3),
-            csv: csv.or(r.out),
-            pov: !no_pov,
-        }));
-    }
-    if first.as_deref() == Some(std::path::Path::new("study")) {
-        if r.time || r.aa.is_some() || r.no_gui || csv.is_some() || no_pov {
-            return Err(usage(
-                "study takes --out DIR, --runs, --threads and scene files",
-            ));
+            runs: b.runs,
+            csv: b.csv,
+            pov: !b.no_pov,
+        }),
+        Some(Sub::Study(s)) => Command::Study(super::study::StudyArgs {
+            out: s.out,
+            runs: s.runs,
+            threads: s.threads,
+            scenes: s.scenes,
+        }),
+    })
+}
+
+fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
+    let edits = match &r.scene {
+        Some(scene) => {
+            let given = r.set.into_iter().map(|(p, v)| Given::Set(p, v));
+            edit_args(given.collect(), scene)?
         }
-        return Ok(Command::Study(super::study::StudyArgs {
-            out: r.out.unwrap_or_else(|| PathBuf::from("study")),
-            runs: runs.unwrap_or(3),
-            threads: r.threads,
-            scenes: positionals.collect(),
-        }));
-    }
-    if runs.is_some() || csv.is_some() || no_pov {
-        return Err(usage("--runs, --csv and --no-pov belong to 'bench'"));
-    }
-    if first.as_deref() == Some(std::path::Path::new("export-pov")) {
-        let scene = positionals
-            .next()
-            .ok_or_else(|| usage("export-pov needs a scene file"))?;
-        if let Some(extra) = positionals.next() {
-            return Err(usage(format!("unexpected argument '{}'", extra.display())));
+        // --set makes the render headless, which needs a scene.
+        None if !r.set.is_empty() => return Err(UsageError::NoScene),
+        None => Vec::new(),
+    };
+    Ok(RenderArgs {
+        scene: r.scene,
+        out: r.out,
+        time: r.time,
+        no_gui: r.no_gui,
+        threads: r.threads,
+        aa: r.aa,
+        method: r.method,
+        edits,
+    })
+}
+
+/// An edit flag as given, before its path is read.
+enum Given {
+    Set(String, String),
+    Remove(String),
+    Add(String),
+}
+
+/// The `--set`, `--remove` and `--add` of `matches`, in the order given on
+/// the command line: clap collects each flag's values apart, and their
+/// indices put them back in order.
+fn in_order(
+    matches: &ArgMatches,
+    set: Vec<(String, String)>,
+    remove: Vec<String>,
+    add: Vec<String>,
+) -> Vec<Given> {
+    let indices = |id: &str| matches.indices_of(id).into_iter().flatten();
+    let mut given: Vec<(usize, Given)> = Vec::new();
+    given.extend(
+        indices("set")
+            .zip(set)
+            .map(|(i, (p, v))| (i, Given::Set(p, v))),
+    );
+    given.extend(
+        indices("remove")
+            .zip(remove)
+            .map(|(i, p)| (i, Given::Remove(p))),
+    );
+    given.extend(indices("add").zip(add).map(|(i, k)| (i, Given::Add(k))));
+    given.sort_by_key(|(i, _)| *i);
+    given.into_iter().map(|(_, g)| g).collect()
+}
+
+/// The edits read: their paths, values and kinds checked (not yet against
+/// the scene).
+fn edit_args(given: Vec<Given>, scene: &Path) -> Result<Vec<EditArg>, UsageError> {
+    given
+        .into_iter()
+        .map(|g| match g {
+            Given::Set(path, value) => EditArg::set(&path, &value),
+            Given::Remove(path) => EditArg::remove(&path),
+            Given::Add(kind) => EditArg::add(&kind),
+        })
+        .collect::<Result<_, _>>()
+        .map_err(|error| UsageError::Edit {
+            scene: scene.to_owned(),
+            error,
+        })
+}
+
+/// The arguments with the brief's `-out` and `-time` spelled `--out` and
+/// `--time` (up to a `--`, after which every argument is a file).
+fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
+    let mut files_only = false;
+    args.into_iter()
+        .map(|arg| {
+            if files_only {
+                return arg;
+            }
+            match arg.to_str() {
+                Some("--") => {
+                    files_only = true;
+                    arg
+                }
+                Some(flag @ ("-out" | "-time")) => format!("-{flag}").into(),
+                Some(text) if text.starts_with("-out=") => format!("-{text}").into(),
+                _ => arg,
+            }
+        })
+        .collect()
+}
+
+/// The subcommands' names, as clap derives them from `Sub`.
+const SUBCOMMANDS: [&str; 5] = ["export-pov", "plan", "bench", "edit", "study"];
+
+/// The subcommand the arguments run, if any: only the first argument can
+/// name one (`args_conflicts_with_subcommands`).
+fn subcommand_named(args: &[OsString]) -> Option<&'static str> {
+    let first = args.first()?.to_str()?;
+    SUBCOMMANDS.into_iter().find(|name| *name == first)
+}
+
+/// One line for a clap error, in the words the hand-written parser used
+/// ("unknown flag '--frobnicate'", "--aa expects an integer from 1 to 16,
+/// not \"17\""); clap's own text spans several lines.
+fn clap_message(e: &clap::Error) -> String {
+    let text = |kind| match e.get(kind) {
+        Some(ContextValue::String(s)) => Some(s.clone()),
+        Some(ContextValue::Strings(s)) => Some(s.join(", ")),
+        Some(ContextValue::StyledStr(s)) => Some(s.to_string()),
+        _ => None,
+    };
+    // "--threads <N>" → "--threads".
+    let flag = text(ContextKind::InvalidArg)
+        .map(|a| a.split(' ').next().unwrap_or_default().to_owned())
+        .unwrap_or_default();
+    let value = text(ContextKind::InvalidValue).unwrap_or_default();
+    match e.kind() {
+        ErrorKind::UnknownArgument if flag.starts_with('-') => {
+            match text(ContextKind::SuggestedArg) {
+                Some(s) => format!("unknown flag '{flag}' (did you mean '{s}'?)"),
+                None => format!("unknown flag '{flag}'"),
+            }
         }
-        if r.time || r.no_gui || r.threads.is_some() || r.aa.is_some() {
-            return Err(usage("export-pov takes only a scene and -out"));
+        ErrorKind::UnknownArgument => format!("unexpected argument '{flag}'"),
+        ErrorKind::InvalidValue if value.is_empty() => format!("{flag} needs a value"),
+        ErrorKind::InvalidValue => match text(ContextKind::ValidValue) {
+            Some(valid) => format!("{flag} expects one of {valid}, not {value:?}"),
+            None => format!("{flag}: invalid value {value:?}"),
+        },
+        ErrorKind::ValueValidation => match std::error::Error::source(e) {
+            Some(why) => format!("{flag} {why}, not {value:?}"),
+            None => format!("{flag}: invalid value {value:?}"),
+        },
+        ErrorKind::ArgumentConflict => {
+            let prior = text(ContextKind::PriorArg).unwrap_or_default();
+            match text(ContextKind::InvalidSubcommand) {
+                // A second positional where there is room for one: clap
+                // takes it for a subcommand's name.
+                Some(extra) => format!("unexpected argument '{extra}'"),
+                None if prior.split(' ').next() == Some(flag.as_str()) => {
+                    format!("{flag} given twice")
+                }
+                None => format!("{flag} cannot be used with {prior}"),
+            }
         }
-        return Ok(Command::ExportPov { scene, out: r.out });
-    }
-    if first.as_deref() == Some(std::path::Path::new("plan")) {
-        let scene = positionals
-            .next()
-            .ok_or_else(|| usage("plan needs a scene file"))?;
-        if let Some(extra) = positionals.next() {
-            return Err(usage(format!("unexpected argument '{}'", extra.display())));
+        ErrorKind::MissingRequiredArgument => {
+            format!(
+                "missing argument {}",
+                text(ContextKind::InvalidArg).unwrap_or_default()
+            )
         }
-        if r.out.is_some() || r.time || r.no_gui || r.threads.is_some() || r.aa.is_some() {
-            return Err(usage("plan takes only a scene file"));
+        // Anything else: clap's first line, without its "error: ".
+        _ => {
+            let rendered = e.render().to_string();
+            let first = rendered.lines().next().unwrap_or_default();
+            first.strip_prefix("error: ").unwrap_or(first).to_owned()
         }
-        return Ok(Command::Plan { scene });
     }
-    if let Some(extra) = positionals.next() {
-        return Err(usage(format!(
-            "unexpected argument '{}' (one scene at a time)",
-            extra.display()
-        )));
-    }
-    r.scene = first;
-    Ok(Command::Render(r))
 }
 
 #[cfg(test)]
@@ -255,6 +565,24 @@ mod tests {
 
     fn p(args: &[&str]) -> Result<Command, UsageError> {
         parse(args.iter().map(OsString::from))
+    }
+
+    /// The message of a usage error.
+    fn message(result: Result<Command, UsageError>) -> String {
+        match result {
+            Err(UsageError::Invalid { message, .. }) => message,
+            other => panic!("expected a usage error, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn cli_is_well_formed() {
+        Cli::command().debug_assert();
+        let names: Vec<_> = Cli::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_owned())
+            .collect();
+        assert_eq!(names, SUBCOMMANDS);
     }
 
     #[test]
@@ -266,13 +594,21 @@ mod tests {
         assert_eq!(r.scene, Some(PathBuf::from("s.xml")));
         assert_eq!(r.out, Some(PathBuf::from("x.png")));
         assert!(r.time && r.headless());
+        assert_eq!(p(&["-time", "s.xml", "-out=x.png"]).unwrap(), gnu);
+        assert_eq!(p(&["-time", "s.xml", "-o", "x.png"]).unwrap(), gnu);
     }
 
     #[test]
     fn numbers_are_checked() {
-        assert!(p(&["s.xml", "--threads", "0"]).is_err());
-        assert!(p(&["s.xml", "--aa", "17"]).is_err());
-        assert!(p(&["s.xml", "--aa"]).is_err());
+        assert_eq!(
+            message(p(&["s.xml", "--threads", "0"])),
+            "--threads expects an integer >= 1, not \"0\""
+        );
+        assert_eq!(
+            message(p(&["s.xml", "--aa", "17"])),
+            "--aa expects an integer from 1 to 16, not \"17\""
+        );
+        assert_eq!(message(p(&["s.xml", "--aa"])), "--aa needs a value");
         let Ok(Command::Render(r)) = p(&["s.xml", "--aa", "4", "--threads=3"]) else {
             panic!()
         };
@@ -281,8 +617,50 @@ mod tests {
 
     #[test]
     fn unknown_flags_are_named() {
-        assert_eq!(p(&["-x"]).unwrap_err().0, "unknown flag '-x'");
-        assert_eq!(p(&["--outt", "a"]).unwrap_err().0, "unknown flag '--outt'");
+        assert_eq!(message(p(&["-x"])), "unknown flag '-x'");
+        assert_eq!(
+            message(p(&["--outt", "a"])),
+            "unknown flag '--outt' (did you mean '--out'?)"
+        );
+        assert_eq!(
+            message(p(&["a.xml", "b.xml"])),
+            "unexpected argument 'b.xml'"
+        );
+        assert_eq!(
+            message(p(&["s.xml", "-out", "a.png", "--out", "b.png"])),
+            "--out given twice"
+        );
+    }
+
+    #[test]
+    fn usage_errors_point_to_the_subcommands_help() {
+        let Err(UsageError::Invalid { command, .. }) = p(&["plan", "--frobnicate"]) else {
+            panic!()
+        };
+        assert_eq!(command, Some("plan"));
+        let Err(UsageError::Invalid { command, .. }) = p(&["s.xml", "--frobnicate"]) else {
+            panic!()
+        };
+        assert_eq!(command, None);
+    }
+
+    #[test]
+    fn help_and_version_are_printed() {
+        let Ok(Command::Print(help)) = p(&["--help"]) else {
+            panic!()
+        };
+        assert!(help.starts_with(USAGE) && help.contains("-out, --out FILE"));
+        let Ok(Command::Print(help)) = p(&["plan", "-h"]) else {
+            panic!()
+        };
+        assert!(help.contains("Usage: rayoflight plan <SCENE>"), "{help}");
+        let Ok(Command::Print(version)) = p(&["-V"]) else {
+            panic!()
+        };
+        assert_eq!(
+            version.trim(),
+            format!("rayoflight {}", env!("CARGO_PKG_VERSION"))
+        );
     }
 
     #[test]
@@ -295,6 +673,15 @@ mod tests {
             }
         );
         assert!(p(&["export-pov"]).is_err());
+        assert!(p(&["export-pov", "s.xml", "--time"]).is_err());
+    }
+
+    #[test]
+    fn a_scene_named_like_a_subcommand_is_given_as_a_path() {
+        let Ok(Command::Render(r)) = p(&["./bench"]) else {
+            panic!()
+        };
+        assert_eq!(r.scene, Some(PathBuf::from("./bench")));
     }
 
     #[test]
@@ -312,6 +699,7 @@ mod tests {
         assert!(p(&["bench", "--runs", "0"]).is_err());
         assert!(p(&["bench", "scene.xml"]).is_err());
         assert!(p(&["bench", "--aa", "2"]).is_err());
+        assert!(p(&["bench", "--csv", "a.csv", "-out", "b.csv"]).is_err());
         assert!(
             p(&["s.xml", "--runs", "2"]).is_err(),
             "--runs belongs to bench"
@@ -325,7 +713,7 @@ mod tests {
         };
         assert_eq!(r.method.as_ref().map(|m| m.name), Some("f32"));
         assert!(r.headless());
-        assert!(p(&["s.xml", "--method", "fast"]).is_err());
+        assert!(message(p(&["s.xml", "--method", "fast"])).contains("auto"));
         assert!(p(&["s.xml", "--method"]).is_err());
         assert!(p(&["study", "--method", "auto"]).is_err());
     }
@@ -362,10 +750,82 @@ mod tests {
     }
 
     #[test]
+    fn set_on_a_render_is_read_and_makes_it_headless() {
+        let Ok(Command::Render(r)) = p(&[
+            "s.xml",
+            "--set",
+            "model.depth=3",
+            "--set=light[1].x=-2",
+            "--threads",
+            "2",
+        ]) else {
+            panic!()
+        };
+        let expected = [
+            EditArg::set("model.depth", "3"),
+            EditArg::set("light[1].x", "-2"),
+        ];
+        assert_eq!(r.edits, expected.map(Result::unwrap));
+        assert!(r.headless());
+        assert_eq!(p(&["--set", "model.depth=3"]), Err(UsageError::NoScene));
+        assert!(message(p(&["s.xml", "--set", "model.depth"])).starts_with("--set expects"));
+        assert!(matches!(
+            p(&["s.xml", "--set", "model.dept=3"]),
+            Err(UsageError::Edit { .. })
+        ));
+        assert!(p(&["s.xml", "--remove", "light[1]"]).is_err(), "edit only");
+    }
+
+    #[test]
+    fn edit_keeps_the_order_of_its_flags() {
+        let Ok(Command::Edit(e)) = p(&[
+            "edit",
+            "s.xml",
+            "--remove",
+            "light[1]",
+            "--set",
+            "model.depth=3",
+            "--add",
+            "sphere",
+            "--set=object[1].color.red=0.5",
+            "-out",
+            "o.xml",
+        ]) else {
+            panic!()
+        };
+        let expected = [
+            EditArg::remove("light[1]"),
+            EditArg::set("model.depth", "3"),
+            EditArg::add("sphere"),
+            EditArg::set("object[1].color.red", "0.5"),
+        ];
+        assert_eq!(e.edits, expected.map(Result::unwrap));
+        assert_eq!((e.scene, e.out), ("s.xml".into(), Some("o.xml".into())));
+    }
+
+    #[test]
+    fn edit_refuses_what_it_cannot_read() {
+        assert!(message(p(&["edit", "s.xml"])).starts_with("nothing to do"));
+        assert!(
+            message(p(&["edit", "s.xml", "--set", "model.depth"])).starts_with("--set expects")
+        );
+        assert!(p(&["edit", "--set", "model.depth=3"]).is_err(), "no scene");
+        let Err(UsageError::Edit { scene, error }) = p(&["edit", "s.xml", "--add", "cube"]) else {
+            panic!()
+        };
+        assert_eq!(scene, PathBuf::from("s.xml"));
+        assert_eq!(error.to_string(), "cube: can add sphere, plane or light");
+    }
+
+    #[test]
     fn double_dash_ends_flags() {
         let Ok(Command::Render(r)) = p(&["--", "-weird.xml"]) else {
             panic!()
         };
         assert_eq!(r.scene, Some(PathBuf::from("-weird.xml")));
+        let Ok(Command::Render(r)) = p(&["--", "-out"]) else {
+            panic!()
+        };
+        assert_eq!(r.scene, Some(PathBuf::from("-out")));
     }
 }

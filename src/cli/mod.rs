@@ -5,65 +5,29 @@
 
 mod args;
 mod bench;
+mod edit;
 mod study;
 
-use args::{Command, RenderArgs, UsageError};
+use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
+use rayoflight::scene::edit::{EditError, Edited};
+use rayoflight::scene::splice;
 use rayoflight::{output, pov, render, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
-const USAGE: &str = "\
-Usage: rayoflight [-time] scene.xml [-out image.png] [--threads N] [--aa N] [--method NAME]
-       rayoflight export-pov scene.xml [-out scene.pov]
-       rayoflight plan scene.xml
-       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
-       rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]
-       rayoflight --help | --version";
-
-const HELP: &str = "\
-Renders an XML scene (spheres, planes, lights, one camera, an illumination
-model) to an image.
-
-Options:
-  -out, --out FILE   image to write; the format follows the extension
-                     (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp).
-                     Default: the scene's path with the extension .png
-  -time, --time      print the render time (prepare + trace) as 'render: N ns'
-  --threads N        render threads (default: one per core)
-  --aa N             N×N rays per pixel, 1 to 16 (default 1: the pixel centre)
-  --method NAME      render with a study method instead of auto (default,
-                     auto, f32, textbook, draft, …; see docs/study.md)
-  --no-gui           never open a window (the headless build never does)
-  -h, --help         this help
-  -V, --version      the version
-
-Subcommands:
-  export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
-  plan               what 'auto' will do for the scene, and why (renders
-                     use it: precision, BVH and culling, early stop, terms)
-  bench              time the bench scenes (against POV-Ray when installed),
-                     thread scaling, cost against object count, peak memory;
-                     --runs K (default 3), --csv FILE, --no-pov
-  study              speed against accuracy: every method (f32, textbook
-                     quadratic, offsets, anti-aliasing, depth cut, early
-                     stop, draft, auto) on the study scenes, or on the scene
-                     files given; a table on stdout, DIR/study.csv, the chart
-                     DIR/study.png and a picture of each failure
-                     (--out DIR, default ./study; --runs K, default 3)
-
-Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
-
 /// A failure at the edge: what to print and which status to exit with.
 enum Failure {
-    Usage(String),
+    /// Exit status 2.
+    Usage(UsageError),
+    /// A scene, render or output error, as printed: exit status 1.
     Error(String),
 }
 
 impl From<UsageError> for Failure {
     fn from(e: UsageError) -> Failure {
-        Failure::Usage(e.0)
+        Failure::Usage(e)
     }
 }
 
@@ -74,12 +38,20 @@ fn fail(e: impl std::fmt::Display) -> Failure {
 pub fn main() -> ExitCode {
     match run(std::env::args_os().skip(1)) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::Usage(msg)) if msg.is_empty() => {
+        Err(Failure::Usage(UsageError::NoScene)) => {
             eprintln!("{USAGE}");
             ExitCode::from(2)
         }
-        Err(Failure::Usage(msg)) => {
-            eprintln!("rayoflight: {msg}; see 'rayoflight --help'");
+        Err(Failure::Usage(UsageError::Invalid { message, command })) => {
+            let help = match command {
+                Some(name) => format!("rayoflight {name} --help"),
+                None => "rayoflight --help".to_owned(),
+            };
+            eprintln!("rayoflight: {message}; see '{help}'");
+            ExitCode::from(2)
+        }
+        Err(Failure::Usage(UsageError::Edit { scene, error })) => {
+            eprintln!("rayoflight: {}: {error}", scene.display());
             ExitCode::from(2)
         }
         Err(Failure::Error(msg)) => {
@@ -91,15 +63,12 @@ pub fn main() -> ExitCode {
 
 fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure> {
     match args::parse(args)? {
-        Command::Help => {
-            print_line(&format!("{USAGE}\n\n{HELP}"));
-            Ok(())
-        }
-        Command::Version => {
-            print_line(&format!("rayoflight {}", env!("CARGO_PKG_VERSION")));
+        Command::Print(text) => {
+            print_line(text.trim_end());
             Ok(())
         }
         Command::ExportPov { scene, out } => export_pov(&scene, out),
+        Command::Edit(args) => edit_scene(&args),
         Command::Plan { scene } => {
             let scene = scene::load(&scene).map_err(fail)?;
             for d in render::auto(&scene).decisions {
@@ -133,7 +102,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     }
     // No scene: the headless CLI prints its usage.
     let Some(scene_path) = r.scene.clone() else {
-        return Err(Failure::Usage(String::new()));
+        return Err(Failure::Usage(UsageError::NoScene));
     };
     let out = r
         .out
@@ -143,20 +112,23 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     refuse_same_file(&scene_path, &out)?;
     output::format_for(&out).map_err(fail)?;
 
-    let scene = scene::load(&scene_path).map_err(fail)?;
+    let mut edited = Edited::new(scene::load(&scene_path).map_err(fail)?);
+    // --set: in memory only, the scene file is never written.
+    edit::apply(&mut edited, &r.edits).map_err(refused(&scene_path))?;
+    let scene = edited.scene();
     let start = Instant::now();
     // `auto`: the exact options this scene needs (the reference image),
     // unless a study method is asked for.
     let options = match &r.method {
-        Some(method) => method.options_for(&scene),
-        None => render::auto(&scene).options,
+        Some(method) => method.options_for(scene),
+        None => render::auto(scene).options,
     };
     let options = render::RenderOptions {
         threads: r.threads,
         aa: r.aa.unwrap_or(options.aa),
         ..options
     };
-    let image = render::render(&scene, &options).map_err(fail)?;
+    let image = render::render(scene, &options).map_err(fail)?;
     let elapsed = start.elapsed();
     output::save(&image, &out).map_err(fail)?;
     if r.time {
@@ -172,9 +144,37 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
     use rayoflight::gui::{self, GuiError};
     match gui::run(scene) {
         Ok(()) => Ok(()),
-        Err(e @ (GuiError::NoDisplay | GuiError::Window(_))) => Err(Failure::Usage(e.to_string())),
+        Err(e @ (GuiError::NoDisplay | GuiError::Window(_))) => {
+            Err(Failure::Usage(UsageError::Invalid {
+                message: e.to_string(),
+                command: None,
+            }))
+        }
         Err(e) => Err(fail(e)),
     }
+}
+
+/// `rayoflight edit`: applies the edits and writes the scene's text back
+/// with only what they change changed, in place or to `-out`.
+fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
+    let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
+    let mut edited = Edited::new(loaded);
+    edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
+    let new_text = splice::save(&text, &args.scene, &edited)
+        .map_err(|e| Failure::Error(format!("{}: {e}", args.scene.display())))?;
+    let out = args.out.as_deref().unwrap_or(&args.scene);
+    // Edits that change nothing (a value set to the one it has) leave the
+    // scene file untouched, its modification time included.
+    if new_text == text && same_file(&args.scene, out) {
+        return Ok(());
+    }
+    output::write_atomic(out, new_text.as_bytes()).map_err(fail)
+}
+
+/// An edit `scene` refuses: a usage error (exit 2) that names the scene.
+fn refused(scene: &Path) -> impl FnOnce(EditError) -> Failure {
+    let scene = scene.to_owned();
+    |error| Failure::Usage(UsageError::Edit { scene, error })
 }
 
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
@@ -190,17 +190,22 @@ fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
 /// `./a/../s.xml` and symbolic links are caught), and on Unix the inode
 /// (hard links).
 fn refuse_same_file(scene: &Path, out: &Path) -> Result<(), Failure> {
-    let same = match (scene.canonicalize(), canonical_target(out)) {
-        (Ok(a), Some(b)) => a == b || same_inode(&a, &b),
-        _ => false,
-    };
-    if same {
+    if same_file(scene, out) {
         return Err(Failure::Error(format!(
             "{}: refusing to overwrite the scene file with the output",
             out.display()
         )));
     }
     Ok(())
+}
+
+/// Whether `out` names the existing file `scene`, by another path or
+/// through a link.
+fn same_file(scene: &Path, out: &Path) -> bool {
+    match (scene.canonicalize(), canonical_target(out)) {
+        (Ok(a), Some(b)) => a == b || same_inode(&a, &b),
+        _ => false,
+    }
 }
 
 /// Canonical form of a path that may not exist yet: its parent made

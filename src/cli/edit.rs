@@ -1,0 +1,131 @@
+//! Edits given on the command line: `rayoflight edit`'s `--set`,
+//! `--remove` and `--add`. Each is read into an [`EditArg`] when the
+//! arguments are parsed (its path and value checked), and turned into the
+//! library's [`Edit`] only when it is applied, against the scene as the
+//! edits before it left it: an added element's index depends on them.
+
+use rayoflight::scene::Scene;
+use rayoflight::scene::edit::{Edit, EditError, Edited, Field, Item, NewElement, Value};
+
+/// The paths `--set` and `--remove` take, for `rayoflight edit --help`
+/// (the engine's errors list them too).
+pub const PATHS: &str = "\
+Paths count from 1, in file order; objects are spheres and planes together.
+Values (--set PATH=VALUE):
+  model.type, model.depth
+  camera.width, camera.height, camera.eyeDistance
+  camera.transformation[K].<x|y|z|angle|factor>
+  object[N].color.<red|green|blue>
+  object[N].material.<ka|kd|ks|m>
+  object[N].transformation[K].<x|y|z|angle|factor>
+  light[N].<x|y|z>
+  light[N].color.<red|green|blue>
+Elements (--remove PATH):
+  object[N], light[N], object[N].transformation[K], camera.transformation[K]
+Each value is checked as the loader checks the file: ka >= 0, model.type
+one of ambient, lambert, phong, whitted, and so on.";
+
+/// One `--set`, `--remove` or `--add`, its path and value read.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EditArg {
+    Set(Field, Value),
+    Remove(Item),
+    Add(NewElement),
+}
+
+impl EditArg {
+    /// `--set PATH=VALUE`, split at the `=`.
+    pub fn set(path: &str, value: &str) -> Result<EditArg, EditError> {
+        let field = Field::parse(path)?;
+        Ok(EditArg::Set(field, field.parse_value(value)?))
+    }
+
+    /// `--remove PATH`.
+    pub fn remove(path: &str) -> Result<EditArg, EditError> {
+        Item::parse(path).map(EditArg::Remove)
+    }
+
+    /// `--add sphere|plane|light`.
+    pub fn add(kind: &str) -> Result<EditArg, EditError> {
+        NewElement::parse(kind).map(EditArg::Add)
+    }
+
+    /// The engine's edit, for `scene` as it is now: an added element goes
+    /// after the last of its kind.
+    fn edit(&self, scene: &Scene) -> Edit {
+        match *self {
+            EditArg::Set(field, value) => Edit::Set(field, value),
+            EditArg::Remove(item) => Edit::Remove(item),
+            EditArg::Add(kind) => Edit::add(scene, kind),
+        }
+    }
+}
+
+/// Applies `edits` to `edited` in order. The first one the scene refuses
+/// (a path naming nothing in it, a value out of range) stops there.
+pub fn apply(edited: &mut Edited, edits: &[EditArg]) -> Result<(), EditError> {
+    for arg in edits {
+        let edit = arg.edit(edited.scene());
+        edited.apply(&edit)?;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every path the help lists, with N = K = 1 and each `<a|b>` choice.
+    fn listed(section: &str) -> Vec<String> {
+        section
+            .lines()
+            .skip(1)
+            .take_while(|l| l.starts_with("  "))
+            .flat_map(|l| l.split(", "))
+            .map(|p| p.trim().replace(['N', 'K'], "1"))
+            .flat_map(|p| match p.split_once('<') {
+                Some((head, choices)) => choices
+                    .trim_end_matches('>')
+                    .split('|')
+                    .map(|c| format!("{head}{c}"))
+                    .collect(),
+                None => vec![p],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_help_lists_paths_the_engine_reads() {
+        let (values, elements) = PATHS.split_once("Elements").unwrap();
+        let values = listed(&values[values.find("Values").unwrap()..]);
+        let elements = listed(elements);
+        assert_eq!((values.len(), elements.len()), (28, 4));
+        for path in values {
+            Field::parse(&path).unwrap_or_else(|e| panic!("{e}"));
+        }
+        for path in elements {
+            Item::parse(&path).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+
+    #[test]
+    fn an_add_is_built_against_the_scene_as_the_edits_before_left_it() {
+        let scene = rayoflight::scene::parse(
+            rayoflight::EXAMPLE_SCENE,
+            std::path::Path::new("example.xml"),
+        )
+        .unwrap();
+        let mut edited = Edited::new(scene);
+        let n = edited.scene().objects.len();
+        let edits = [
+            EditArg::add("sphere").unwrap(),
+            EditArg::add("plane").unwrap(),
+            EditArg::set(&format!("object[{}].color.red", n + 2), "0.5").unwrap(),
+        ];
+        apply(&mut edited, &edits).unwrap();
+        let objects = &edited.scene().objects;
+        assert_eq!(objects.len(), n + 2);
+        assert_eq!(objects[n + 1].shape.name(), "plane");
+        assert_eq!(objects[n + 1].color.x, 0.5);
+    }
+}
