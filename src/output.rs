@@ -147,7 +147,14 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     // applies it at creation), not tempfile's private 0600.
     #[cfg(unix)]
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    let mut file = builder.tempfile_in(dir).map_err(io_error)?;
+    // tempfile names its own temporary path in its errors: report the
+    // system's error for the path the user gave.
+    let mut file = builder.tempfile_in(dir).map_err(|e| {
+        io_error(
+            e.raw_os_error()
+                .map_or(e, std::io::Error::from_raw_os_error),
+        )
+    })?;
     // A replaced file keeps its own permissions.
     if let Ok(meta) = std::fs::metadata(path) {
         file.as_file()

@@ -5,20 +5,9 @@
 
 mod common;
 
-use common::{TINY, files_in, stderr, stdout};
+use common::{TINY, files_in, rayoflight, stderr, stdout};
 use std::fs;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn rayoflight(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rayoflight"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("the binary runs")
-}
+use std::path::PathBuf;
 
 /// A temporary directory holding `tiny.xml`.
 fn workdir() -> (tempfile::TempDir, PathBuf) {

@@ -4,10 +4,10 @@
 
 mod common;
 
-use common::{files_in, stderr, stdout};
+use common::{files_in, rayoflight, stderr, stdout};
 use std::fs;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 /// Two spheres and a light, 8×8, with comments and formatting that an edit
 /// must keep.
@@ -33,16 +33,6 @@ const SCENE: &str = r#"<?xml version="1.0"?>
   <model type="phong" depth="2"/>
 </scene>
 "#;
-
-fn rayoflight(dir: &Path, args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_rayoflight"))
-        .args(args)
-        .current_dir(dir)
-        .env_remove("DISPLAY")
-        .env_remove("WAYLAND_DISPLAY")
-        .output()
-        .expect("the binary runs")
-}
 
 /// A temporary directory holding `s.xml`.
 fn workdir() -> (tempfile::TempDir, PathBuf) {
@@ -330,7 +320,7 @@ fn refused_edits_name_the_problem_and_touch_nothing() {
         (
             &["--add", "cube"],
             2,
-            "rayoflight: s.xml: cube: can add sphere, plane or light",
+            "rayoflight: s.xml: cube: not an element that can be added; those are sphere, plane and light",
         ),
         (
             &[],

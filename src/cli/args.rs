@@ -814,7 +814,10 @@ mod tests {
             panic!()
         };
         assert_eq!(scene, PathBuf::from("s.xml"));
-        assert_eq!(error.to_string(), "cube: can add sphere, plane or light");
+        assert_eq!(
+            error.to_string(),
+            "cube: not an element that can be added; those are sphere, plane and light"
+        );
     }
 
     #[test]

@@ -733,7 +733,10 @@ impl NewElement {
             "sphere" => Ok(NewElement::Sphere),
             "plane" => Ok(NewElement::Plane),
             "light" => Ok(NewElement::Light),
-            _ => Err(path_error(name, "can add sphere, plane or light")),
+            _ => Err(path_error(
+                name,
+                "not an element that can be added; those are sphere, plane and light",
+            )),
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use std::fs;
 use std::path::Path;
-use std::process::Output;
+use std::process::{Command, Output};
 
 /// xorshift64*: a small deterministic generator (seed ≠ 0).
 pub struct Rng(pub u64);
@@ -30,6 +30,18 @@ pub const TINY: &str = r#"<scene>
   <camera width="16" height="12" eyeDistance="2"/>
 </scene>
 "#;
+
+/// Runs the built binary in `dir` with no display, so that it never opens
+/// a window.
+pub fn rayoflight(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("the binary runs")
+}
 
 pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
