@@ -9,6 +9,7 @@ use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;
 use rayoflight::gui::document::{Document, FileState, Reload};
 use rayoflight::gui::preview::{Preview, RenderState};
+use rayoflight::gui::recent::Recent;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::render::{self, RenderOptions};
@@ -340,7 +341,11 @@ fn until_the_picture_is(
 
 #[test]
 fn a_panel_edit_renders_the_edited_scene() {
-    let app = RayOfLightApp::new(&egui::Context::default(), Document::builtin());
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::builtin(),
+        Recent::in_memory(),
+    );
     let mut harness = egui_kittest::Harness::builder()
         .with_size(egui::vec2(1200.0, 800.0))
         .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
@@ -463,7 +468,11 @@ fn a_study_is_cancelled_within_100_ms() {
 
 #[test]
 fn the_study_window_runs_the_study_and_picks_the_preview_method() {
-    let app = RayOfLightApp::new(&egui::Context::default(), Document::builtin());
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::builtin(),
+        Recent::in_memory(),
+    );
     let mut harness = egui_kittest::Harness::builder()
         .with_size(egui::vec2(1400.0, 1000.0))
         .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);

@@ -10,6 +10,7 @@
 use super::document::{Document, FileState, Reload, SaveError};
 use super::panel::{self, Selection};
 use super::preview::{Preview, RenderState};
+use super::recent::Recent;
 use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
 use super::worker::{Event, Worker};
@@ -113,7 +114,8 @@ enum DialogKind {
 
 /// What background threads send to the UI thread.
 enum Background {
-    File(FileEvent),
+    /// A file event from the watcher of this generation.
+    File(u64, FileEvent),
     Exported(PathBuf, Result<(), String>),
     Dialog(DialogKind, Option<PathBuf>, Duration),
 }
@@ -178,7 +180,10 @@ pub struct RayOfLightApp {
     study: StudyWindow,
     /// A transient message for the status bar (export done, save failed).
     notice: Option<(String, Instant)>,
-    recent: Vec<PathBuf>,
+    recent: Recent,
+    /// Which watcher is the current one: events of an older one (for a
+    /// file no longer open) still in the channel are dropped.
+    watch_generation: u64,
     /// Frame times of the last second, for the frames-per-second readout.
     frames: VecDeque<Instant>,
     /// The pixel under the cursor and its colour.
@@ -194,7 +199,9 @@ pub struct RayOfLightApp {
 }
 
 impl RayOfLightApp {
-    pub fn new(ctx: &egui::Context, doc: Document) -> RayOfLightApp {
+    /// The app on `doc`, with the recent-files list `recent`
+    /// ([`Recent::user`] in the app, [`Recent::in_memory`] in tests).
+    pub fn new(ctx: &egui::Context, doc: Document, recent: Recent) -> RayOfLightApp {
         let wake_ctx = ctx.clone();
         let worker = Worker::spawn(Worker::default_threads(), move || {
             wake_ctx.request_repaint()
@@ -222,7 +229,8 @@ impl RayOfLightApp {
             rendered_dragging: false,
             study: StudyWindow::default(),
             notice: None,
-            recent: super::recent::load(),
+            recent,
+            watch_generation: 0,
             frames: VecDeque::new(),
             hovered: None,
             ctx: ctx.clone(),
@@ -254,7 +262,13 @@ impl RayOfLightApp {
             },
             Command::Save => self.save(),
             Command::SaveAs => self.start_dialog(DialogKind::SaveAs),
-            Command::SaveAsPath => self.path_prompt = Some(PathPrompt::new(DialogKind::SaveAs)),
+            Command::SaveAsPath => {
+                let mut prompt = PathPrompt::new(DialogKind::SaveAs);
+                if let Some(path) = self.doc.path() {
+                    prompt.text = path.display().to_string();
+                }
+                self.path_prompt = Some(prompt);
+            }
             Command::SaveTo(path) => {
                 let other_file = path.exists()
                     && self
@@ -336,19 +350,21 @@ impl RayOfLightApp {
     /// (Re)starts watching the document's file, if it has one.
     fn watch(&mut self) {
         self.watcher = None;
+        self.watch_generation += 1;
         let Some(path) = self.doc.path().map(Path::to_owned) else {
             return;
         };
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
+        let generation = self.watch_generation;
         match SceneWatcher::new(&path, move |event| {
-            let _ = tx.send(Background::File(event));
+            let _ = tx.send(Background::File(generation, event));
             ctx.request_repaint();
         }) {
             Ok(w) => self.watcher = Some(w),
             Err(e) => self.notify(format!("{e}; saves from other editors will not show")),
         }
-        super::recent::push(&mut self.recent, &path);
+        self.recent.push(&path);
     }
 
     pub fn document(&self) -> &Document {
@@ -561,7 +577,11 @@ impl RayOfLightApp {
         }
         while let Ok(message) = self.background.try_recv() {
             match message {
-                Background::File(event) => self.file_event(event),
+                Background::File(generation, event) => {
+                    if generation == self.watch_generation {
+                        self.file_event(event);
+                    }
+                }
                 Background::Exported(path, Ok(())) => {
                     self.notify(format!("exported {}", path.display()))
                 }
@@ -668,10 +688,11 @@ impl RayOfLightApp {
                 pick(ui, true, "Open path…", Command::OpenPath);
                 pick(ui, true, "Open built-in example", Command::OpenBuiltin);
                 ui.menu_button("Recent", |ui| {
-                    if self.recent.is_empty() {
+                    let recent = self.recent.existing();
+                    if recent.is_empty() {
                         ui.label("(none)");
                     }
-                    for path in &self.recent {
+                    for path in &recent {
                         pick(
                             ui,
                             true,
@@ -744,10 +765,12 @@ impl RayOfLightApp {
                     .inner_margin(6.0),
             )
             .show(ui, |ui| {
-                ui.colored_label(
-                    Color32::WHITE,
-                    format!("The last save does not load; showing the last good scene.\n{error}"),
-                );
+                let what = if self.doc.is_placeholder() {
+                    "The file does not load yet; it will show as soon as it does."
+                } else {
+                    "The last save does not load; showing the last good scene."
+                };
+                ui.colored_label(Color32::WHITE, format!("{what}\n{error}"));
             });
     }
 
@@ -793,7 +816,11 @@ impl RayOfLightApp {
                     FileState::Builtin => "built-in example".to_owned(),
                     FileState::Missing => "file missing: waiting for it to come back".to_owned(),
                     FileState::Watching if self.doc.error().is_some() => {
-                        "file has errors".to_owned()
+                        if self.doc.has_unsaved_edits() {
+                            "file has errors · unsaved edits".to_owned()
+                        } else {
+                            "file has errors".to_owned()
+                        }
                     }
                     FileState::Watching if self.doc.has_unsaved_edits() => {
                         "unsaved edits (Ctrl+S saves)".to_owned()
@@ -937,41 +964,45 @@ impl RayOfLightApp {
 
     fn confirm_modal(&mut self, ui: &mut egui::Ui, confirm: Confirm) {
         let mut answer = None;
-        egui::Modal::new(egui::Id::unique("confirm")).show(ui.ctx(), |ui| match &confirm {
-            Confirm::Discard(command) => {
-                ui.heading("Unsaved edits");
-                ui.label(format!(
-                    "{} has edits that are not saved. {}",
-                    self.doc.title(),
-                    match command {
-                        Command::Quit => "Quit anyway?",
-                        Command::Reload => "Reload the file and lose them?",
-                        _ => "Open another scene and lose them?",
-                    }
-                ));
-                ui.horizontal(|ui| {
-                    if ui.button("Save first").clicked() {
-                        answer = Some(Answer::SaveThen);
-                    }
-                    if ui.button("Discard edits").clicked() {
-                        answer = Some(Answer::Go);
-                    }
-                    if ui.button("Cancel").clicked() {
-                        answer = Some(Answer::Cancel);
-                    }
-                });
-            }
-            Confirm::Replace(path) => {
-                ui.heading("Replace the file?");
-                ui.label(format!("{} already exists.", path.display()));
-                ui.horizontal(|ui| {
-                    if ui.button("Replace").clicked() {
-                        answer = Some(Answer::Go);
-                    }
-                    if ui.button("Cancel").clicked() {
-                        answer = Some(Answer::Cancel);
-                    }
-                });
+        egui::Modal::new(egui::Id::unique("confirm")).show(ui.ctx(), |ui| {
+            // One width whatever the text: the buttons stay where they were.
+            ui.set_width(460.0);
+            match &confirm {
+                Confirm::Discard(command) => {
+                    ui.heading("Unsaved edits");
+                    ui.label(format!(
+                        "{} has edits that are not saved. {}",
+                        self.doc.title(),
+                        match command {
+                            Command::Quit => "Quit anyway?",
+                            Command::Reload => "Reload the file and lose them?",
+                            _ => "Open another scene and lose them?",
+                        }
+                    ));
+                    ui.horizontal(|ui| {
+                        if ui.button("Save first").clicked() {
+                            answer = Some(Answer::SaveThen);
+                        }
+                        if ui.button("Discard edits").clicked() {
+                            answer = Some(Answer::Go);
+                        }
+                        if ui.button("Cancel").clicked() {
+                            answer = Some(Answer::Cancel);
+                        }
+                    });
+                }
+                Confirm::Replace(path) => {
+                    ui.heading("Replace the file?");
+                    ui.label(format!("{} already exists.", path.display()));
+                    ui.horizontal(|ui| {
+                        if ui.button("Replace").clicked() {
+                            answer = Some(Answer::Go);
+                        }
+                        if ui.button("Cancel").clicked() {
+                            answer = Some(Answer::Cancel);
+                        }
+                    });
+                }
             }
         });
         if ui.input(|i| i.key_pressed(Key::Escape)) {
@@ -1006,9 +1037,11 @@ impl RayOfLightApp {
         let mut done = None;
         egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
             ui.heading("The file changed on disk");
+            ui.set_max_width(640.0);
             ui.label(
-                "Another program saved the scene file. Your other edits were applied onto its \
-                 version; these changed the same values. Choose, for each, which to keep:",
+                "Another program saved the scene file, and it changed values you have \
+                 edited too (any other edits of yours are applied onto its version). \
+                 Choose which to keep:",
             );
             egui::Grid::new("conflicts").num_columns(3).show(ui, |ui| {
                 ui.strong("value");

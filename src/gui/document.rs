@@ -140,7 +140,8 @@ pub struct Document {
     /// (never read, or missing).
     disk: Option<u64>,
     /// The scene the file holds as of the last read or write.
-    saved: Scene,
+    /// (With the origins it had then: reverting keeps every element's text.)
+    saved: Edited,
     /// The scene on screen: `saved` plus the unsaved edits.
     edited: Edited,
     /// `edited` differs from `saved`.
@@ -168,7 +169,7 @@ impl Document {
             disk: Some(fingerprint(text.as_bytes())),
             labels: splice::object_labels(&text),
             source: text,
-            saved: scene.clone(),
+            saved: Edited::new(scene.clone()),
             edited: Edited::new(scene),
             dirty: false,
             log: Vec::new(),
@@ -291,6 +292,12 @@ impl Document {
         }
     }
 
+    /// The scene with, for each element, where it came from in the text
+    /// last read from disk.
+    pub fn edited(&self) -> &Edited {
+        &self.edited
+    }
+
     // ----- edits, undo, redo -----
 
     /// Applies an edit as one undo step.
@@ -348,9 +355,23 @@ impl Document {
             });
         }
         self.redo.clear();
-        self.log.extend(edits);
+        for edit in edits {
+            self.log_edit(edit);
+        }
         self.update_dirty();
         Ok(())
+    }
+
+    /// Adds `edit` to the unsaved edits. A value set again right after it
+    /// was set (each step of a drag) replaces the earlier one: a merge
+    /// replays, and asks about, each value once.
+    fn log_edit(&mut self, edit: Edit) {
+        if let (Edit::Set(field, _), Some(Edit::Set(last, _))) = (&edit, self.log.last())
+            && field == last
+        {
+            self.log.pop();
+        }
+        self.log.push(edit);
     }
 
     /// Ends a drag: the next edit of the same field is a step of its own.
@@ -397,7 +418,7 @@ impl Document {
             // state, so it applies; one that does not is skipped rather than
             // leaving the stack half done.
             if let Ok(reverse) = self.edited.undo(undo) {
-                self.log.push(edit);
+                self.log_edit(edit);
                 back.push(reverse);
             }
         }
@@ -411,7 +432,7 @@ impl Document {
     }
 
     fn update_dirty(&mut self) {
-        self.dirty = self.scene() != &self.saved;
+        self.dirty = self.scene() != self.saved.scene();
         if !self.dirty {
             // Back to what the file holds: nothing to replay onto it.
             self.log.clear();
@@ -419,26 +440,16 @@ impl Document {
     }
 
     /// Drops the unsaved edits: back to the file's scene, as one undo step.
+    /// Undoing the revert brings the edits back by their paths.
     pub fn revert(&mut self) {
         if !self.dirty {
             return;
         }
-        let edits = merge::edits_between(self.scene(), &self.saved.clone());
-        self.apply_all("revert edits", edits);
-    }
-
-    /// Applies `edits` as one undo step.
-    fn apply_all(&mut self, label: &str, edits: Vec<Edit>) {
-        let mut undos = Vec::new();
-        for edit in edits {
-            if let Ok(undo) = self.edited.apply(&edit) {
-                undos.push(undo);
-                self.log.push(edit);
-            }
-        }
+        let back = merge::edits_between(self.saved.scene(), self.scene());
+        self.edited = self.saved.clone();
         self.undo.push(Step {
-            label: label.to_owned(),
-            undos,
+            label: "revert edits".to_owned(),
+            undos: back.into_iter().rev().map(Undo::from_edit).collect(),
             dragging: None,
         });
         self.redo.clear();
@@ -484,7 +495,7 @@ impl Document {
         choices: &BTreeMap<usize, Choice>,
         save_after: bool,
     ) -> Reload {
-        let merged = merge::merge(&self.saved, &theirs, &self.log, choices);
+        let merged = merge::merge(self.saved.scene(), &theirs, &self.log, choices);
         if !merged.conflicts.is_empty() {
             self.conflict = Some(PendingMerge {
                 text,
@@ -506,7 +517,7 @@ impl Document {
         self.disk = Some(fingerprint(text.as_bytes()));
         self.labels = splice::object_labels(&text);
         self.source = text;
-        self.saved = theirs;
+        self.saved = Edited::new(theirs);
         self.edited = edited;
         self.log = log;
         // The origins the stacks would restore point into the old text.
@@ -617,7 +628,7 @@ impl Document {
         let text = splice::save(&self.source, path, &self.edited)?;
         crate::output::write_atomic(path, text.as_bytes())?;
         self.disk = Some(fingerprint(text.as_bytes()));
-        self.saved = self.scene().clone();
+        self.saved = self.edited.clone();
         self.log.clear();
         self.dirty = false;
         if self.state == FileState::Missing {

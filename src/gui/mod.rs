@@ -3,8 +3,10 @@
 //! edit and each save of the file.
 //!
 //! - [`app`]: the window: layout, menus, keys, the picture.
-//! - [`panel`]: the side panel's widgets.
-//! - [`document`]: the file's text and scene, the unsaved panel edits.
+//! - [`panel`]: the side panel's widgets; they return edits, never change
+//!   the scene themselves.
+//! - [`document`]: the file's text, the scene with its unsaved edits, undo
+//!   and redo, saves that never write over unread text, merges.
 //! - [`worker`]: the background render thread, coarse to fine, newest wins.
 //! - [`preview`]: the picture assembled from the worker's tiles.
 //! - [`watcher`]: the file watcher (notify), debounced.
@@ -17,7 +19,7 @@ pub mod app;
 pub mod document;
 mod panel;
 pub mod preview;
-mod recent;
+pub mod recent;
 pub mod study;
 pub mod watcher;
 pub mod worker;
@@ -62,7 +64,13 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
     eframe::run_native(
         "RayOfLight",
         options,
-        Box::new(move |cc| Ok(Box::new(app::RayOfLightApp::new(&cc.egui_ctx, doc)))),
+        Box::new(move |cc| {
+            Ok(Box::new(app::RayOfLightApp::new(
+                &cc.egui_ctx,
+                doc,
+                recent::Recent::user(),
+            )))
+        }),
     )
     .map_err(|e| GuiError::Window(e.to_string()))
 }

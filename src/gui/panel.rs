@@ -84,7 +84,8 @@ impl Form<'_> {
         response
     }
 
-    /// An angle in radians (as the file holds it), shown in degrees.
+    /// An angle in radians (as the file holds it), shown in degrees to six
+    /// decimals (-0.1 rad is -5.729578°).
     fn angle(&mut self, ui: &mut Ui, field: Field) -> Response {
         let Ok(Value::Number(radians)) = field.get(self.scene) else {
             return ui.label("?");
@@ -94,14 +95,15 @@ impl Form<'_> {
         let response = ui.add(
             DragValue::new(&mut degrees)
                 .speed(1.0)
-                .custom_formatter(|v, _| number_text(v))
+                .custom_formatter(|v, _| degrees_text(v))
                 .suffix("°"),
         );
         self.note(&response);
-        // Compared in degrees, as shown: Enter on an untouched field gives
-        // back the same degrees and no edit (the radians would not round
-        // trip through degrees).
-        if response.changed() && degrees.to_bits() != old.to_bits() {
+        // Enter on an untouched field reads back the text shown: that is no
+        // edit (the file's radians would not survive the round trip).
+        let shown = degrees_text(old).parse::<f64>().unwrap_or(old);
+        let untouched = degrees.to_bits() == old.to_bits() || degrees.to_bits() == shown.to_bits();
+        if response.changed() && !untouched {
             self.set(field, Value::Number(degrees.to_radians()), &response);
         }
         response
@@ -126,6 +128,17 @@ impl Form<'_> {
 
     fn edit(&mut self, edit: Edit) {
         self.out.edits.push(edit);
+    }
+}
+
+/// Degrees to six decimals, without trailing zeros.
+fn degrees_text(v: f64) -> String {
+    let text = format!("{v:.6}");
+    let text = text.trim_end_matches('0').trim_end_matches('.');
+    if text == "-0" {
+        "0".to_owned()
+    } else {
+        text.to_owned()
     }
 }
 

@@ -922,6 +922,11 @@ impl Edited {
         self.objects.get(n)?.as_ref().map(|o| o.index)
     }
 
+    /// The index, among the loaded text's lights, that light `n` came from.
+    pub fn light_origin(&self, n: usize) -> Option<usize> {
+        *self.lights.get(n)?
+    }
+
     /// Applies `edit` if the result is a valid scene, and returns what undoes
     /// it; on an error nothing changes.
     pub fn apply(&mut self, edit: &Edit) -> Result<Undo, EditError> {
