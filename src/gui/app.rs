@@ -461,16 +461,24 @@ impl RayOfLightApp {
 
     fn save(&mut self) {
         match self.doc.save() {
-            Ok(Reload::Merged) => self.notify("merged the file's changes and saved".into()),
+            Ok(Reload::Merged) => {
+                self.notify("merged the file's changes and saved".into());
+                self.after_edit();
+            }
+            Ok(Reload::Replaced) => {
+                self.notify(
+                    "the file changed on disk and nothing here was unsaved: showing it".into(),
+                );
+                self.after_edit();
+            }
             Ok(_) => self.notify("saved".into()),
             Err(SaveError::NoPath) => self.start_dialog(DialogKind::SaveAs),
             Err(SaveError::Conflict) => {
-                self.notify("the file changed on disk: choose between the versions".into())
+                self.notify("the file changed on disk: choose between the versions".into());
+                self.conflict_choices.clear();
             }
             Err(e) => self.notify(format!("not saved: {e}")),
         }
-        // A merge may have brought the file's changes in.
-        self.request_render();
     }
 
     fn save_as(&mut self, path: &Path) {

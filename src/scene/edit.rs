@@ -567,8 +567,9 @@ impl Field {
         })
     }
 
-    /// The element the field belongs to, if it is an object or a light.
-    fn item(self) -> Option<Item> {
+    /// The element the field belongs to, if it is an object, a light or a
+    /// transformation step.
+    pub fn item(self) -> Option<Item> {
         match self {
             Field::Color { object, .. } | Field::Material { object, .. } => {
                 Some(Item::Object(object))
@@ -767,7 +768,7 @@ fn count_message(len: usize, what: &str) -> String {
     }
 }
 
-fn transform_of(scene: &Scene, owner: Owner) -> Result<&Transform, EditError> {
+pub(crate) fn transform_of(scene: &Scene, owner: Owner) -> Result<&Transform, EditError> {
     match owner {
         Owner::Camera => Ok(&scene.camera.transform),
         Owner::Object(n) => Ok(&object_of(scene, n)?.transform),

@@ -19,7 +19,7 @@
 use std::collections::BTreeMap;
 
 use super::Scene;
-use super::edit::{Edit, Edited, Element, Field, Item, Owner, Value};
+use super::edit::{Edit, Edited, Element, Field, Item, Owner, Value, transform_of};
 use crate::math::TransformStep;
 
 /// How a conflict is settled.
@@ -136,10 +136,7 @@ fn edit_path(edit: &Edit) -> String {
 }
 
 fn steps(scene: &Scene, owner: Owner) -> Option<&[TransformStep]> {
-    match owner {
-        Owner::Camera => Some(scene.camera.transform.steps()),
-        Owner::Object(n) => scene.objects.get(n).map(|o| o.transform.steps()),
-    }
+    transform_of(scene, owner).ok().map(|t| t.steps())
 }
 
 /// The element `item` names, compared between the two scenes: `None` when
@@ -165,18 +162,6 @@ fn count_changed(base: &Scene, theirs: &Scene, item: Item) -> bool {
     }
 }
 
-/// The element a field belongs to (objects for their steps too).
-fn field_item(field: Field) -> Option<Item> {
-    match field {
-        Field::Color { object, .. } | Field::Material { object, .. } => Some(Item::Object(object)),
-        Field::Step { owner, step, .. } => Some(Item::Step(owner, step)),
-        Field::LightPosition { light, .. } | Field::LightColor { light, .. } => {
-            Some(Item::Light(light))
-        }
-        _ => None,
-    }
-}
-
 fn conflict(base: &Scene, theirs: &Scene, edit: &Edit) -> Option<Conflict> {
     let make = |path: String, yours: String, theirs: String, can_keep_yours| {
         Some(Conflict {
@@ -198,7 +183,7 @@ fn conflict(base: &Scene, theirs: &Scene, edit: &Edit) -> Option<Conflict> {
                     false,
                 );
             };
-            if let Some(item) = field_item(*field)
+            if let Some(item) = field.item()
                 && count_changed(base, theirs, item)
                 && same_element(base, theirs, item) == Some(false)
             {

@@ -787,16 +787,15 @@ impl Editor<'_, '_> {
             match doc.child(node, "material") {
                 Some(m) => {
                     let (om, em) = (o.material, e.material);
-                    for (attr, ov, ev) in [
-                        ("ka", om.ka, em.ka),
-                        ("kd", om.kd, em.kd),
-                        ("ks", om.ks, em.ks),
-                        ("m", om.m, em.m),
-                    ] {
-                        if ov != ev {
-                            self.set_attr(m, attr, &num(ev));
-                        }
-                    }
+                    self.set_numbers(
+                        m,
+                        &[
+                            ("ka", om.ka, em.ka),
+                            ("kd", om.kd, em.kd),
+                            ("ks", om.ks, em.ks),
+                            ("m", om.m, em.m),
+                        ],
+                    );
                 }
                 None => new_items.push((1, vec![(0, material_tag(&e.material, true))])),
             }
@@ -813,15 +812,7 @@ impl Editor<'_, '_> {
     }
 
     fn light(&mut self, node: usize, o: &Light, e: &Light) -> Result<(), EditError> {
-        for (attr, ov, ev) in [
-            ("x", o.position.x, e.position.x),
-            ("y", o.position.y, e.position.y),
-            ("z", o.position.z, e.position.z),
-        ] {
-            if ov != ev {
-                self.set_attr(node, attr, &num(ev));
-            }
-        }
+        self.set_vec3(node, ["x", "y", "z"], o.position, e.position);
         if o.color != e.color {
             match self.doc.child(node, "color") {
                 Some(c) => self.set_color(c, o.color, e.color),
@@ -898,11 +889,7 @@ impl Editor<'_, '_> {
         use TransformStep as S;
         match (*a, *b) {
             (S::Translate(u), S::Translate(v)) | (S::Scale(u), S::Scale(v)) => {
-                for (attr, ov, ev) in [("x", u.x, v.x), ("y", u.y, v.y), ("z", u.z, v.z)] {
-                    if ov != ev {
-                        self.set_attr(node, attr, &num(ev));
-                    }
-                }
+                self.set_vec3(node, ["x", "y", "z"], u, v);
             }
             (S::RotateX(u), S::RotateX(v))
             | (S::RotateY(u), S::RotateY(v))
@@ -922,9 +909,28 @@ impl Editor<'_, '_> {
     }
 
     fn set_color(&mut self, node: usize, o: Color, e: Color) {
-        for (attr, ov, ev) in [("red", o.x, e.x), ("green", o.y, e.y), ("blue", o.z, e.z)] {
-            if ov != ev {
-                self.set_attr(node, attr, &num(ev));
+        self.set_vec3(node, ["red", "green", "blue"], o, e);
+    }
+
+    /// Sets the three attributes `names` of `node` that changed from `o`
+    /// to `e`.
+    fn set_vec3(&mut self, node: usize, names: [&str; 3], o: Vec3, e: Vec3) {
+        self.set_numbers(
+            node,
+            &[
+                (names[0], o.x, e.x),
+                (names[1], o.y, e.y),
+                (names[2], o.z, e.z),
+            ],
+        );
+    }
+
+    /// Sets each attribute of `node` whose value changed, `(name, old,
+    /// new)`; the others keep their text.
+    fn set_numbers(&mut self, node: usize, values: &[(&str, f64, f64)]) {
+        for &(attr, old, new) in values {
+            if old != new {
+                self.set_attr(node, attr, &num(new));
             }
         }
     }
