@@ -743,9 +743,6 @@ fn commented_scenes() -> Vec<(String, String)> {
         files.sort();
         for file in files {
             let text = std::fs::read_to_string(&file).unwrap();
-            if text.len() > 200_000 {
-                continue;
-            }
             let mut commented = String::new();
             for (i, line) in text.lines().enumerate() {
                 let trimmed = line.trim_start();

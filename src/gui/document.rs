@@ -98,9 +98,26 @@ struct Step {
     label: String,
     /// Applied last to first.
     undos: Vec<Undo>,
-    /// Values being dragged: the next edit of the same fields in the same
+    /// What is being dragged: the next edit of the same values in the same
     /// drag joins this step.
-    dragging: Option<Vec<Field>>,
+    dragging: Option<DragKey>,
+}
+
+/// The values a drag changes: a field each, `None` for the camera's
+/// transformation.
+type DragKey = Vec<Option<Field>>;
+
+/// What `edits` change, if they are edits a drag makes (set values, move
+/// the camera).
+fn drag_key(edits: &[Edit]) -> Option<DragKey> {
+    edits
+        .iter()
+        .map(|e| match e {
+            Edit::Set(field, _) => Some(Some(*field)),
+            Edit::CameraTransform(_) => Some(None),
+            Edit::Insert(..) | Edit::Remove(_) => None,
+        })
+        .collect()
 }
 
 /// "ka of #2 sphere"; "colour of #1 sphere" for a colour's channels set
@@ -292,6 +309,11 @@ impl Document {
         }
     }
 
+    /// The scene as the file holds it (after the last read or write).
+    pub fn file_scene(&self) -> &Scene {
+        self.saved.scene()
+    }
+
     /// The scene with, for each element, where it came from in the text
     /// last read from disk.
     pub fn edited(&self) -> &Edited {
@@ -333,25 +355,15 @@ impl Document {
                 }
             }
         }
-        let fields: Option<Vec<Field>> = dragging
-            .then(|| {
-                edits
-                    .iter()
-                    .map(|e| match e {
-                        Edit::Set(field, _) => Some(*field),
-                        _ => None,
-                    })
-                    .collect()
-            })
-            .flatten();
-        let joins = fields.is_some()
+        let key = if dragging { drag_key(&edits) } else { None };
+        let joins = key.is_some()
             && self.redo.is_empty()
-            && self.undo.last().is_some_and(|s| s.dragging == fields);
+            && self.undo.last().is_some_and(|s| s.dragging == key);
         if !joins {
             self.undo.push(Step {
                 label,
                 undos,
-                dragging: fields,
+                dragging: key,
             });
         }
         self.redo.clear();
@@ -363,12 +375,15 @@ impl Document {
     }
 
     /// Adds `edit` to the unsaved edits. A value set again right after it
-    /// was set (each step of a drag) replaces the earlier one: a merge
-    /// replays, and asks about, each value once.
+    /// was set (each step of a drag), or the camera moved again, replaces
+    /// the earlier one: a merge replays, and asks about, each value once.
     fn log_edit(&mut self, edit: Edit) {
-        if let (Edit::Set(field, _), Some(Edit::Set(last, _))) = (&edit, self.log.last())
-            && field == last
-        {
+        let replaces = match (&edit, self.log.last()) {
+            (Edit::Set(field, _), Some(Edit::Set(last, _))) => field == last,
+            (Edit::CameraTransform(_), Some(Edit::CameraTransform(_))) => true,
+            _ => false,
+        };
+        if replaces {
             self.log.pop();
         }
         self.log.push(edit);

@@ -23,6 +23,8 @@ pub enum RenderState {
         rays: u64,
     },
     Failed(String),
+    /// Stopped by the user (Esc) before it finished.
+    Cancelled,
 }
 
 #[derive(Debug, Clone)]
@@ -71,6 +73,14 @@ impl Preview {
     /// current render.
     pub fn first_pass(&self) -> Option<Duration> {
         self.first_pass
+    }
+
+    /// The render in progress was cancelled: its late events are dropped
+    /// (their generation is old) and the state says so.
+    pub fn cancel(&mut self) {
+        if matches!(self.state, RenderState::Rendering { .. }) {
+            self.state = RenderState::Cancelled;
+        }
     }
 
     /// Whether a render has completed at least once.

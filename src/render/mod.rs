@@ -4,10 +4,12 @@
 //! and nothing more); [`render_tile`] traces one rectangle of pixels, checking
 //! a [`Cancel`] token once per pixel; [`render`] does the whole image on a
 //! rayon pool. [`RenderOptions`] holds every method choice; its default is
-//! the contract's reference image.
+//! the contract's reference image. [`navigate`] moves the camera as a
+//! viewport does (orbit, pan, dolly).
 
 mod auto;
 mod camera;
+pub mod navigate;
 mod prepared;
 mod tile;
 

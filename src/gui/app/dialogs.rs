@@ -1,0 +1,360 @@
+//! Files and questions: opening, saving and exporting (with the system's
+//! file dialogs, or a plain path field where none can open), and the modal
+//! questions — unsaved edits, replacing a file, conflicts with the file on
+//! disk.
+
+use super::*;
+
+/// A question the app is waiting on.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) enum Confirm {
+    /// `Command` would drop unsaved edits.
+    Discard(Command),
+    /// Save as would replace this existing file.
+    Replace(PathBuf),
+}
+
+/// A file dialog running on its own thread, so the window keeps painting.
+pub(super) enum DialogKind {
+    Open,
+    SaveAs,
+    Export,
+}
+
+/// An answer to a [`Confirm`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(super) enum Answer {
+    Go,
+    SaveThen,
+    Cancel,
+}
+
+/// Whether two paths name the same file (through links).
+pub(super) fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
+}
+
+/// A plain path field, offered where no file dialog can open.
+pub(super) struct PathPrompt {
+    kind: DialogKind,
+    text: String,
+    /// Keyboard focus was given to the field (once, when it opened).
+    focused: bool,
+}
+
+impl PathPrompt {
+    /// A field for `kind`, holding `text` to start from.
+    pub(super) fn new(kind: DialogKind, text: Option<String>) -> PathPrompt {
+        PathPrompt {
+            kind,
+            text: text.unwrap_or_default(),
+            focused: false,
+        }
+    }
+}
+
+impl RayOfLightApp {
+    /// Replaces the document by the file at `path` (the caller asked about
+    /// unsaved edits). A file that does not load opens with its error shown.
+    pub(super) fn open(&mut self, path: &Path) {
+        match Document::open(path) {
+            Ok(doc) => self.replace_document(doc),
+            Err(e) => self.notify(e.to_string()),
+        }
+    }
+
+    pub(super) fn save(&mut self) {
+        match self.doc.save() {
+            Ok(Reload::Merged) => {
+                self.notify("merged the file's changes and saved".into());
+                self.after_edit();
+            }
+            Ok(Reload::Replaced) => {
+                self.notify(
+                    "the file changed on disk and nothing here was unsaved: showing it".into(),
+                );
+                self.after_edit();
+            }
+            Ok(_) => self.notify("saved".into()),
+            Err(SaveError::NoPath) => self.start_dialog(DialogKind::SaveAs),
+            Err(SaveError::Conflict) => {
+                self.notify("the file changed on disk: choose between the versions".into());
+                self.conflict_choices.clear();
+            }
+            Err(e) => self.notify(format!("not saved: {e}")),
+        }
+    }
+
+    pub(super) fn save_as(&mut self, path: &Path) {
+        match self.doc.save_as(path) {
+            Ok(()) => {
+                self.notify(format!("saved as {}", path.display()));
+                self.watch();
+            }
+            Err(e) => self.notify(format!("not saved: {e}")),
+        }
+    }
+
+    /// Renders at full resolution with the chosen anti-aliasing on a
+    /// background thread and writes the file atomically.
+    pub(super) fn export(&mut self, path: PathBuf) {
+        if let Err(e) = crate::output::format_for(&path) {
+            self.notify(e.to_string());
+            return;
+        }
+        let scene = self.doc.scene().clone();
+        // Exports are exact whatever the preview uses: auto's options.
+        let options = RenderOptions {
+            threads: Some(Worker::default_threads()),
+            aa: self.aa,
+            ..render::auto(&scene).options
+        };
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        self.notify(format!("exporting {}…", path.display()));
+        std::thread::spawn(move || {
+            let result = render::render(&scene, &options)
+                .map_err(|e| e.to_string())
+                .and_then(|image| crate::output::save(&image, &path).map_err(|e| e.to_string()));
+            let _ = tx.send(Background::Exported(path, result));
+            ctx.request_repaint();
+        });
+    }
+
+    pub(super) fn start_dialog(&mut self, kind: DialogKind) {
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        let start_dir = self.doc.path().and_then(Path::parent).map(Path::to_owned);
+        std::thread::spawn(move || {
+            let started = Instant::now();
+            let mut dialog = rfd::FileDialog::new();
+            if let Some(dir) = start_dir {
+                dialog = dialog.set_directory(dir);
+            }
+            let picked = match kind {
+                DialogKind::Open => dialog.add_filter("Scene", &["xml"]).pick_file(),
+                DialogKind::SaveAs => dialog
+                    .add_filter("Scene", &["xml"])
+                    .set_file_name("scene.xml")
+                    .save_file(),
+                DialogKind::Export => dialog
+                    .add_filter("Image", &["png", "jpg", "jpeg"])
+                    .set_file_name("render.png")
+                    .save_file(),
+            };
+            let _ = tx.send(Background::Dialog(kind, picked, started.elapsed()));
+            ctx.request_repaint();
+        });
+    }
+
+    pub(super) fn dialog_done(&mut self, kind: DialogKind, path: Option<PathBuf>, took: Duration) {
+        match path {
+            Some(path) => self.path_chosen(kind, path),
+            // A dialog that closes at once without a choice could not open
+            // (no desktop portal): offer a plain path field instead.
+            None if took < Duration::from_millis(300) => {
+                self.path_prompt = Some(PathPrompt::new(kind, None))
+            }
+            None => {}
+        }
+    }
+
+    pub(super) fn path_chosen(&mut self, kind: DialogKind, path: PathBuf) {
+        match kind {
+            DialogKind::Open => self.run(Command::OpenFile(path)),
+            DialogKind::SaveAs => self.run(Command::SaveTo(path)),
+            DialogKind::Export => self.export(path),
+        }
+    }
+
+    /// Holds back closing the window while there are unsaved edits: ask.
+    pub(super) fn guard_close(&mut self, ctx: &egui::Context) {
+        if ctx.input(|i| i.viewport().close_requested())
+            && self.doc.has_unsaved_edits()
+            && !self.allow_close
+        {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            self.confirm = Some(Confirm::Discard(Command::Quit));
+        }
+    }
+
+    pub(super) fn modals(&mut self, ui: &mut egui::Ui) {
+        if let Some(confirm) = self.confirm.clone() {
+            self.confirm_modal(ui, confirm);
+        }
+        if self.doc.conflict().is_some() {
+            self.conflict_modal(ui);
+        }
+        self.path_prompt_modal(ui);
+    }
+
+    pub(super) fn confirm_modal(&mut self, ui: &mut egui::Ui, confirm: Confirm) {
+        let mut answer = None;
+        egui::Modal::new(egui::Id::unique("confirm")).show(ui.ctx(), |ui| {
+            // One width whatever the text: the buttons stay where they were.
+            ui.set_width(460.0);
+            match &confirm {
+                Confirm::Discard(command) => {
+                    ui.heading("Unsaved edits");
+                    ui.label(format!(
+                        "{} has edits that are not saved. {}",
+                        self.doc.title(),
+                        match command {
+                            Command::Quit => "Quit anyway?",
+                            Command::Reload => "Reload the file and lose them?",
+                            _ => "Open another scene and lose them?",
+                        }
+                    ));
+                    ui.horizontal(|ui| {
+                        if ui.button("Save first").clicked() {
+                            answer = Some(Answer::SaveThen);
+                        }
+                        if ui.button("Discard edits").clicked() {
+                            answer = Some(Answer::Go);
+                        }
+                        if ui.button("Cancel").clicked() {
+                            answer = Some(Answer::Cancel);
+                        }
+                    });
+                }
+                Confirm::Replace(path) => {
+                    ui.heading("Replace the file?");
+                    ui.label(format!("{} already exists.", path.display()));
+                    ui.horizontal(|ui| {
+                        if ui.button("Replace").clicked() {
+                            answer = Some(Answer::Go);
+                        }
+                        if ui.button("Cancel").clicked() {
+                            answer = Some(Answer::Cancel);
+                        }
+                    });
+                }
+            }
+        });
+        if ui.input(|i| i.key_pressed(Key::Escape)) {
+            answer = Some(Answer::Cancel);
+        }
+        let Some(answer) = answer else { return };
+        self.confirm = None;
+        match (answer, confirm) {
+            (Answer::Cancel, _) => {}
+            (Answer::Go, Confirm::Replace(path)) => self.save_as(&path),
+            (Answer::Go, Confirm::Discard(command)) => self.execute(command),
+            (Answer::SaveThen, Confirm::Discard(command)) => {
+                self.save();
+                // Saved (no conflict, no error): go on; else the edits stay.
+                if !self.doc.has_unsaved_edits() && self.doc.conflict().is_none() {
+                    self.execute(command);
+                }
+            }
+            (Answer::SaveThen, Confirm::Replace(_)) => {}
+        }
+    }
+
+    /// The file changed on disk and some unsaved edits touch what it
+    /// changed: both values side by side, a choice for each.
+    pub(super) fn conflict_modal(&mut self, ui: &mut egui::Ui) {
+        let Some(pending) = self.doc.conflict() else {
+            return;
+        };
+        let conflicts = pending.conflicts().to_vec();
+        self.conflict_choices
+            .resize(conflicts.len(), Choice::Theirs);
+        let mut done = None;
+        egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
+            ui.heading("The file changed on disk");
+            ui.set_max_width(640.0);
+            ui.label(
+                "Another program saved the scene file, and it changed values you have \
+                 edited too (any other edits of yours are applied onto its version). \
+                 Choose which to keep:",
+            );
+            egui::Grid::new("conflicts").num_columns(3).show(ui, |ui| {
+                ui.strong("value");
+                ui.strong("yours");
+                ui.strong("the file's");
+                ui.end_row();
+                for (c, choice) in conflicts.iter().zip(self.conflict_choices.iter_mut()) {
+                    ui.label(&c.path);
+                    ui.add_enabled_ui(c.can_keep_yours, |ui| {
+                        ui.radio_value(choice, Choice::Mine, &c.yours);
+                    });
+                    ui.radio_value(choice, Choice::Theirs, &c.theirs);
+                    ui.end_row();
+                }
+            });
+            ui.horizontal(|ui| {
+                if ui.button("Apply these choices").clicked() {
+                    done = Some(self.conflict_choices.clone());
+                }
+                if ui.button("Keep all of mine").clicked() {
+                    done = Some(
+                        conflicts
+                            .iter()
+                            .map(|c| {
+                                if c.can_keep_yours {
+                                    Choice::Mine
+                                } else {
+                                    Choice::Theirs
+                                }
+                            })
+                            .collect(),
+                    );
+                }
+                if ui.button("Take all of the file's").clicked() {
+                    done = Some(vec![Choice::Theirs; conflicts.len()]);
+                }
+            });
+        });
+        if let Some(choices) = done {
+            match self.doc.resolve(&choices) {
+                Ok(_) => self.notify("merged".into()),
+                Err(e) => self.notify(format!("not saved: {e}")),
+            }
+            self.conflict_choices.clear();
+            self.after_edit();
+        }
+    }
+
+    pub(super) fn path_prompt_modal(&mut self, ui: &mut egui::Ui) {
+        let mut chosen = None;
+        let Some(prompt) = &mut self.path_prompt else {
+            return;
+        };
+        let mut close = false;
+        egui::Modal::new(egui::Id::unique("path-prompt")).show(ui.ctx(), |ui| {
+            ui.label(match prompt.kind {
+                DialogKind::Open => "Open scene file:",
+                DialogKind::SaveAs => "Save scene as:",
+                DialogKind::Export => "Export image to (.png or .jpg):",
+            });
+            let edit = ui.text_edit_singleline(&mut prompt.text);
+            if !prompt.focused {
+                edit.request_focus();
+                prompt.focused = true;
+            }
+            if ui.input(|i| i.key_pressed(Key::Escape)) {
+                close = true;
+            }
+            ui.horizontal(|ui| {
+                let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
+                if (ui.button("OK").clicked() || enter) && !prompt.text.trim().is_empty() {
+                    chosen = Some(PathBuf::from(prompt.text.trim()));
+                    close = true;
+                }
+                if ui.button("Cancel").clicked() {
+                    close = true;
+                }
+            });
+        });
+        if close {
+            let prompt = self.path_prompt.take();
+            if let (Some(prompt), Some(path)) = (prompt, chosen) {
+                self.path_chosen(prompt.kind, path);
+            }
+        }
+    }
+}

@@ -1,0 +1,381 @@
+//! The application: window layout and the glue between the document, the
+//! file watcher, the render worker and the picture on screen.
+//!
+//! The state is owned here (`RayOfLightApp`) and the work is elsewhere: the
+//! worker renders, the watcher reads files, [`Document`] keeps the text, the
+//! edits and their undo, [`Preview`] assembles tiles. This module holds the
+//! state, the frame ([`RayOfLightApp::draw`]), render requests and the
+//! events from background threads; its children hold the rest:
+//! - [`command`]: the [`Command`] enum of menus and keys, and the one place
+//!   that carries it out;
+//! - `dialogs`: open, save, export, and the modal questions;
+//! - `picture`: the picture, its zoom and pan, the pick;
+//! - `navigate`: orbit, pan and dolly the camera with the mouse;
+//! - `status`: the status bar, the error banner, notices, frame counts.
+
+pub mod command;
+mod dialogs;
+mod navigate;
+mod picture;
+mod status;
+
+pub use command::Command;
+use dialogs::{Confirm, DialogKind, PathPrompt};
+use picture::View;
+
+use super::document::{Document, FileState, Reload, SaveError};
+use super::panel::{self, Selection};
+use super::preview::{Preview, RenderState};
+use super::recent::Recent;
+use super::study::{self, PreviewMethods, StudyWindow};
+use super::watcher::{FileEvent, SceneWatcher};
+use super::worker::{Event, Worker};
+use crate::render::{self, RenderOptions};
+use crate::scene::merge::Choice;
+use egui::{Color32, Key, KeyboardShortcut, Modifiers, Pos2, Rect, Sense, TextureOptions, Vec2};
+use std::collections::VecDeque;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::sync::mpsc::{self, Receiver, Sender};
+use std::time::{Duration, Instant};
+
+/// What background threads send to the UI thread.
+enum Background {
+    /// A file event from the watcher of this generation.
+    File(u64, FileEvent),
+    Exported(PathBuf, Result<(), String>),
+    Dialog(DialogKind, Option<PathBuf>, Duration),
+}
+
+pub struct RayOfLightApp {
+    doc: Document,
+    worker: Worker,
+    preview: Preview,
+    texture: Option<egui::TextureHandle>,
+    watcher: Option<SceneWatcher>,
+    background: Receiver<Background>,
+    background_tx: Sender<Background>,
+    path_prompt: Option<PathPrompt>,
+    view: View,
+    selection: Selection,
+    /// A question waiting for an answer.
+    confirm: Option<Confirm>,
+    /// The user's choice for each conflict of the pending merge.
+    conflict_choices: Vec<Choice>,
+    /// Anti-aliasing of the preview and of exports.
+    aa: u32,
+    /// The live preview's method (auto unless chosen in the Study window)
+    /// and the one while a value is dragged.
+    methods: PreviewMethods,
+    /// The newest render used the while-dragging method: render again
+    /// with the exact one on release.
+    rendered_dragging: bool,
+    study: StudyWindow,
+    /// A transient message for the status bar (export done, save failed).
+    notice: Option<(String, Instant)>,
+    recent: Recent,
+    /// Which watcher is the current one: events of an older one (for a
+    /// file no longer open) still in the channel are dropped.
+    watch_generation: u64,
+    /// Frame times of the last second, for the frames-per-second readout.
+    frames: VecDeque<Instant>,
+    /// The pixel under the cursor and its colour.
+    hovered: Option<(u32, u32, [u8; 3])>,
+    /// A drag of the camera under way.
+    navigation: Option<navigate::Navigation>,
+    /// When the wheel last moved the camera, while its undo step is open.
+    wheel_at: Option<Instant>,
+    /// The window title last sent.
+    title: String,
+    /// The user chose to quit without saving.
+    allow_close: bool,
+    /// Print the status figures to stderr once a second (RAYOFLIGHT_STATS).
+    stats: bool,
+    last_stats: Instant,
+    ctx: egui::Context,
+}
+
+impl RayOfLightApp {
+    /// The app on `doc`, with the recent-files list `recent`
+    /// ([`Recent::user`] in the app, [`Recent::in_memory`] in tests).
+    pub fn new(ctx: &egui::Context, doc: Document, recent: Recent) -> RayOfLightApp {
+        let wake_ctx = ctx.clone();
+        let worker = Worker::spawn(Worker::default_threads(), move || {
+            wake_ctx.request_repaint()
+        });
+        let (background_tx, background) = mpsc::channel();
+        let mut app = RayOfLightApp {
+            doc,
+            worker,
+            preview: Preview::default(),
+            texture: None,
+            watcher: None,
+            background,
+            background_tx,
+            title: String::new(),
+            allow_close: false,
+            stats: std::env::var_os("RAYOFLIGHT_STATS").is_some(),
+            last_stats: Instant::now(),
+            path_prompt: None,
+            view: View::default(),
+            selection: Selection::default(),
+            confirm: None,
+            conflict_choices: Vec::new(),
+            aa: 1,
+            methods: PreviewMethods::default(),
+            rendered_dragging: false,
+            study: StudyWindow::default(),
+            notice: None,
+            recent,
+            watch_generation: 0,
+            frames: VecDeque::new(),
+            hovered: None,
+            navigation: None,
+            wheel_at: None,
+            ctx: ctx.clone(),
+        };
+        app.watch();
+        app.request_render();
+        app
+    }
+
+    /// The scene changed (an edit, undo, redo, a reload): drop a selection
+    /// that no longer exists and render.
+    fn after_edit(&mut self) {
+        if self
+            .selection
+            .object
+            .is_some_and(|n| n >= self.doc.scene().objects.len())
+        {
+            self.selection = Selection::default();
+        }
+        self.request_render();
+    }
+
+    fn replace_document(&mut self, doc: Document) {
+        self.doc = doc;
+        self.selection = Selection::default();
+        self.view = View::default();
+        self.watch();
+        self.request_render();
+    }
+
+    /// (Re)starts watching the document's file, if it has one.
+    fn watch(&mut self) {
+        self.watcher = None;
+        self.watch_generation += 1;
+        let Some(path) = self.doc.path().map(Path::to_owned) else {
+            return;
+        };
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        let generation = self.watch_generation;
+        match SceneWatcher::new(&path, move |event| {
+            let _ = tx.send(Background::File(generation, event));
+            ctx.request_repaint();
+        }) {
+            Ok(w) => self.watcher = Some(w),
+            Err(e) => self.notify(format!("{e}; saves from other editors will not show")),
+        }
+        self.recent.push(&path);
+    }
+
+    pub fn document(&self) -> &Document {
+        &self.doc
+    }
+
+    pub fn preview(&self) -> &Preview {
+        &self.preview
+    }
+
+    /// The newest render generation requested from the worker.
+    pub fn newest_generation(&self) -> u64 {
+        self.worker.newest()
+    }
+
+    /// Asks the worker for the preview of the current scene, with the
+    /// while-dragging method when one is set and a button is held.
+    fn request_render(&mut self) {
+        let dragging = self.methods.dragging.is_some() && self.ctx.input(|i| i.pointer.any_down());
+        let options = self.methods.options(self.doc.scene(), dragging, self.aa);
+        self.rendered_dragging = dragging;
+        let generation = self
+            .worker
+            .request(Arc::new(self.doc.scene().clone()), options);
+        self.study.superseded(generation);
+        if self.study.open {
+            self.study.set_plan(self.doc.scene());
+        }
+    }
+
+    /// The live preview's methods (for tests).
+    pub fn preview_methods(&self) -> &PreviewMethods {
+        &self.methods
+    }
+
+    pub fn study_window(&self) -> &StudyWindow {
+        &self.study
+    }
+
+    /// Runs the study of the current scene in the worker.
+    pub fn run_study(&mut self) {
+        let name = self.doc.path().and_then(Path::file_stem).map_or_else(
+            || "example".to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        let scene = crate::study::StudyScene {
+            name: name.clone(),
+            scene: self.doc.scene().clone(),
+        };
+        let generation = self.worker.study(scene, self.study.runs);
+        self.study.started(generation, name);
+        self.study.set_plan(self.doc.scene());
+    }
+
+    /// Does what the Study window asked.
+    pub fn study_action(&mut self, action: study::Action) {
+        match action {
+            study::Action::Run => self.run_study(),
+            study::Action::Cancel => self.worker.cancel(),
+            study::Action::Preview(name) => {
+                if let Some(method) = crate::study::method(name) {
+                    self.methods.preview = method;
+                    self.request_render();
+                }
+            }
+            study::Action::WhileDragging(name) => {
+                self.methods.dragging = name.and_then(crate::study::method);
+            }
+        }
+    }
+
+    /// Handles what the watcher, the worker and the dialogs sent.
+    fn drain_events(&mut self) {
+        let newest = self.worker.newest();
+        let events: Vec<_> = self.worker.events().collect();
+        let mut study_ended = false;
+        for event in events {
+            match event {
+                Event::StudyStarted { .. }
+                | Event::StudyRow { .. }
+                | Event::StudyFinished { .. }
+                | Event::StudyStopped { .. } => study_ended |= self.study.apply(event),
+                _ => {
+                    self.preview.apply(newest, event);
+                }
+            }
+        }
+        // The study took the worker from an unfinished preview: finish it.
+        if study_ended && !matches!(self.preview.state(), RenderState::Done { .. }) {
+            self.request_render();
+        }
+        while let Ok(message) = self.background.try_recv() {
+            match message {
+                Background::File(generation, event) => {
+                    if generation == self.watch_generation {
+                        self.file_event(event);
+                    }
+                }
+                Background::Exported(path, Ok(())) => {
+                    self.notify(format!("exported {}", path.display()))
+                }
+                Background::Exported(_, Err(e)) => self.notify(format!("export failed: {e}")),
+                Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
+            }
+        }
+    }
+
+    fn file_event(&mut self, event: FileEvent) {
+        match event {
+            FileEvent::Loaded(text, scene) => match self.doc.file_loaded(text, *scene) {
+                Reload::Replaced => self.after_edit(),
+                Reload::Merged => {
+                    self.notify("the file changed on disk: your edits were applied onto it".into());
+                    self.after_edit();
+                }
+                Reload::Conflict => self.conflict_choices.clear(),
+                Reload::Unchanged | Reload::Broken => {}
+            },
+            FileEvent::Broken(error) => {
+                self.doc.file_broken(&error);
+            }
+            FileEvent::Missing => self.doc.file_missing(),
+        }
+    }
+
+    fn side_panel(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::left("scene-panel")
+            .resizable(true)
+            .default_size(320.0)
+            .show(ui, |ui| {
+                egui::ScrollArea::vertical().show(ui, |ui| {
+                    let out = panel::scene_panel(ui, &self.doc, &mut self.selection);
+                    if !out.edits.is_empty() {
+                        match self.doc.apply_step(out.edits, out.dragging) {
+                            Ok(()) => self.after_edit(),
+                            Err(e) => self.notify(e.to_string()),
+                        }
+                    }
+                    if out.drag_ended {
+                        self.doc.end_drag();
+                    }
+                });
+            });
+    }
+}
+
+impl eframe::App for RayOfLightApp {
+    fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        self.draw(ui);
+    }
+}
+
+impl RayOfLightApp {
+    /// The whole window's content for one frame.
+    pub fn draw(&mut self, ui: &mut egui::Ui) {
+        self.count_frame();
+        self.drain_events();
+        let ctx = ui.ctx().clone();
+        self.guard_close(&ctx);
+        self.shortcuts(&ctx);
+        let title = format!(
+            "RayOfLight — {}{}",
+            self.doc.title(),
+            if self.doc.has_unsaved_edits() {
+                " •"
+            } else {
+                ""
+            }
+        );
+        if title != self.title {
+            ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
+            self.title = title;
+        }
+        egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
+        self.error_banner(ui);
+        self.status_bar(ui);
+        self.side_panel(ui);
+        self.picture(ui);
+        self.modals(ui);
+        if self.study.open {
+            for action in self.study.show(&ctx, &self.methods) {
+                self.study_action(action);
+            }
+        }
+        if self.wheel_at.is_some() {
+            self.end_wheel_burst();
+            ctx.request_repaint_after(navigate::WHEEL_PAUSE);
+        }
+        // A value was dragged with the cheaper method: exact on release.
+        if self.rendered_dragging && !ctx.input(|i| i.pointer.any_down()) {
+            self.request_render();
+        }
+        if self.study.is_running() {
+            ctx.request_repaint_after(Duration::from_millis(100));
+        }
+        if matches!(self.preview.state(), RenderState::Rendering { .. }) || self.stats {
+            // Keep the progress bar moving between tiles.
+            ctx.request_repaint_after(Duration::from_millis(16));
+        }
+    }
+}

@@ -1,0 +1,190 @@
+//! The picture: the render shown 1:1 or fitted, zoom and pan, the pixel
+//! under the cursor and the pick of an object by a click.
+
+use super::*;
+
+/// How the picture is placed in the central area.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct View {
+    /// Screen pixels per image pixel (1 = 1:1, crisp).
+    zoom: f32,
+    /// Offset of the picture's centre from the area's centre, in points.
+    pan: Vec2,
+    /// Keep the whole picture in view as the window changes.
+    fit: bool,
+}
+
+impl View {
+    /// Keep the whole picture in view.
+    pub(super) fn fit() -> View {
+        View::default()
+    }
+
+    /// One image pixel per screen pixel, centred.
+    pub(super) fn one_to_one() -> View {
+        View {
+            fit: false,
+            ..View::default()
+        }
+    }
+
+    /// Zooms by `factor`, within 1/64 to 64 screen pixels per image pixel.
+    pub(super) fn zoom_by(&mut self, factor: f32) {
+        self.zoom = (self.zoom * factor).clamp(1.0 / 64.0, 64.0);
+        self.fit = false;
+    }
+}
+
+impl Default for View {
+    fn default() -> Self {
+        View {
+            zoom: 1.0,
+            pan: Vec2::ZERO,
+            fit: true,
+        }
+    }
+}
+
+impl RayOfLightApp {
+    pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
+        egui::CentralPanel::default().show(ui, |ui| {
+            if self.preview.take_dirty() || self.texture.is_none() {
+                let image = self.preview.image();
+                let (w, h) = image.dimensions();
+                let color_image =
+                    egui::ColorImage::from_rgb([w as usize, h as usize], image.as_raw());
+                match &mut self.texture {
+                    Some(t) => t.set(color_image, TextureOptions::NEAREST),
+                    None => {
+                        self.texture = Some(ui.ctx().load_texture(
+                            "render",
+                            color_image,
+                            TextureOptions::NEAREST,
+                        ))
+                    }
+                }
+            }
+            let Some(texture) = self.texture.as_ref().map(egui::TextureHandle::id) else {
+                return;
+            };
+            let area = ui.available_rect_before_wrap();
+            let response = ui.allocate_rect(area, Sense::click_and_drag());
+            let (w, h) = self.preview.image().dimensions();
+            let image_size = Vec2::new(w as f32, h as f32);
+            let ppp = ui.ctx().pixels_per_point();
+            if self.view.fit {
+                let fit = (area.width() / image_size.x).min(area.height() / image_size.y) * ppp;
+                // Whole steps when enlarging keep pixels square and crisp.
+                self.view.zoom = if fit >= 1.0 { fit.floor() } else { fit };
+                self.view.pan = Vec2::ZERO;
+            }
+            let size = image_size * self.view.zoom / ppp;
+            let rect = Rect::from_center_size(area.center() + self.view.pan, size);
+            // Snap to physical pixels so 1:1 stays crisp.
+            let rect = Rect::from_min_size(
+                Pos2::new(
+                    (rect.min.x * ppp).round() / ppp,
+                    (rect.min.y * ppp).round() / ppp,
+                ),
+                size,
+            );
+            // Image pixels (x, y) under a screen position.
+            let to_image = |pos: Pos2| {
+                let rel = (pos - rect.min) / size * image_size;
+                (f64::from(rel.x), f64::from(rel.y))
+            };
+            let image_per_point = f64::from(image_size.x / size.x);
+            self.gestures(ui, &response, to_image, image_per_point);
+            let painter = ui.painter_at(area);
+            painter.image(
+                texture,
+                rect,
+                Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
+                Color32::WHITE,
+            );
+            // Pixel inspector and pick.
+            self.hovered = None;
+            if let Some(pos) = response.hover_pos() {
+                let rel = (pos - rect.min) / size * image_size;
+                if rel.x >= 0.0 && rel.y >= 0.0 && rel.x < image_size.x && rel.y < image_size.y {
+                    let (x, y) = (rel.x as u32, rel.y as u32);
+                    let rgb = self.preview.image().get_pixel(x, y).0;
+                    self.hovered = Some((x, y, rgb));
+                    if response.clicked() {
+                        self.pick(f64::from(rel.x), f64::from(rel.y));
+                    }
+                }
+            }
+        });
+    }
+
+    /// What the mouse does on the picture: a drag orbits the camera
+    /// (Shift or the middle button: pans it), the wheel dollies it toward
+    /// the point under the cursor; with Ctrl, the drag and the wheel pan and
+    /// zoom the picture instead. A click without a drag selects.
+    fn gestures(
+        &mut self,
+        ui: &egui::Ui,
+        response: &egui::Response,
+        to_image: impl Fn(Pos2) -> (f64, f64),
+        image_per_point: f64,
+    ) {
+        let (modifiers, scroll, zoom, middle, press) = ui.input(|i| {
+            (
+                i.modifiers,
+                i.smooth_scroll_delta.y,
+                i.zoom_delta(),
+                i.pointer.middle_down(),
+                i.pointer.press_origin(),
+            )
+        });
+        if response.hovered() {
+            if modifiers.command || zoom != 1.0 {
+                let factor = zoom * (scroll / 200.0).exp();
+                if factor != 1.0 {
+                    self.view.zoom_by(factor);
+                }
+            } else if scroll != 0.0
+                && let Some(pos) = response.hover_pos()
+            {
+                self.dolly(to_image(pos), scroll);
+            }
+        }
+        if response.drag_started() && !modifiers.command {
+            let gesture = if modifiers.shift || middle {
+                navigate::Gesture::Pan
+            } else {
+                navigate::Gesture::Orbit
+            };
+            let at = press.or(response.interact_pointer_pos()).map(&to_image);
+            if let Some(at) = at {
+                self.navigation_start(gesture, at);
+            }
+        }
+        if response.dragged() {
+            if self.navigation.is_some() {
+                let total = response
+                    .interact_pointer_pos()
+                    .zip(press)
+                    .map_or(Vec2::ZERO, |(now, start)| now - start);
+                self.navigation_drag(total, image_per_point);
+            } else if modifiers.command {
+                self.view.pan += response.drag_delta();
+                self.view.fit = false;
+            }
+        }
+        if response.drag_stopped() {
+            self.navigation_end();
+        }
+    }
+
+    /// Selects the object seen at image position (`x`, `y`) and opens it
+    /// in the panel, once (a click in the picture).
+    pub fn pick(&mut self, x: f64, y: f64) {
+        let prepared = render::prepare(self.doc.scene(), &RenderOptions::default());
+        self.selection = Selection {
+            object: prepared.pick(x, y),
+            reveal: true,
+        };
+    }
+}

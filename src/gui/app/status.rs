@@ -1,0 +1,134 @@
+//! The status bar, the error banner, transient notices and the frame
+//! counter (`RAYOFLIGHT_STATS`).
+
+use super::*;
+
+impl RayOfLightApp {
+    pub(super) fn error_banner(&mut self, ui: &mut egui::Ui) {
+        let Some(error) = self.doc.error().map(str::to_owned) else {
+            return;
+        };
+        egui::Panel::top("error-banner")
+            .frame(
+                egui::Frame::new()
+                    .fill(Color32::from_rgb(120, 20, 20))
+                    .inner_margin(6.0),
+            )
+            .show(ui, |ui| {
+                let what = if self.doc.is_placeholder() {
+                    "The file does not load yet; it will show as soon as it does."
+                } else {
+                    "The last save does not load; showing the last good scene."
+                };
+                ui.colored_label(Color32::WHITE, format!("{what}\n{error}"));
+            });
+    }
+
+    pub(super) fn status_bar(&mut self, ui: &mut egui::Ui) {
+        egui::Panel::bottom("status").show(ui, |ui| {
+            ui.horizontal(|ui| {
+                match self.preview.state() {
+                    RenderState::Idle => ui.label("idle"),
+                    RenderState::Rendering {
+                        scale,
+                        tiles_done,
+                        tiles_total,
+                    } => {
+                        let progress = *tiles_done as f32 / (*tiles_total).max(1) as f32;
+                        ui.add(egui::ProgressBar::new(progress).desired_width(120.0).text(
+                            if *scale == 1 {
+                                "rendering".to_owned()
+                            } else {
+                                format!("preview 1/{scale}")
+                            },
+                        ))
+                    }
+                    RenderState::Done { .. } => ui.label("done"),
+                    RenderState::Failed(message) => ui.colored_label(Color32::RED, message),
+                    RenderState::Cancelled => ui.label("cancelled (Esc)"),
+                };
+                ui.label(if self.rendered_dragging {
+                    self.methods.dragging.as_ref().map_or("", |m| m.name)
+                } else {
+                    self.methods.preview.name
+                })
+                .on_hover_text("the live preview's method (View › Study…)");
+                if let Some((elapsed, rays)) = self.preview.last_render() {
+                    let secs = elapsed.as_secs_f64().max(1e-9);
+                    ui.separator();
+                    ui.label(format!("{:.1} ms", secs * 1e3));
+                    ui.label(format!("{:.2} Mrays/s", rays as f64 / secs / 1e6));
+                }
+                ui.separator();
+                let camera = &self.doc.scene().camera;
+                ui.label(format!("{}×{}", camera.width, camera.height));
+                ui.separator();
+                ui.label(match self.doc.state() {
+                    FileState::Builtin => "built-in example".to_owned(),
+                    FileState::Missing => "file missing: waiting for it to come back".to_owned(),
+                    FileState::Watching if self.doc.error().is_some() => {
+                        if self.doc.has_unsaved_edits() {
+                            "file has errors · unsaved edits".to_owned()
+                        } else {
+                            "file has errors".to_owned()
+                        }
+                    }
+                    FileState::Watching if self.doc.has_unsaved_edits() => {
+                        "unsaved edits (Ctrl+S saves)".to_owned()
+                    }
+                    FileState::Watching => "watching, saved".to_owned(),
+                });
+                if let Some((x, y, rgb)) = self.hovered {
+                    ui.separator();
+                    ui.label(format!(
+                        "({x}, {y}) rgb({}, {}, {})",
+                        rgb[0], rgb[1], rgb[2]
+                    ));
+                }
+                ui.separator();
+                ui.label(format!("{} fps", self.frames.len()));
+                if let Some((notice, _)) = &self.notice {
+                    ui.separator();
+                    ui.label(notice.as_str());
+                }
+            });
+        });
+    }
+
+    pub(super) fn count_frame(&mut self) {
+        let now = Instant::now();
+        // Once a second, with RAYOFLIGHT_STATS set: the figures the status
+        // bar shows, on stderr, for measuring the app from outside.
+        if self.stats && now.duration_since(self.last_stats) >= Duration::from_secs(1) {
+            self.last_stats = now;
+            eprintln!(
+                "stats: fps={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
+                self.frames.len(),
+                self.preview.state(),
+                self.preview.first_pass().map(|d| d.as_secs_f64() * 1e3),
+                self.preview
+                    .last_render()
+                    .map(|(d, _)| d.as_secs_f64() * 1e3),
+            );
+        }
+        self.frames.push_back(now);
+        while self
+            .frames
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+        {
+            self.frames.pop_front();
+        }
+        if self
+            .notice
+            .as_ref()
+            .is_some_and(|(_, t)| t.elapsed() > Duration::from_secs(8))
+        {
+            self.notice = None;
+        }
+    }
+
+    pub(super) fn notify(&mut self, message: String) {
+        self.notice = Some((message, Instant::now()));
+    }
+}

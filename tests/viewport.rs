@@ -1,0 +1,273 @@
+//! Looking around with the mouse (egui_kittest, no display): a drag on the
+//! picture orbits the camera, Shift+drag pans it, the wheel dollies it, each
+//! an undoable edit of the camera that saves to a file the CLI renders to
+//! the same picture; a click still selects; Home returns to the file's
+//! camera.
+#![cfg(feature = "gui")]
+
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use egui::{Event, Modifiers, PointerButton, Pos2, Vec2};
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use glam::DVec3;
+use rayoflight::gui::app::RayOfLightApp;
+use rayoflight::gui::document::Document;
+use rayoflight::gui::preview::RenderState;
+use rayoflight::gui::recent::Recent;
+use rayoflight::render::{self, navigate::Pose};
+use rayoflight::scene;
+
+const SCENE: &str = r#"<scene>
+  <!-- GREEN sphere -->
+  <sphere><color red="0" green="1" blue="0"/></sphere>
+  <!-- RED sphere -->
+  <sphere>
+    <color red="1" green="0" blue="0"/>
+    <transformation><translate x="3" y="0" z="0"/></transformation>
+  </sphere>
+  <light x="1" y="-4" z="-5"/>
+  <camera width="32" height="24" eyeDistance="2">
+    <transformation>
+      <translate x="0" y="0" z="-10"/>
+    </transformation>
+  </camera>
+</scene>
+"#;
+
+/// The middle of the picture: the window is 1200×900 and the panel takes
+/// the left 320 or so; the fitted picture is centred in the rest.
+const MIDDLE: Pos2 = Pos2::new(780.0, 460.0);
+
+fn app(path: &Path) -> Harness<'static, RayOfLightApp> {
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(path).unwrap(),
+        Recent::in_memory(),
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    harness.run_steps(3);
+    harness
+}
+
+fn file() -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, SCENE).unwrap();
+    (dir, path)
+}
+
+/// Presses at `from`, moves to `to` in a few steps, releases.
+fn drag(harness: &mut Harness<'_, RayOfLightApp>, from: Pos2, to: Pos2, modifiers: Modifiers) {
+    harness.event(Event::PointerMoved(from));
+    harness.run_steps(1);
+    harness.event_modifiers(
+        Event::PointerButton {
+            pos: from,
+            button: PointerButton::Primary,
+            pressed: true,
+            modifiers,
+        },
+        modifiers,
+    );
+    harness.run_steps(1);
+    for k in 1..=4 {
+        let p = from + (to - from) * (k as f32 / 4.0);
+        harness.event_modifiers(Event::PointerMoved(p), modifiers);
+        harness.run_steps(1);
+    }
+    harness.event_modifiers(
+        Event::PointerButton {
+            pos: to,
+            button: PointerButton::Primary,
+            pressed: false,
+            modifiers,
+        },
+        modifiers,
+    );
+    harness.run_steps(2);
+}
+
+fn pose(harness: &Harness<'_, RayOfLightApp>) -> Pose {
+    Pose::of(&harness.state().document().scene().camera).unwrap()
+}
+
+fn close(a: DVec3, b: DVec3) -> bool {
+    (a - b).length() < 1e-9
+}
+
+#[test]
+fn a_drag_orbits_the_camera_by_the_expected_angle_and_undoes_exactly() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    let original = harness.state().document().scene().clone();
+    drag(
+        &mut harness,
+        MIDDLE,
+        MIDDLE + Vec2::new(100.0, 0.0),
+        Modifiers::NONE,
+    );
+    let p = pose(&harness);
+    // 100 points at 0.01 rad a point: one radian of yaw about the point
+    // under the cursor (the green sphere's near side, on the axis).
+    let expected = DVec3::new(1f64.sin(), 0.0, 1f64.cos());
+    assert!(close(p.forward(), expected), "forward {}", p.forward());
+    let doc = harness.state().document();
+    assert!(doc.has_unsaved_edits());
+    assert_eq!(doc.undo_label(), Some("camera view"));
+    // One drag, one step: Ctrl+Z gives the camera back exactly.
+    harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    harness.run_steps(2);
+    assert_eq!(harness.state().document().scene(), &original);
+    assert!(!harness.state().document().has_unsaved_edits());
+}
+
+#[test]
+fn shift_drag_pans_and_the_wheel_dollies_as_one_step() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    let start = pose(&harness);
+    drag(
+        &mut harness,
+        MIDDLE,
+        MIDDLE + Vec2::new(0.0, 60.0),
+        Modifiers::SHIFT,
+    );
+    let panned = pose(&harness);
+    assert!(close(panned.forward(), start.forward()), "no turn");
+    let moved = panned.position - start.position;
+    assert!(
+        moved.y < 0.0 && moved.x.abs() < 1e-9 && moved.z.abs() < 1e-9,
+        "{moved}"
+    );
+
+    // Three wheel steps in a burst: one undo step toward the sphere.
+    harness.event(Event::PointerMoved(MIDDLE));
+    for _ in 0..3 {
+        harness.event(Event::MouseWheel {
+            unit: egui::MouseWheelUnit::Point,
+            delta: Vec2::new(0.0, 40.0),
+            phase: egui::TouchPhase::Move,
+            source: egui::MouseWheelSource::Unknown,
+            modifiers: Modifiers::NONE,
+        });
+        harness.run_steps(4);
+    }
+    harness.run_steps(20);
+    let dollied = pose(&harness);
+    assert!(dollied.position.z > panned.position.z, "moved forward");
+    std::thread::sleep(Duration::from_millis(600));
+    harness.run_steps(2);
+    harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    harness.run_steps(2);
+    assert!(close(pose(&harness).position, panned.position));
+}
+
+#[test]
+fn a_click_without_a_drag_still_selects() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    assert!(harness.query_by_label("Remove object").is_none());
+    harness.event(Event::PointerMoved(MIDDLE));
+    harness.run_steps(1);
+    for pressed in [true, false] {
+        harness.event(Event::PointerButton {
+            pos: MIDDLE,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.run_steps(1);
+    }
+    harness.run_steps(2);
+    assert!(harness.query_by_label("Remove object").is_some());
+    let camera = &harness.state().document().scene().camera;
+    assert_eq!(camera, &scene::load(&path).unwrap().camera, "no move");
+}
+
+#[test]
+fn the_saved_view_renders_on_the_command_line_as_on_screen_and_home_returns() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    drag(
+        &mut harness,
+        MIDDLE,
+        MIDDLE + Vec2::new(-80.0, 30.0),
+        Modifiers::NONE,
+    );
+    harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::S);
+    harness.run_steps(2);
+    let saved = scene::load(&path).unwrap();
+    assert_eq!(&saved, harness.state().document().scene());
+    // The file's text kept its comments; the camera's steps were replaced.
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("<!-- RED sphere -->") && text.contains("<rotate-y angle="));
+    let expected = render::render(&saved, &render::auto(&saved).options).unwrap();
+    let start = Instant::now();
+    loop {
+        harness.step();
+        let app = harness.state();
+        if matches!(app.preview().state(), RenderState::Done { .. })
+            && app.preview().image() == &expected
+        {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "the saved view never showed"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+
+    // Home: back to the camera the file has (the saved one now); after
+    // another orbit, Home undoes it as one edit.
+    drag(
+        &mut harness,
+        MIDDLE,
+        MIDDLE + Vec2::new(50.0, 0.0),
+        Modifiers::NONE,
+    );
+    assert_ne!(&harness.state().document().scene().camera, &saved.camera);
+    harness.key_press(egui::Key::Home);
+    harness.run_steps(2);
+    assert_eq!(&harness.state().document().scene().camera, &saved.camera);
+}
+
+#[test]
+fn esc_cancels_at_once_and_the_status_says_so() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("mirrors.xml");
+    // Two facing perfect mirrors at depth 10 000: seconds of work.
+    std::fs::write(
+        &path,
+        r#"<scene>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
+  <light x="0" y="-1" z="0"/>
+  <camera width="1920" height="1080" eyeDistance="1"/>
+  <model type="whitted" depth="10000"/>
+</scene>"#,
+    )
+    .unwrap();
+    let mut harness = app(&path);
+    let start = Instant::now();
+    while !matches!(
+        harness.state().preview().state(),
+        RenderState::Rendering { .. }
+    ) {
+        assert!(start.elapsed() < Duration::from_secs(20), "never rendered");
+        harness.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
+    harness.get_by_label("cancelled (Esc)");
+    // Tiles still in flight do not bring "rendering" back.
+    std::thread::sleep(Duration::from_millis(200));
+    harness.run_steps(3);
+    assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
+}
