@@ -8,6 +8,7 @@
 //! - [`document`]: the file's text, the scene with its unsaved edits, undo
 //!   and redo, saves that never write over unread text, merges.
 //! - [`worker`]: the background render thread, coarse to fine, newest wins.
+//! - [`pace`]: how coarse to render while the mouse moves.
 //! - [`preview`]: the picture assembled from the worker's tiles.
 //! - [`watcher`]: the file watcher (notify), debounced.
 //! - [`study`]: the Study window and the live preview's choice of method.
@@ -17,6 +18,7 @@
 
 pub mod app;
 pub mod document;
+pub mod pace;
 mod panel;
 pub mod preview;
 pub mod recent;

@@ -33,8 +33,8 @@ pub struct Preview {
     /// Generation whose pixels are arriving.
     generation: u64,
     state: RenderState,
-    /// Set when pixels changed since the last [`Preview::take_dirty`].
-    dirty: bool,
+    /// What changed since the last [`Preview::take_dirty`].
+    dirty: Dirty,
     /// Time of the last finished full-resolution pass.
     last_render: Option<(Duration, u64)>,
     /// Time from the request to the end of the first (coarsest) pass of the
@@ -48,7 +48,7 @@ impl Default for Preview {
             image: RgbImage::new(1, 1),
             generation: 0,
             state: RenderState::Idle,
-            dirty: false,
+            dirty: Dirty::Whole,
             last_render: None,
             first_pass: None,
         }
@@ -88,8 +88,8 @@ impl Preview {
         self.last_render.is_some() || self.generation != 0
     }
 
-    /// True once after pixels changed: the texture needs an upload.
-    pub fn take_dirty(&mut self) -> bool {
+    /// What changed since the last call: the texture uploads only that.
+    pub fn take_dirty(&mut self) -> Dirty {
         std::mem::take(&mut self.dirty)
     }
 
@@ -112,7 +112,7 @@ impl Preview {
                 self.generation = generation;
                 if self.image.dimensions() != (width, height) {
                     self.image = RgbImage::new(width, height);
-                    self.dirty = true;
+                    self.dirty = Dirty::Whole;
                 }
                 let tiles_total = crate::render::tiles(
                     width.div_ceil(scale),
@@ -163,6 +163,14 @@ impl Preview {
     /// Paints a tile of a pass at 1/`scale` resolution into the full image.
     fn paint(&mut self, scale: u32, tile: &crate::render::Tile, pixels: &[u8]) {
         let (width, height) = self.image.dimensions();
+        let x = (tile.x * scale).min(width);
+        let y = (tile.y * scale).min(height);
+        let region = Region {
+            x,
+            y,
+            width: (tile.width * scale).min(width - x),
+            height: (tile.height * scale).min(height - y),
+        };
         let row_bytes = tile.width as usize * 3;
         for (row, line) in pixels.chunks_exact(row_bytes).enumerate() {
             let y0 = (tile.y + row as u32) * scale;
@@ -176,6 +184,96 @@ impl Preview {
                 }
             }
         }
-        self.dirty = true;
+        self.dirty.add(region);
+    }
+}
+
+/// A rectangle of the image, in pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Region {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// What of the image changed since the texture was last uploaded.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum Dirty {
+    #[default]
+    Nothing,
+    /// These tiles: only they are uploaded (a 4000×4000 image is 48 MB; a
+    /// tile is 3 KB to 50 KB).
+    Regions(Vec<Region>),
+    /// Everything (a new size).
+    Whole,
+}
+
+impl Dirty {
+    /// More regions than this are uploaded as the whole image.
+    const MAX_REGIONS: usize = 256;
+
+    fn add(&mut self, region: Region) {
+        if region.width == 0 || region.height == 0 {
+            return;
+        }
+        match self {
+            Dirty::Whole => {}
+            Dirty::Nothing => *self = Dirty::Regions(vec![region]),
+            Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => *self = Dirty::Whole,
+            Dirty::Regions(list) => list.push(region),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::Tile;
+
+    fn tile(x: u32, y: u32, width: u32, height: u32, scale: u32) -> Event {
+        Event::Tile {
+            generation: 1,
+            scale,
+            tile: Tile {
+                x,
+                y,
+                width,
+                height,
+            },
+            pixels: vec![200; (width * height * 3) as usize],
+        }
+    }
+
+    #[test]
+    fn only_the_tiles_painted_are_uploaded() {
+        let mut p = Preview::default();
+        let start = Event::PassStarted {
+            generation: 1,
+            scale: 2,
+            width: 100,
+            height: 60,
+        };
+        assert!(p.apply(1, start));
+        assert_eq!(p.take_dirty(), Dirty::Whole, "a new size");
+        assert_eq!(p.take_dirty(), Dirty::Nothing);
+        // A tile of the half-resolution pass covers twice its size, cut at
+        // the image's edge.
+        p.apply(1, tile(40, 20, 16, 16, 2));
+        assert_eq!(
+            p.take_dirty(),
+            Dirty::Regions(vec![Region {
+                x: 80,
+                y: 40,
+                width: 20,
+                height: 20
+            }])
+        );
+        assert_eq!(p.image().get_pixel(99, 59).0, [200, 200, 200]);
+        // Many tiles at once: the whole image in one upload.
+        for k in 0..300 {
+            p.apply(1, tile(k % 50, 0, 1, 1, 2));
+        }
+        assert_eq!(p.take_dirty(), Dirty::Whole);
     }
 }

@@ -94,6 +94,8 @@ enum Message {
         generation: u64,
         scene: Arc<Scene>,
         options: RenderOptions,
+        /// The passes, coarsest first, as 1/scale of each side.
+        passes: Vec<u32>,
     },
     Study {
         generation: u64,
@@ -150,13 +152,29 @@ impl Worker {
             .max(1)
     }
 
-    /// Asks for a render; cancels any older one. Returns its generation.
+    /// Asks for a render, coarse to fine ([`passes`]); cancels any older
+    /// one. Returns its generation.
     pub fn request(&self, scene: Arc<Scene>, options: RenderOptions) -> u64 {
+        let passes = passes(scene.camera.width, scene.camera.height);
+        self.request_passes(scene, options, passes)
+    }
+
+    /// Asks for a render in the given passes (1/scale of each side,
+    /// coarsest first; `[4]` alone renders only a quarter-size picture, for
+    /// while the mouse moves). Cancels any older one; returns its
+    /// generation.
+    pub fn request_passes(
+        &self,
+        scene: Arc<Scene>,
+        options: RenderOptions,
+        passes: Vec<u32>,
+    ) -> u64 {
         let generation = self.newest.fetch_add(1, Ordering::Relaxed) + 1;
         let _ = self.to_worker.send(Message::Render {
             generation,
             scene,
             options,
+            passes,
         });
         generation
     }
@@ -227,10 +245,11 @@ impl WorkerThread {
                     generation,
                     scene,
                     options,
+                    passes,
                 } => {
                     let cancel = Cancel::new(self.newest.clone(), generation);
                     if !cancel.is_cancelled() {
-                        self.render(generation, &scene, &options, &cancel);
+                        self.render(generation, &scene, &options, &passes, &cancel);
                     }
                 }
                 Message::Study {
@@ -252,7 +271,14 @@ impl WorkerThread {
         (self.wake)();
     }
 
-    fn render(&self, generation: u64, scene: &Scene, options: &RenderOptions, cancel: &Cancel) {
+    fn render(
+        &self,
+        generation: u64,
+        scene: &Scene,
+        options: &RenderOptions,
+        passes: &[u32],
+        cancel: &Cancel,
+    ) {
         if let Err(e) = options.validate() {
             self.send(Event::Failed {
                 generation,
@@ -262,7 +288,8 @@ impl WorkerThread {
         }
         let (width, height) = (scene.camera.width, scene.camera.height);
         let render_start = Instant::now();
-        for scale in passes(width, height) {
+        for &scale in passes {
+            let scale = scale.max(1);
             if cancel.is_cancelled() {
                 return;
             }

@@ -53,7 +53,38 @@ pub enum Command {
     Study,
     /// Back to the camera the file has (Home).
     CameraFromFile,
+    /// Show or hide the list of keys and mouse actions (F1, `?`).
+    Help,
 }
+
+/// Every key and mouse action, for the help window (F1).
+pub const HELP: &[(&str, &str)] = &[
+    (
+        "drag on the picture",
+        "orbit the camera around the point under the cursor",
+    ),
+    (
+        "Shift+drag, middle drag",
+        "pan the camera in its view plane",
+    ),
+    ("mouse wheel", "dolly toward the point under the cursor"),
+    ("Home", "back to the camera the file has"),
+    ("click", "select the object under the cursor"),
+    ("Ctrl+wheel, + / -", "zoom the picture"),
+    ("Ctrl+drag", "pan the picture"),
+    ("F / 1", "fit the picture / show it 1:1"),
+    ("Esc", "cancel the render in progress"),
+    ("Ctrl+Z", "undo"),
+    ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
+    (
+        "Ctrl+S",
+        "save (merges with changes made by other programs)",
+    ),
+    ("Ctrl+O", "open a scene"),
+    ("Ctrl+E", "export the image"),
+    ("Ctrl+Q", "quit (asks about unsaved edits)"),
+    ("F1, ?", "this list"),
+];
 
 impl Command {
     /// Whether carrying it out drops unsaved edits.
@@ -66,6 +97,26 @@ impl Command {
 }
 
 impl RayOfLightApp {
+    /// The help window: [`HELP`] as a table.
+    pub(super) fn help_window(&mut self, ctx: &egui::Context) {
+        egui::Window::new("Keys and mouse")
+            .open(&mut self.help_open)
+            .resizable(false)
+            .collapsible(false)
+            .show(ctx, |ui| {
+                egui::Grid::new("help")
+                    .num_columns(2)
+                    .striped(true)
+                    .show(ui, |ui| {
+                        for (keys, action) in HELP {
+                            ui.strong(*keys);
+                            ui.label(*action);
+                            ui.end_row();
+                        }
+                    });
+            });
+    }
+
     /// Carries out a command from a menu or a key. Commands that would drop
     /// unsaved edits ask first.
     pub fn run(&mut self, command: Command) {
@@ -137,6 +188,7 @@ impl RayOfLightApp {
                 self.preview.cancel();
             }
             Command::CameraFromFile => self.camera_from_file(),
+            Command::Help => self.help_open = !self.help_open,
             Command::Study => {
                 self.study.open = true;
                 self.study.set_plan(self.doc.scene());
@@ -181,10 +233,17 @@ impl RayOfLightApp {
                     (Key::Minus, Command::ZoomOut),
                     (Key::Escape, Command::CancelRender),
                     (Key::Home, Command::CameraFromFile),
+                    (Key::F1, Command::Help),
                 ] {
                     if i.key_pressed(key) && i.modifiers.is_none() {
                         commands.push(command);
                     }
+                }
+                if i.events
+                    .iter()
+                    .any(|e| matches!(e, egui::Event::Text(t) if t == "?"))
+                {
+                    commands.push(Command::Help);
                 }
             });
         }
@@ -268,6 +327,7 @@ impl RayOfLightApp {
                 pick(ui, true, "1:1  1", Command::OneToOne);
                 pick(ui, true, "Camera from file  Home", Command::CameraFromFile);
                 pick(ui, true, "Study…", Command::Study);
+                pick(ui, true, "Keys and mouse…  F1", Command::Help);
                 ui.separator();
                 ui.label("Anti-aliasing");
                 for aa in [1, 2, 3, 4] {

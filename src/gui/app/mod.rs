@@ -24,8 +24,9 @@ use dialogs::{Confirm, DialogKind, PathPrompt};
 use picture::View;
 
 use super::document::{Document, FileState, Reload, SaveError};
+use super::pace::Pace;
 use super::panel::{self, Selection};
-use super::preview::{Preview, RenderState};
+use super::preview::{Dirty, Preview, RenderState};
 use super::recent::Recent;
 use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
@@ -85,6 +86,13 @@ pub struct RayOfLightApp {
     navigation: Option<navigate::Navigation>,
     /// When the wheel last moved the camera, while its undo step is open.
     wheel_at: Option<Instant>,
+    /// The keys-and-mouse window is shown.
+    help_open: bool,
+    /// The measured cost of rendering, for the interactive scale.
+    pace: Pace,
+    /// The newest request was one interactive pass at this scale: refine
+    /// once the mouse stops.
+    interactive: Option<u32>,
     /// The window title last sent.
     title: String,
     /// The user chose to quit without saving.
@@ -132,6 +140,9 @@ impl RayOfLightApp {
             hovered: None,
             navigation: None,
             wheel_at: None,
+            help_open: false,
+            pace: Pace::default(),
+            interactive: None,
             ctx: ctx.clone(),
         };
         app.watch();
@@ -195,17 +206,38 @@ impl RayOfLightApp {
 
     /// Asks the worker for the preview of the current scene, with the
     /// while-dragging method when one is set and a button is held.
+    ///
+    /// While the mouse moves the camera or drags a value, only one pass is
+    /// rendered, as coarse as keeps [`TARGET_FPS`](super::pace::TARGET_FPS)
+    /// pictures a second; the next request after the mouse stops refines
+    /// from that scale.
     fn request_render(&mut self) {
-        let dragging = self.methods.dragging.is_some() && self.ctx.input(|i| i.pointer.any_down());
+        let interacting = self.interacting();
+        let dragging = self.methods.dragging.is_some() && interacting;
         let options = self.methods.options(self.doc.scene(), dragging, self.aa);
         self.rendered_dragging = dragging;
-        let generation = self
-            .worker
-            .request(Arc::new(self.doc.scene().clone()), options);
+        let camera = &self.doc.scene().camera;
+        let passes = if interacting {
+            let scale = self.pace.interactive_scale(camera.width, camera.height);
+            self.interactive = Some(scale);
+            vec![scale]
+        } else if let Some(scale) = self.interactive.take() {
+            Pace::refine(scale)
+        } else {
+            super::worker::passes(camera.width, camera.height)
+        };
+        let generation =
+            self.worker
+                .request_passes(Arc::new(self.doc.scene().clone()), options, passes);
         self.study.superseded(generation);
         if self.study.open {
             self.study.set_plan(self.doc.scene());
         }
+    }
+
+    /// A drag of the camera or of a value is under way.
+    fn interacting(&self) -> bool {
+        self.navigation.is_some() || self.ctx.dragged_id().is_some()
     }
 
     /// The live preview's methods (for tests).
@@ -261,6 +293,9 @@ impl RayOfLightApp {
                 | Event::StudyFinished { .. }
                 | Event::StudyStopped { .. } => study_ended |= self.study.apply(event),
                 _ => {
+                    if let Event::PassFinished { elapsed, rays, .. } = &event {
+                        self.pace.measured(*rays, *elapsed);
+                    }
                     self.preview.apply(newest, event);
                 }
             }
@@ -357,6 +392,7 @@ impl RayOfLightApp {
         self.side_panel(ui);
         self.picture(ui);
         self.modals(ui);
+        self.help_window(&ctx);
         if self.study.open {
             for action in self.study.show(&ctx, &self.methods) {
                 self.study_action(action);
@@ -366,8 +402,9 @@ impl RayOfLightApp {
             self.end_wheel_burst();
             ctx.request_repaint_after(navigate::WHEEL_PAUSE);
         }
-        // A value was dragged with the cheaper method: exact on release.
-        if self.rendered_dragging && !ctx.input(|i| i.pointer.any_down()) {
+        // The mouse stopped: refine the coarse picture, exact again if a
+        // value was dragged with a cheaper method.
+        if (self.rendered_dragging || self.interactive.is_some()) && !self.interacting() {
             self.request_render();
         }
         if self.study.is_running() {

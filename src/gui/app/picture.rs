@@ -48,22 +48,7 @@ impl Default for View {
 impl RayOfLightApp {
     pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
         egui::CentralPanel::default().show(ui, |ui| {
-            if self.preview.take_dirty() || self.texture.is_none() {
-                let image = self.preview.image();
-                let (w, h) = image.dimensions();
-                let color_image =
-                    egui::ColorImage::from_rgb([w as usize, h as usize], image.as_raw());
-                match &mut self.texture {
-                    Some(t) => t.set(color_image, TextureOptions::NEAREST),
-                    None => {
-                        self.texture = Some(ui.ctx().load_texture(
-                            "render",
-                            color_image,
-                            TextureOptions::NEAREST,
-                        ))
-                    }
-                }
-            }
+            self.upload(ui.ctx());
             let Some(texture) = self.texture.as_ref().map(egui::TextureHandle::id) else {
                 return;
             };
@@ -116,6 +101,42 @@ impl RayOfLightApp {
                 }
             }
         });
+    }
+
+    /// Brings the texture up to date with the preview: only the tiles that
+    /// changed, or the whole image when its size changed.
+    fn upload(&mut self, ctx: &egui::Context) {
+        let dirty = self.preview.take_dirty();
+        let image = self.preview.image();
+        let whole = || {
+            let (w, h) = image.dimensions();
+            egui::ColorImage::from_rgb([w as usize, h as usize], image.as_raw())
+        };
+        match (&mut self.texture, dirty) {
+            (None, _) => {
+                self.texture = Some(ctx.load_texture("render", whole(), TextureOptions::NEAREST))
+            }
+            (Some(_), Dirty::Nothing) => {}
+            (Some(t), Dirty::Whole) => t.set(whole(), TextureOptions::NEAREST),
+            (Some(t), Dirty::Regions(regions)) => {
+                let raw = image.as_raw();
+                let row = image.width() as usize * 3;
+                for r in regions {
+                    let (x, y) = (r.x as usize, r.y as usize);
+                    let (w, h) = (r.width as usize, r.height as usize);
+                    let mut rgb = Vec::with_capacity(w * h * 3);
+                    for line in y..y + h {
+                        let start = line * row + x * 3;
+                        rgb.extend_from_slice(raw.get(start..start + w * 3).unwrap_or_default());
+                    }
+                    if rgb.len() != w * h * 3 {
+                        continue;
+                    }
+                    let part = egui::ColorImage::from_rgb([w, h], &rgb);
+                    t.set_partial([x, y], part, TextureOptions::NEAREST);
+                }
+            }
+        }
     }
 
     /// What the mouse does on the picture: a drag orbits the camera
