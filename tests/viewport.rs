@@ -27,7 +27,7 @@ const SCENE: &str = r#"<scene>
     <color red="1" green="0" blue="0"/>
     <transformation><translate x="3" y="0" z="0"/></transformation>
   </sphere>
-  <light x="1" y="-4" z="-5"/>
+  <light x="1" y="-1" z="-5"/>
   <camera width="32" height="24" eyeDistance="2">
     <transformation>
       <translate x="0" y="0" z="-10"/>
@@ -270,4 +270,62 @@ fn esc_cancels_at_once_and_the_status_says_so() {
     std::thread::sleep(Duration::from_millis(200));
     harness.run_steps(3);
     assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
+}
+
+#[test]
+fn dragging_a_light_marker_moves_the_light_in_the_view_plane() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    let start = harness.state().document().scene().lights[0].position;
+    let marker = harness
+        .state()
+        .light_marker(0)
+        .expect("the light is in view");
+    drag(
+        &mut harness,
+        marker,
+        marker + Vec2::new(40.0, 0.0),
+        Modifiers::NONE,
+    );
+    let moved = harness.state().document().scene().lights[0].position;
+    // The camera looks along +z, unturned: right is +x.
+    assert!(moved.x > start.x + 0.1, "{start} -> {moved}");
+    assert!((moved.y - start.y).abs() < 1e-9 && (moved.z - start.z).abs() < 1e-9);
+    let camera = &harness.state().document().scene().camera;
+    assert_eq!(
+        camera,
+        &scene::load(&path).unwrap().camera,
+        "the camera stays"
+    );
+    let doc = harness.state().document();
+    assert_eq!(doc.undo_label(), Some("position of light 1"));
+    harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    harness.run_steps(2);
+    assert_eq!(harness.state().document().scene().lights[0].position, start);
+}
+
+#[test]
+fn the_selected_object_is_outlined() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    assert_eq!(harness.state().outline_pixels(), None);
+    // The middle of the picture is the green sphere.
+    harness.state_mut().pick(16.0, 12.0);
+    let start = Instant::now();
+    while harness.state().outline_pixels().is_none() {
+        assert!(start.elapsed() < Duration::from_secs(10), "no outline");
+        harness.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // The sphere's rim: some pixels, far fewer than the picture has.
+    let pixels = harness.state().outline_pixels().unwrap();
+    assert!((4..32 * 24 / 2).contains(&pixels), "{pixels}");
+    // The same outline the core's id buffer gives.
+    let scene = harness.state().document().scene().clone();
+    let ids = render::object_ids(&scene, 1);
+    let expected = (0..ids.height)
+        .flat_map(|y| (0..ids.width).map(move |x| (x, y)))
+        .filter(|&(x, y)| ids.is_outline(x, y, 0))
+        .count();
+    assert_eq!(pixels, expected);
 }

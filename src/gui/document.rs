@@ -121,20 +121,22 @@ fn drag_key(edits: &[Edit]) -> Option<DragKey> {
 }
 
 /// "ka of #2 sphere"; "colour of #1 sphere" for a colour's channels set
-/// together.
+/// together, "position of light 1" for a light's coordinates.
 fn step_label(edits: &[Edit], scene: &Scene) -> String {
     let first = edits
         .first()
         .map_or_else(String::new, |e| e.describe(scene));
-    let colour = edits.len() > 1
-        && edits.iter().all(|e| {
-            matches!(
-                e,
-                Edit::Set(Field::Color { .. } | Field::LightColor { .. }, _)
-            )
-        });
+    let all = |f: fn(&Field) -> bool| {
+        edits.len() > 1
+            && edits
+                .iter()
+                .all(|e| matches!(e, Edit::Set(field, _) if f(field)))
+    };
+    let colour = all(|f| matches!(f, Field::Color { .. } | Field::LightColor { .. }));
+    let position = all(|f| matches!(f, Field::LightPosition { .. }));
     match first.split_once(" of ") {
         Some((_, of)) if colour => format!("colour of {of}"),
+        Some((_, of)) if position => format!("position of {of}"),
         _ => first,
     }
 }

@@ -362,7 +362,8 @@ fn transform_editor(
     };
     CollapsingHeader::new(title).id_salt(id).show(ui, |ui| {
         for (k, step) in steps.iter().enumerate() {
-            ui.horizontal(|ui| {
+            // Wrapped, so that a long row does not widen the panel.
+            ui.horizontal_wrapped(|ui| {
                 step_editor(ui, form, owner, k, step);
                 if ui
                     .small_button("×")

@@ -7,7 +7,7 @@
 
 use super::worker::Event;
 use image::RgbImage;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// What the renderer is doing, for the status bar.
 #[derive(Debug, Clone, PartialEq)]
@@ -40,6 +40,8 @@ pub struct Preview {
     /// Time from the request to the end of the first (coarsest) pass of the
     /// current render: how long until the picture first reacts.
     first_pass: Option<Duration>,
+    /// When the pass now rendering started.
+    pass_started: Option<Instant>,
 }
 
 impl Default for Preview {
@@ -51,6 +53,7 @@ impl Default for Preview {
             dirty: Dirty::Whole,
             last_render: None,
             first_pass: None,
+            pass_started: None,
         }
     }
 }
@@ -73,6 +76,25 @@ impl Preview {
     /// current render.
     pub fn first_pass(&self) -> Option<Duration> {
         self.first_pass
+    }
+
+    /// The pass in progress: its fraction done, and when it has run for a
+    /// second or more, the time it has left at its pace so far.
+    pub fn progress(&self) -> Option<(f32, Option<Duration>)> {
+        let RenderState::Rendering {
+            tiles_done,
+            tiles_total,
+            ..
+        } = self.state
+        else {
+            return None;
+        };
+        let fraction = tiles_done as f32 / tiles_total.max(1) as f32;
+        let elapsed = self.pass_started?.elapsed();
+        let left = (elapsed >= Duration::from_secs(1) && tiles_done > 0).then(|| {
+            elapsed.mul_f64((tiles_total - tiles_done.min(tiles_total)) as f64 / tiles_done as f64)
+        });
+        Some((fraction, left))
     }
 
     /// The render in progress was cancelled: its late events are dropped
@@ -120,6 +142,7 @@ impl Preview {
                     crate::render::TILE_SIZE,
                 )
                 .len();
+                self.pass_started = Some(Instant::now());
                 self.state = RenderState::Rendering {
                     scale,
                     tiles_done: 0,

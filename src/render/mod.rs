@@ -5,16 +5,19 @@
 //! a [`Cancel`] token once per pixel; [`render`] does the whole image on a
 //! rayon pool. [`RenderOptions`] holds every method choice; its default is
 //! the contract's reference image. [`navigate`] moves the camera as a
-//! viewport does (orbit, pan, dolly).
+//! viewport does (orbit, pan, dolly); [`object_ids`] says which object each
+//! pixel shows.
 
 mod auto;
 mod camera;
+mod ids;
 pub mod navigate;
 mod prepared;
 mod tile;
 
 pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
+pub use ids::{ObjectIds, object_ids};
 pub use prepared::{Hit, Prepared, prepare};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
 

@@ -156,6 +156,26 @@ pub fn pixel_size(camera: &Camera, depth: f64) -> f64 {
     s * depth / camera.eye_distance
 }
 
+/// Where a world point shows in the picture, in pixels from its top-left
+/// corner (the inverse of [`super::CameraRays::ray`]); `None` for a point
+/// at or behind the eye.
+///
+/// In camera space the eye is at (0, 0, −e) and the screen is z = 0: the
+/// line from the eye to q meets the screen at q.xy · e / (q.z + e), which is
+/// (x − width/2) · s in pixels x.
+pub fn project(camera: &Camera, point: DVec3) -> Option<(f64, f64)> {
+    let q = camera.transform.to_object().transform_point3(point);
+    let e = camera.eye_distance;
+    let depth = q.z + e;
+    if depth.is_nan() || depth <= 0.0 {
+        return None;
+    }
+    let s = 2.0 / f64::from(camera.width.min(camera.height));
+    let x = q.x * e / depth / s + f64::from(camera.width) / 2.0;
+    let y = q.y * e / depth / s + f64::from(camera.height) / 2.0;
+    (x.is_finite() && y.is_finite()).then_some((x, y))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -227,6 +247,24 @@ mod tests {
         let pose = Pose::of(&c).unwrap().orbit(DVec3::ZERO, 0.0, 3.0);
         let (_, pitch, _) = angles(&pose.rotation);
         assert!((pitch - MAX_PITCH).abs() < 1e-12);
+    }
+
+    #[test]
+    fn projecting_a_point_of_a_pixels_ray_gives_the_pixel() {
+        let c = camera(vec![
+            TransformStep::RotateX(-0.3),
+            TransformStep::RotateY(0.8),
+            TransformStep::Translate(DVec3::new(1.0, -2.0, -15.0)),
+        ]);
+        let rays = crate::render::CameraRays::new(&c);
+        for (x, y) in [(0.5, 0.5), (300.0, 300.0), (599.5, 17.25)] {
+            let p = rays.ray(x, y).at(7.5);
+            let (u, v) = project(&c, p).unwrap();
+            assert!((u - x).abs() < 1e-9 && (v - y).abs() < 1e-9, "{u} {v}");
+        }
+        // Behind the eye: nowhere.
+        let behind = rays.ray(300.0, 300.0).at(-50.0);
+        assert_eq!(project(&c, behind), None);
     }
 
     #[test]

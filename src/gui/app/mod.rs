@@ -11,11 +11,13 @@
 //! - `dialogs`: open, save, export, and the modal questions;
 //! - `picture`: the picture, its zoom and pan, the pick;
 //! - `navigate`: orbit, pan and dolly the camera with the mouse;
+//! - `overlay`: light markers over the picture, dragged to move lights;
 //! - `status`: the status bar, the error banner, notices, frame counts.
 
 pub mod command;
 mod dialogs;
 mod navigate;
+mod overlay;
 mod picture;
 mod status;
 
@@ -44,6 +46,8 @@ use std::time::{Duration, Instant};
 enum Background {
     /// A file event from the watcher of this generation.
     File(u64, FileEvent),
+    /// The object-id buffer for the outline of (object, render generation).
+    Ids((u32, u64), crate::render::ObjectIds),
     Exported(PathBuf, Result<(), String>),
     Dialog(DialogKind, Option<PathBuf>, Duration),
 }
@@ -84,6 +88,13 @@ pub struct RayOfLightApp {
     hovered: Option<(u32, u32, [u8; 3])>,
     /// A drag of the camera under way.
     navigation: Option<navigate::Navigation>,
+    /// A light's marker being dragged.
+    light_drag: Option<overlay::LightDrag>,
+    /// The light markers drawn in the last frame: light and position.
+    markers: Vec<(usize, Pos2)>,
+    /// The selected object's outline, and what the newest one asked for is.
+    outline: Option<overlay::Outline>,
+    outline_wanted: Option<(u32, u64)>,
     /// When the wheel last moved the camera, while its undo step is open.
     wheel_at: Option<Instant>,
     /// The keys-and-mouse window is shown.
@@ -139,6 +150,10 @@ impl RayOfLightApp {
             frames: VecDeque::new(),
             hovered: None,
             navigation: None,
+            light_drag: None,
+            markers: Vec::new(),
+            outline: None,
+            outline_wanted: None,
             wheel_at: None,
             help_open: false,
             pace: Pace::default(),
@@ -306,6 +321,7 @@ impl RayOfLightApp {
         }
         while let Ok(message) = self.background.try_recv() {
             match message {
+                Background::Ids(key, ids) => self.outline_ready(key, ids),
                 Background::File(generation, event) => {
                     if generation == self.watch_generation {
                         self.file_event(event);
@@ -393,6 +409,7 @@ impl RayOfLightApp {
         self.picture(ui);
         self.modals(ui);
         self.help_window(&ctx);
+        self.refresh_outline();
         if self.study.open {
             for action in self.study.show(&ctx, &self.methods) {
                 self.study_action(action);

@@ -87,6 +87,7 @@ impl RayOfLightApp {
                 Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
                 Color32::WHITE,
             );
+            self.draw_outline(&painter, rect);
             // Pixel inspector and pick.
             self.hovered = None;
             if let Some(pos) = response.hover_pos() {
@@ -100,6 +101,9 @@ impl RayOfLightApp {
                     }
                 }
             }
+            let to_screen =
+                |x: f64, y: f64| rect.min + Vec2::new(x as f32, y as f32) / image_size * size;
+            self.light_markers(ui, area, to_screen, image_per_point);
         });
     }
 

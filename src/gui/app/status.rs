@@ -29,19 +29,28 @@ impl RayOfLightApp {
             ui.horizontal(|ui| {
                 match self.preview.state() {
                     RenderState::Idle => ui.label("idle"),
-                    RenderState::Rendering {
-                        scale,
-                        tiles_done,
-                        tiles_total,
-                    } => {
-                        let progress = *tiles_done as f32 / (*tiles_total).max(1) as f32;
-                        ui.add(egui::ProgressBar::new(progress).desired_width(120.0).text(
-                            if *scale == 1 {
-                                "rendering".to_owned()
-                            } else {
-                                format!("preview 1/{scale}")
-                            },
-                        ))
+                    RenderState::Rendering { scale, .. } => {
+                        let (fraction, left) = self.preview.progress().unwrap_or((0.0, None));
+                        let what = if *scale == 1 {
+                            "rendering".to_owned()
+                        } else {
+                            format!("preview 1/{scale}")
+                        };
+                        // Long passes say how far they are and how long
+                        // they have left.
+                        let text = match left {
+                            Some(left) => format!(
+                                "{what} {:.0} % · {:.0} s left",
+                                fraction * 100.0,
+                                left.as_secs_f64().ceil()
+                            ),
+                            None => what,
+                        };
+                        ui.add(
+                            egui::ProgressBar::new(fraction)
+                                .desired_width(200.0)
+                                .text(text),
+                        )
                     }
                     RenderState::Done { .. } => ui.label("done"),
                     RenderState::Failed(message) => ui.colored_label(Color32::RED, message),

@@ -1,0 +1,212 @@
+//! What is drawn over the picture: the selected object's outline (from the
+//! core's object-id buffer, computed on a background thread whenever the
+//! selection or the scene changes and the mouse is still), and a marker at
+//! each light's projected position, which a drag moves in the view plane
+//! (an undoable edit of the light's x, y, z, one step per drag).
+
+use super::*;
+use crate::render::navigate::{Pose, pixel_size, project};
+use crate::scene::edit::{Axis, Edit, Field, Value};
+use glam::DVec3;
+
+/// Radius of a light's marker, in points.
+const MARKER: f32 = 7.0;
+
+/// The longest side of the object-id buffer behind the outline.
+const OUTLINE_SIDE: u32 = 800;
+
+/// The outline of the selected object, ready to draw.
+pub(super) struct Outline {
+    /// What it was computed for: the object and the render generation of
+    /// the scene it was computed on.
+    key: (u32, u64),
+    texture: egui::TextureHandle,
+    /// Outline pixels (for tests).
+    pixels: usize,
+}
+
+/// A light being dragged.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LightDrag {
+    light: usize,
+    start: DVec3,
+    /// World size of one image pixel at the light's depth.
+    pixel: f64,
+}
+
+impl RayOfLightApp {
+    /// The number of outline pixels drawn for the selected object, once
+    /// computed (for tests).
+    pub fn outline_pixels(&self) -> Option<usize> {
+        self.outline.as_ref().map(|o| o.pixels)
+    }
+
+    /// Starts computing the outline when the selection or the scene
+    /// changed and nothing is being dragged; drops it when nothing is
+    /// selected.
+    pub(super) fn refresh_outline(&mut self) {
+        let Some(object) = self.selection.object.and_then(|o| u32::try_from(o).ok()) else {
+            self.outline = None;
+            self.outline_wanted = None;
+            return;
+        };
+        let key = (object, self.worker.newest());
+        if self.outline_wanted == Some(key) || self.interacting() {
+            return;
+        }
+        self.outline_wanted = Some(key);
+        let scene = self.doc.scene().clone();
+        let longest = scene.camera.width.max(scene.camera.height);
+        let scale = longest.div_ceil(OUTLINE_SIDE).max(1);
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        std::thread::spawn(move || {
+            let ids = render::object_ids(&scene, scale);
+            let _ = tx.send(Background::Ids(key, ids));
+            ctx.request_repaint();
+        });
+    }
+
+    /// The object-id buffer for `key` arrived: its outline becomes a
+    /// texture (transparent but for the outline pixels).
+    pub(super) fn outline_ready(&mut self, key: (u32, u64), ids: render::ObjectIds) {
+        if self.outline_wanted != Some(key) {
+            return;
+        }
+        let (w, h) = (ids.width, ids.height);
+        let mut pixels = 0;
+        let mut image = egui::ColorImage::new(
+            [w as usize, h as usize],
+            vec![Color32::TRANSPARENT; (w * h) as usize],
+        );
+        for y in 0..h {
+            for x in 0..w {
+                if ids.is_outline(x, y, key.0) {
+                    image.pixels[(y * w + x) as usize] = Color32::from_rgb(255, 140, 0);
+                    pixels += 1;
+                }
+            }
+        }
+        let texture = self
+            .ctx
+            .load_texture("selection-outline", image, TextureOptions::NEAREST);
+        self.outline = Some(Outline {
+            key,
+            texture,
+            pixels,
+        });
+    }
+
+    /// Draws the selected object's outline over the picture at `rect`.
+    pub(super) fn draw_outline(&self, painter: &egui::Painter, rect: Rect) {
+        if let Some(outline) = &self.outline
+            && self.selection.object.map(|o| o as u32) == Some(outline.key.0)
+        {
+            painter.image(
+                outline.texture.id(),
+                rect,
+                Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
+                Color32::WHITE,
+            );
+        }
+    }
+
+    /// Where light `n`'s marker was drawn last, in screen points (for
+    /// tests and tools driving the app).
+    pub fn light_marker(&self, n: usize) -> Option<Pos2> {
+        self.markers
+            .iter()
+            .find(|(m, _)| *m == n)
+            .map(|&(_, pos)| pos)
+    }
+
+    /// Draws the light markers and moves a light its marker is dragged.
+    /// `to_screen` maps image pixels to screen points; an image pixel is
+    /// `image_per_point` screen points.
+    pub(super) fn light_markers(
+        &mut self,
+        ui: &mut egui::Ui,
+        area: Rect,
+        to_screen: impl Fn(f64, f64) -> Pos2,
+        image_per_point: f64,
+    ) {
+        let scene = self.doc.scene();
+        let camera = scene.camera.clone();
+        let lights: Vec<(usize, DVec3, Pos2)> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter_map(|(n, l)| {
+                let (x, y) = project(&camera, l.position)?;
+                let pos = to_screen(x, y);
+                area.contains(pos).then_some((n, l.position, pos))
+            })
+            .collect();
+        let painter = ui.painter_at(area);
+        self.markers = lights.iter().map(|&(n, _, pos)| (n, pos)).collect();
+        for (n, position, pos) in lights {
+            let id = ui.scope_id().with(("light-marker", n));
+            let hit = Rect::from_center_size(pos, Vec2::splat(MARKER * 2.5));
+            let response = ui
+                .interact(hit, id, Sense::drag())
+                .on_hover_text(format!("light {}: drag to move it", n + 1));
+            let strong = response.hovered() || response.dragged();
+            painter.circle(
+                pos,
+                MARKER,
+                Color32::from_rgb(255, 220, 60),
+                egui::Stroke::new(if strong { 2.5 } else { 1.5 }, Color32::BLACK),
+            );
+            painter.text(
+                pos + Vec2::new(MARKER + 2.0, -MARKER),
+                egui::Align2::LEFT_BOTTOM,
+                format!("L{}", n + 1),
+                egui::FontId::proportional(12.0),
+                Color32::WHITE,
+            );
+            if response.drag_started() {
+                let depth = Pose::of(&camera)
+                    .map(|pose| (position - pose.eye(camera.eye_distance)).dot(pose.forward()))
+                    .unwrap_or(0.0);
+                self.light_drag = Some(LightDrag {
+                    light: n,
+                    start: position,
+                    pixel: pixel_size(&camera, depth),
+                });
+            }
+            if response.dragged()
+                && let Some(drag) = self.light_drag.filter(|d| d.light == n)
+                && let Ok(pose) = Pose::of(&camera)
+            {
+                let total = response.total_drag_delta().unwrap_or_default();
+                let (dx, dy) = (
+                    f64::from(total.x) * image_per_point * drag.pixel,
+                    f64::from(total.y) * image_per_point * drag.pixel,
+                );
+                let moved = drag.start + pose.right() * dx + pose.down() * dy;
+                let edits = [Axis::X, Axis::Y, Axis::Z]
+                    .into_iter()
+                    .map(|axis| {
+                        let value = match axis {
+                            Axis::X => moved.x,
+                            Axis::Y => moved.y,
+                            Axis::Z => moved.z,
+                        };
+                        Edit::Set(
+                            Field::LightPosition { light: n, axis },
+                            Value::Number(value),
+                        )
+                    })
+                    .collect();
+                match self.doc.apply_step(edits, true) {
+                    Ok(()) => self.after_edit(),
+                    Err(e) => self.notify(e.to_string()),
+                }
+            }
+            if response.drag_stopped() {
+                self.light_drag = None;
+                self.doc.end_drag();
+            }
+        }
+    }
+}
