@@ -329,3 +329,50 @@ fn the_selected_object_is_outlined() {
         .count();
     assert_eq!(pixels, expected);
 }
+
+#[test]
+fn g_moves_the_selected_object_in_the_view_plane_and_esc_puts_it_back() {
+    let (_dir, path) = file();
+    let mut harness = app(&path);
+    let original = harness.state().document().scene().clone();
+    harness.state_mut().pick(16.0, 12.0);
+    harness.event(Event::PointerMoved(MIDDLE));
+    harness.run_steps(2);
+
+    // G, a move to the right, Esc: nothing changed, nothing to undo.
+    harness.key_press(egui::Key::G);
+    harness.run_steps(1);
+    harness.event(Event::PointerMoved(MIDDLE + Vec2::new(60.0, 0.0)));
+    harness.run_steps(2);
+    assert_ne!(harness.state().document().scene(), &original, "it follows");
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert_eq!(harness.state().document().scene(), &original);
+    assert!(!harness.state().document().has_unsaved_edits());
+
+    // G, a move, a click: placed, one undo step.
+    harness.event(Event::PointerMoved(MIDDLE));
+    harness.run_steps(1);
+    harness.key_press(egui::Key::G);
+    harness.run_steps(1);
+    let to = MIDDLE + Vec2::new(60.0, 0.0);
+    harness.event(Event::PointerMoved(to));
+    harness.run_steps(2);
+    for pressed in [true, false] {
+        harness.event(Event::PointerButton {
+            pos: to,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.run_steps(1);
+    }
+    harness.run_steps(2);
+    let doc = harness.state().document();
+    let moved = doc.scene().objects[0].transform.to_world().translation;
+    assert!(moved.x > 0.1 && moved.y.abs() < 1e-9 && moved.z.abs() < 1e-9, "{moved}");
+    assert_eq!(doc.undo_label(), Some("move #1 sphere"));
+    harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
+    harness.run_steps(2);
+    assert_eq!(harness.state().document().scene(), &original);
+}

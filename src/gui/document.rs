@@ -24,7 +24,7 @@ use std::collections::BTreeMap;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
 
-use crate::scene::edit::{Edit, EditError, Edited, Field, Undo};
+use crate::scene::edit::{Edit, EditError, Edited, Field, Owner, Undo};
 use crate::scene::merge::{self, Choice, Conflict};
 use crate::scene::{self, LoadError, LoadErrorKind, Scene, splice};
 
@@ -103,9 +103,14 @@ struct Step {
     dragging: Option<DragKey>,
 }
 
-/// The values a drag changes: a field each, `None` for the camera's
-/// transformation.
-type DragKey = Vec<Option<Field>>;
+/// What a drag changes: values, or a whole transformation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum DragValue {
+    Field(Field),
+    Transform(Owner),
+}
+
+type DragKey = Vec<DragValue>;
 
 /// What `edits` change, if they are edits a drag makes (set values, move
 /// the camera).
@@ -113,8 +118,8 @@ fn drag_key(edits: &[Edit]) -> Option<DragKey> {
     edits
         .iter()
         .map(|e| match e {
-            Edit::Set(field, _) => Some(Some(*field)),
-            Edit::CameraTransform(_) => Some(None),
+            Edit::Set(field, _) => Some(DragValue::Field(*field)),
+            Edit::Transform(owner, _) => Some(DragValue::Transform(*owner)),
             Edit::Insert(..) | Edit::Remove(_) => None,
         })
         .collect()
@@ -382,7 +387,7 @@ impl Document {
     fn log_edit(&mut self, edit: Edit) {
         let replaces = match (&edit, self.log.last()) {
             (Edit::Set(field, _), Some(Edit::Set(last, _))) => field == last,
-            (Edit::CameraTransform(_), Some(Edit::CameraTransform(_))) => true,
+            (Edit::Transform(owner, _), Some(Edit::Transform(last, _))) => owner == last,
             _ => false,
         };
         if replaces {

@@ -171,8 +171,9 @@ pub enum Edit {
     Insert(Item, Element),
     /// Remove an element.
     Remove(Item),
-    /// Replace the camera's whole transformation (the viewport's edit).
-    CameraTransform(Vec<TransformStep>),
+    /// Replace the camera's or an object's whole transformation (the
+    /// viewport's edits: moving the camera, moving an object).
+    Transform(Owner, Vec<TransformStep>),
 }
 
 const AXES: [(Axis, &str); 3] = [(Axis::X, "x"), (Axis::Y, "y"), (Axis::Z, "z")];
@@ -715,7 +716,10 @@ impl Edit {
                 }),
             },
             Edit::Remove(item) => format!("remove {}", item_name(*item)),
-            Edit::CameraTransform(_) => "camera view".to_owned(),
+            Edit::Transform(Owner::Camera, _) => "camera view".to_owned(),
+            Edit::Transform(Owner::Object(n), _) => {
+                format!("move {}", item_name(Item::Object(*n)))
+            }
         }
     }
 }
@@ -860,7 +864,8 @@ enum Restore {
     Object(Option<ObjectOrigin>),
     Light(Option<usize>),
     Step(Option<usize>),
-    CameraSteps(Vec<Option<usize>>),
+    /// The origins of a transformation's steps.
+    Steps(Vec<Option<usize>>),
 }
 
 impl Undo {
@@ -952,30 +957,35 @@ impl Edited {
             }
             Edit::Insert(item, element) => self.insert(*item, element, restore),
             Edit::Remove(item) => self.remove(*item),
-            Edit::CameraTransform(steps) => {
+            Edit::Transform(owner, steps) => {
+                let path = format!("{owner}.transformation");
                 let transform = Transform::from_steps(steps.clone())
-                    .map_err(|_| value_error("camera.transformation", SINGULAR))?;
-                let old_steps = self.scene.camera.transform.steps().to_vec();
-                let old_origins = self.camera_steps.clone();
-                self.camera_steps = match restore {
-                    Restore::CameraSteps(origins) if origins.len() == steps.len() => origins,
-                    // Steps of the same kind at the same place keep their
-                    // origin: the view changed their values.
-                    _ => steps
-                        .iter()
-                        .enumerate()
-                        .map(|(k, s)| {
-                            old_steps
-                                .get(k)
-                                .filter(|o| std::mem::discriminant(*o) == std::mem::discriminant(s))
-                                .and_then(|_| old_origins.get(k).copied().flatten())
-                        })
-                        .collect(),
-                };
-                self.scene.camera.transform = transform;
+                    .map_err(|_| value_error(&path, SINGULAR))?;
+                let old_steps = transform_of(&self.scene, *owner)?.steps().to_vec();
+                let old_origins = self.step_origins_mut(*owner).map(|o| o.clone());
+                if let Some(origins) = self.step_origins_mut(*owner) {
+                    *origins = match restore {
+                        Restore::Steps(restored) if restored.len() == steps.len() => restored,
+                        // Steps of the same kind at the same place keep
+                        // their origin: the move changed their values.
+                        _ => steps
+                            .iter()
+                            .enumerate()
+                            .map(|(k, s)| {
+                                old_steps
+                                    .get(k)
+                                    .filter(|o| {
+                                        std::mem::discriminant(*o) == std::mem::discriminant(s)
+                                    })
+                                    .and_then(|_| origins.get(k).copied().flatten())
+                            })
+                            .collect(),
+                    };
+                }
+                *transform_mut(&mut self.scene, *owner)? = transform;
                 Ok(Undo {
-                    edit: Edit::CameraTransform(old_steps),
-                    restore: Restore::CameraSteps(old_origins),
+                    edit: Edit::Transform(*owner, old_steps),
+                    restore: old_origins.map_or(Restore::Nothing, Restore::Steps),
                 })
             }
         }

@@ -10,7 +10,8 @@
 //! - removing an element that `theirs` changed;
 //! - editing an object or light when the file added or removed objects or
 //!   lights and the element at that index is not the one in `base`;
-//! - replacing the camera's transformation that `theirs` changed.
+//! - replacing a transformation (the camera's, an object's) that `theirs`
+//!   changed.
 //!
 //! Conflicts are returned with both values; the caller asks the user and
 //! merges again with a [`Choice`] for each. Nothing is ever dropped
@@ -131,7 +132,7 @@ fn edit_path(edit: &Edit) -> String {
     match edit {
         Edit::Set(field, _) => field.to_string(),
         Edit::Insert(item, _) | Edit::Remove(item) => item.to_string(),
-        Edit::CameraTransform(_) => "camera.transformation".to_owned(),
+        Edit::Transform(owner, _) => format!("{owner}.transformation"),
     }
 }
 
@@ -222,14 +223,30 @@ fn conflict(base: &Scene, theirs: &Scene, edit: &Edit) -> Option<Conflict> {
             ),
         },
         Edit::Insert(..) => None,
-        Edit::CameraTransform(_) => {
-            (base.camera.transform != theirs.camera.transform).then(|| Conflict {
-                edit: 0,
-                path: "camera.transformation".to_owned(),
-                yours: "your view".to_owned(),
-                theirs: "changed in the file".to_owned(),
-                can_keep_yours: true,
-            })
+        Edit::Transform(owner, _) => {
+            let path = format!("{owner}.transformation");
+            let (yours, gone) = match owner {
+                Owner::Camera => ("your view", false),
+                Owner::Object(n) => ("your move", theirs.objects.get(*n).is_none()),
+            };
+            let (ours, their) = (steps(base, *owner), steps(theirs, *owner));
+            if gone {
+                make(
+                    path,
+                    yours.to_owned(),
+                    "gone from the file".to_owned(),
+                    false,
+                )
+            } else if ours != their {
+                make(
+                    path,
+                    yours.to_owned(),
+                    "changed in the file".to_owned(),
+                    true,
+                )
+            } else {
+                None
+            }
         }
     }
 }
@@ -272,7 +289,10 @@ pub fn edits_between(from: &Scene, to: &Scene) -> Vec<Edit> {
         set(field, from, to, &mut edits);
     }
     if from.camera.transform != to.camera.transform {
-        edits.push(Edit::CameraTransform(to.camera.transform.steps().to_vec()));
+        edits.push(Edit::Transform(
+            Owner::Camera,
+            to.camera.transform.steps().to_vec(),
+        ));
     }
 
     let common = from.objects.len().min(to.objects.len());

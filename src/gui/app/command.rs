@@ -55,6 +55,8 @@ pub enum Command {
     CameraFromFile,
     /// Show or hide the list of keys and mouse actions (F1, `?`).
     Help,
+    /// Move the selected object with the mouse (G).
+    Grab,
 }
 
 /// Every key and mouse action, for the help window (F1).
@@ -70,10 +72,15 @@ pub const HELP: &[(&str, &str)] = &[
     ("mouse wheel", "dolly toward the point under the cursor"),
     ("Home", "back to the camera the file has"),
     ("click", "select the object under the cursor"),
+    (
+        "G, Alt+drag",
+        "move the selected object in the view plane (click: place; Esc, right click: cancel)",
+    ),
+    ("drag a light's marker", "move the light in the view plane"),
     ("Ctrl+wheel, + / -", "zoom the picture"),
     ("Ctrl+drag", "pan the picture"),
     ("F / 1", "fit the picture / show it 1:1"),
-    ("Esc", "cancel the render in progress"),
+    ("Esc", "cancel the move, else the render in progress"),
     ("Ctrl+Z", "undo"),
     ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
     (
@@ -184,8 +191,18 @@ impl RayOfLightApp {
             Command::ZoomIn => self.view.zoom_by(1.25),
             Command::ZoomOut => self.view.zoom_by(1.0 / 1.25),
             Command::CancelRender => {
-                self.worker.cancel();
-                self.preview.cancel();
+                // Esc puts back an object being moved, else stops the
+                // render.
+                if self.grab.is_some() {
+                    self.grab_end(false);
+                } else {
+                    self.worker.cancel();
+                    self.preview.cancel();
+                }
+            }
+            Command::Grab => {
+                let pointer = self.ctx.input(|i| i.pointer.hover_pos());
+                self.grab_start(pointer);
             }
             Command::CameraFromFile => self.camera_from_file(),
             Command::Help => self.help_open = !self.help_open,
@@ -234,6 +251,7 @@ impl RayOfLightApp {
                     (Key::Escape, Command::CancelRender),
                     (Key::Home, Command::CameraFromFile),
                     (Key::F1, Command::Help),
+                    (Key::G, Command::Grab),
                 ] {
                     if i.key_pressed(key) && i.modifiers.is_none() {
                         commands.push(command);

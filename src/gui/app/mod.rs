@@ -88,6 +88,8 @@ pub struct RayOfLightApp {
     hovered: Option<(u32, u32, [u8; 3])>,
     /// A drag of the camera under way.
     navigation: Option<navigate::Navigation>,
+    /// The selected object being moved (G).
+    grab: Option<navigate::Grab>,
     /// A light's marker being dragged.
     light_drag: Option<overlay::LightDrag>,
     /// The light markers drawn in the last frame: light and position.
@@ -151,6 +153,7 @@ impl RayOfLightApp {
             hovered: None,
             navigation: None,
             light_drag: None,
+            grab: None,
             markers: Vec::new(),
             outline: None,
             outline_wanted: None,
@@ -252,7 +255,7 @@ impl RayOfLightApp {
 
     /// A drag of the camera or of a value is under way.
     fn interacting(&self) -> bool {
-        self.navigation.is_some() || self.ctx.dragged_id().is_some()
+        self.navigation.is_some() || self.grab.is_some() || self.ctx.dragged_id().is_some()
     }
 
     /// The live preview's methods (for tests).

@@ -1,13 +1,15 @@
-//! Looking around the scene with the mouse: gestures on the picture orbit,
-//! pan and dolly the camera ([`crate::render::navigate`]). Each gesture is
-//! an edit of the camera's transformation through the document, so it is
+//! Looking around the scene and moving things with the mouse: gestures on
+//! the picture orbit, pan and dolly the camera ([`crate::render::navigate`]),
+//! and `G` (or Alt+drag) moves the selected object in the view plane. Each
+//! gesture is an edit of a transformation through the document, so it is
 //! shown as unsaved, saved with Ctrl+S and undone with Ctrl+Z: a whole drag
 //! is one step, and so is a burst of wheel steps with no pause over
 //! [`WHEEL_PAUSE`].
 
 use super::*;
+use crate::math::TransformStep;
 use crate::render::navigate::{Pose, pixel_size};
-use crate::scene::edit::Edit;
+use crate::scene::edit::{Edit, Owner};
 use glam::DVec3;
 
 /// Radians the camera turns per screen point dragged.
@@ -37,7 +39,89 @@ pub(super) struct Navigation {
     pixel: f64,
 }
 
+/// The selected object being moved (`G`, or Alt+drag), as in Blender: the
+/// mouse moves it in the view plane, a click confirms, Esc or a right
+/// click puts it back.
+#[derive(Debug, Clone)]
+pub(super) struct Grab {
+    object: usize,
+    /// Its steps when the move started.
+    start: Vec<TransformStep>,
+    /// Where the pointer was when the move started (set at its first
+    /// position over the picture).
+    pointer: Option<Pos2>,
+    /// World size of one image pixel at the object's depth.
+    pixel: f64,
+    pose: Pose,
+}
+
 impl RayOfLightApp {
+    /// Starts moving the selected object; `pointer` is where the mouse is,
+    /// if over the picture.
+    pub(super) fn grab_start(&mut self, pointer: Option<Pos2>) {
+        let Some(object) = self.selection.object else {
+            return self.notify("select an object first (click it), then G moves it".into());
+        };
+        let scene = self.doc.scene();
+        let (Some(o), Ok(pose)) = (scene.objects.get(object), Pose::of(&scene.camera)) else {
+            return;
+        };
+        let centre = o.transform.to_world().translation;
+        let depth = (centre - pose.eye(scene.camera.eye_distance)).dot(pose.forward());
+        self.grab = Some(Grab {
+            object,
+            start: o.transform.steps().to_vec(),
+            pointer,
+            pixel: pixel_size(&scene.camera, depth.abs()),
+            pose,
+        });
+        self.notify("moving: click to place, Esc or right click to cancel".into());
+    }
+
+    /// The pointer is at `pointer`: the object follows it. An image pixel
+    /// is `image_per_point` screen points.
+    pub(super) fn grab_move(&mut self, pointer: Pos2, image_per_point: f64) {
+        let Some(grab) = &mut self.grab else { return };
+        let start = *grab.pointer.get_or_insert(pointer);
+        let total = pointer - start;
+        let scale = image_per_point * grab.pixel;
+        let delta = grab.pose.right() * (f64::from(total.x) * scale)
+            + grab.pose.down() * (f64::from(total.y) * scale);
+        let mut steps = grab.start.clone();
+        // World moves come last: a trailing translate takes them, or one is
+        // added.
+        match steps.last_mut() {
+            Some(TransformStep::Translate(t)) => *t += delta,
+            _ => steps.push(TransformStep::Translate(delta)),
+        }
+        if total == Vec2::ZERO {
+            return;
+        }
+        let edit = Edit::Transform(Owner::Object(grab.object), steps);
+        match self.doc.apply_step(vec![edit], true) {
+            Ok(()) => self.after_edit(),
+            Err(e) => self.notify(e.to_string()),
+        }
+    }
+
+    /// Ends the move: kept, or put back as it was.
+    pub(super) fn grab_end(&mut self, keep: bool) {
+        let Some(grab) = self.grab.take() else { return };
+        let moved = self
+            .doc
+            .scene()
+            .objects
+            .get(grab.object)
+            .map(|o| o.transform.steps())
+            != Some(grab.start.as_slice());
+        if moved && !keep {
+            self.doc.undo();
+            self.after_edit();
+        }
+        self.doc.end_drag();
+        self.notify(if keep { "moved" } else { "move cancelled" }.into());
+    }
+
     /// The point seen at image position `at` and its distance from the
     /// eye; where the ray hits nothing, the centre of the spheres (or a
     /// point ahead) at its own distance.
@@ -140,12 +224,12 @@ impl RayOfLightApp {
     pub(super) fn camera_from_file(&mut self) {
         let steps = self.doc.file_scene().camera.transform.steps().to_vec();
         if steps.as_slice() != self.doc.scene().camera.transform.steps() {
-            self.apply_camera(Edit::CameraTransform(steps), false);
+            self.apply_camera(Edit::Transform(Owner::Camera, steps), false);
         }
     }
 
     fn set_camera(&mut self, pose: &Pose, dragging: bool) {
-        self.apply_camera(Edit::CameraTransform(pose.steps()), dragging);
+        self.apply_camera(Edit::Transform(Owner::Camera, pose.steps()), dragging);
     }
 
     fn apply_camera(&mut self, edit: Edit, dragging: bool) {

@@ -79,6 +79,8 @@ impl RayOfLightApp {
                 (f64::from(rel.x), f64::from(rel.y))
             };
             let image_per_point = f64::from(image_size.x / size.x);
+            // A click that places a moved object selects nothing.
+            let grabbing = self.grab.is_some();
             self.gestures(ui, &response, to_image, image_per_point);
             let painter = ui.painter_at(area);
             painter.image(
@@ -96,7 +98,7 @@ impl RayOfLightApp {
                     let (x, y) = (rel.x as u32, rel.y as u32);
                     let rgb = self.preview.image().get_pixel(x, y).0;
                     self.hovered = Some((x, y, rgb));
-                    if response.clicked() {
+                    if response.clicked() && !grabbing {
                         self.pick(f64::from(rel.x), f64::from(rel.y));
                     }
                 }
@@ -174,6 +176,23 @@ impl RayOfLightApp {
             {
                 self.dolly(to_image(pos), scroll);
             }
+        }
+        // An object being moved follows the pointer; a click places it, a
+        // right click puts it back.
+        if self.grab.is_some() {
+            if let Some(pos) = response.hover_pos().or(response.interact_pointer_pos()) {
+                self.grab_move(pos, image_per_point);
+            }
+            if response.secondary_clicked() {
+                self.grab_end(false);
+            } else if response.clicked() || response.drag_stopped() {
+                self.grab_end(true);
+            }
+            return;
+        }
+        if response.drag_started() && modifiers.alt {
+            self.grab_start(press);
+            return;
         }
         if response.drag_started() && !modifiers.command {
             let gesture = if modifiers.shift || middle {
