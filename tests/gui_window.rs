@@ -9,6 +9,11 @@
 //! started and the window closed with Ctrl+Q: the process must exit within
 //! 1 s (3x allowed).
 //!
+//! A second test orbits the camera with xdotool: the picture changes during
+//! the drag, Ctrl+Z gives the first picture back, Ctrl+S saves a file that
+//! the CLI renders to what the screen shows, and the idle app uses under
+//! 5 % of a core.
+//!
 //! Needs Xvfb, ImageMagick and xdotool (`apt-get install xvfb imagemagick
 //! xdotool libgl1-mesa-dri`); `.ci/run` installs them. Fails, never skips,
 //! when they are missing.
@@ -60,6 +65,10 @@ impl Drop for Killed {
         let _ = self.0.wait();
     }
 }
+
+/// One window test at a time: two starting together could pick the same
+/// free display number, and both apps would share one screen.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 fn start_xvfb() -> (Killed, String) {
     for n in 90..200 {
@@ -136,6 +145,9 @@ fn wait_for(
 fn the_window_follows_saves_of_the_scene_file() {
     let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
     std::fs::create_dir_all(&shots).unwrap();
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
     let (_xvfb, display) = start_xvfb();
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("scene.xml");
@@ -256,3 +268,178 @@ const MIRRORS: &str = r#"<scene>
   <model type="whitted" depth="10000"/>
 </scene>
 "#;
+
+/// Two spheres of exact colours (ambient, ka = 1), red left, green right.
+const TWO_SPHERES: &str = r#"<?xml version="1.0"?>
+<scene>
+  <!-- RED sphere -->
+  <sphere>
+    <color red="1" green="0" blue="0"/>
+    <material ka="1" kd="0" ks="0" m="1"/>
+    <transformation><translate x="-1.5" z="0"/></transformation>
+  </sphere>
+  <!-- GREEN sphere -->
+  <sphere>
+    <color red="0" green="1" blue="0"/>
+    <material ka="1" kd="0" ks="0" m="1"/>
+    <transformation><translate x="1.5" z="0"/></transformation>
+  </sphere>
+  <camera width="160" height="120" eyeDistance="2">
+    <transformation><translate z="-12"/></transformation>
+  </camera>
+  <model type="ambient"/>
+</scene>
+"#;
+
+/// The mean x of the pixels of colour `rgb`, and how many there are.
+fn centroid(image: &image::RgbImage, rgb: [u8; 3]) -> (f64, usize) {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (x, _, p) in image.enumerate_pixels() {
+        if p.0 == rgb {
+            sum += f64::from(x);
+            n += 1;
+        }
+    }
+    (if n > 0 { sum / n as f64 } else { f64::NAN }, n)
+}
+
+/// The red sphere's x seen from the green one's: what an orbit changes and
+/// a pan of the picture does not.
+fn spread(image: &image::RgbImage) -> f64 {
+    centroid(image, GREEN).0 - centroid(image, RED).0
+}
+
+/// CPU seconds the process has used (Linux: /proc/PID/stat, in clock
+/// ticks of 1/100 s).
+fn cpu_seconds(pid: u32) -> f64 {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap();
+    // Fields after the command name, which is in parentheses.
+    let rest = &stat[stat.rfind(')').unwrap() + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = fields[11].parse::<f64>().unwrap() + fields[12].parse::<f64>().unwrap();
+    ticks / 100.0
+}
+
+#[test]
+fn orbiting_with_the_mouse_moves_the_view_undoes_and_saves_what_is_shown() {
+    let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
+    std::fs::create_dir_all(&shots).unwrap();
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (_xvfb, display) = start_xvfb();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("two.xml");
+    std::fs::write(&path, TWO_SPHERES).unwrap();
+    let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .arg(&path)
+        .env("DISPLAY", &display)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_CONFIG_HOME", dir.path())
+        .env("LIBGL_ALWAYS_SOFTWARE", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let app = Killed(app);
+    let xdotool = |args: &[&str]| {
+        let out = Command::new("xdotool")
+            .args(args)
+            .env("DISPLAY", &display)
+            .output()
+            .expect("xdotool runs (apt-get install xdotool)");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    wait_for(
+        &display,
+        &shots.join("orbit-0.png"),
+        Duration::from_secs(60),
+        "the first render",
+        |s| centroid(s, RED).1 > 500 && centroid(s, GREEN).1 > 500,
+    );
+    let window = xdotool(&["search", "--name", "RayOfLight"])
+        .lines()
+        .next()
+        .expect("the app's window is found")
+        .to_owned();
+    xdotool(&["windowfocus", "--sync", &window]);
+    // 1:1, so that screen pixels are image pixels.
+    xdotool(&["key", "--window", &window, "1"]);
+    std::thread::sleep(Duration::from_millis(500));
+    let before = screenshot(&display, &shots.join("orbit-1-before.png"));
+    let start_spread = spread(&before);
+    // The middle of the picture: between the two spheres' centroids.
+    let y = before
+        .enumerate_pixels()
+        .filter(|(_, _, p)| p.0 == RED)
+        .map(|(_, y, _)| f64::from(y))
+        .sum::<f64>()
+        / centroid(&before, RED).1 as f64;
+    let x = (centroid(&before, RED).0 + centroid(&before, GREEN).0) / 2.0;
+    let (x, y) = (x.round() as i64, y.round() as i64);
+
+    // Orbit: press, move in steps, look during the drag, release.
+    xdotool(&["mousemove", &x.to_string(), &y.to_string()]);
+    xdotool(&["mousedown", "1"]);
+    for k in 1..=6 {
+        xdotool(&["mousemove", &(x + 15 * k).to_string(), &y.to_string()]);
+        std::thread::sleep(Duration::from_millis(60));
+    }
+    wait_for(
+        &display,
+        &shots.join("orbit-2-during.png"),
+        Duration::from_secs(6),
+        "the picture changing during the drag",
+        |s| (spread(s) - start_spread).abs() > 3.0,
+    );
+    xdotool(&["mouseup", "1"]);
+    std::thread::sleep(Duration::from_millis(800));
+    let orbited = screenshot(&display, &shots.join("orbit-3-after.png"));
+    let orbited_spread = spread(&orbited);
+    assert!((orbited_spread - start_spread).abs() > 3.0);
+
+    // Ctrl+Z: the first picture again.
+    xdotool(&["key", "--window", &window, "ctrl+z"]);
+    wait_for(
+        &display,
+        &shots.join("orbit-4-undone.png"),
+        Duration::from_secs(6),
+        "the first picture after Ctrl+Z",
+        |s| (spread(s) - start_spread).abs() < 0.01,
+    );
+
+    // Redo, save: the CLI renders the saved file as the screen shows it.
+    xdotool(&["key", "--window", &window, "ctrl+shift+z"]);
+    xdotool(&["key", "--window", &window, "ctrl+s"]);
+    std::thread::sleep(Duration::from_millis(1200));
+    let shown = screenshot(&display, &shots.join("orbit-5-saved.png"));
+    let saved = std::fs::read_to_string(&path).unwrap();
+    assert!(saved.contains("<!-- GREEN sphere -->") && saved.contains("<rotate-y"));
+    let out = dir.path().join("cli.png");
+    let status = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(["--no-gui"])
+        .arg(&path)
+        .arg("-out")
+        .arg(&out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+    let cli = image::open(&out).unwrap().to_rgb8();
+    for rgb in [RED, GREEN] {
+        assert_eq!(
+            centroid(&shown, rgb).1,
+            centroid(&cli, rgb).1,
+            "pixels of {rgb:?} on screen and in the CLI's render"
+        );
+    }
+    assert!((spread(&shown) - spread(&cli)).abs() < 1e-9);
+
+    // Idle: the app uses next to no CPU.
+    std::thread::sleep(Duration::from_millis(1000));
+    let pid = app.0.id();
+    let before = cpu_seconds(pid);
+    std::thread::sleep(Duration::from_secs(5));
+    let idle = (cpu_seconds(pid) - before) / 5.0;
+    eprintln!("idle CPU: {:.1} %", idle * 100.0);
+    assert!(idle < 0.05, "idle CPU {:.1} %", idle * 100.0);
+}

@@ -370,7 +370,10 @@ fn g_moves_the_selected_object_in_the_view_plane_and_esc_puts_it_back() {
     harness.run_steps(2);
     let doc = harness.state().document();
     let moved = doc.scene().objects[0].transform.to_world().translation;
-    assert!(moved.x > 0.1 && moved.y.abs() < 1e-9 && moved.z.abs() < 1e-9, "{moved}");
+    assert!(
+        moved.x > 0.1 && moved.y.abs() < 1e-9 && moved.z.abs() < 1e-9,
+        "{moved}"
+    );
     assert_eq!(doc.undo_label(), Some("move #1 sphere"));
     harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
     harness.run_steps(2);

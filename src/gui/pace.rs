@@ -8,6 +8,10 @@ use std::time::Duration;
 /// Pictures a second while a gesture or a drag is under way.
 pub const TARGET_FPS: f64 = 30.0;
 
+/// A picture gets this fraction of a frame: the rest goes to preparing the
+/// scene, sending the request and showing the picture.
+const SHARE: f64 = 2.0 / 3.0;
+
 /// The smallest side a coarse picture is allowed to have, in pixels.
 const MIN_SIDE: u32 = 8;
 
@@ -32,13 +36,14 @@ impl Pace {
     }
 
     /// The 1/scale of each side that renders a `width` × `height` picture
-    /// within one frame at [`TARGET_FPS`]; 8 until something was measured.
+    /// within two thirds of a frame at [`TARGET_FPS`]; 8 until something was
+    /// measured.
     pub fn interactive_scale(&self, width: u32, height: u32) -> u32 {
         let most = (width.min(height) / MIN_SIDE).max(1);
         let Some(cost) = self.seconds_per_ray else {
             return 8.min(most);
         };
-        let budget = 1.0 / TARGET_FPS / cost;
+        let budget = SHARE / TARGET_FPS / cost;
         let pixels = f64::from(width) * f64::from(height);
         let scale = (pixels / budget.max(1.0)).sqrt().ceil();
         (scale as u32).clamp(1, most)
@@ -60,10 +65,11 @@ mod tests {
     fn the_scale_keeps_a_frame_within_its_budget() {
         let mut pace = Pace::default();
         assert_eq!(pace.interactive_scale(4000, 4000), 8, "unmeasured");
-        // 1 µs a ray: 33 333 rays a frame; 4000×4000 needs 1/22 per side.
+        // 1 µs a ray: 22 222 rays in two thirds of a frame; 4000×4000
+        // needs 1/27 per side.
         pace.measured(1_000_000, Duration::from_secs(1));
         let s = pace.interactive_scale(4000, 4000);
-        assert_eq!(s, 22);
+        assert_eq!(s, 27);
         let rays = (4000 / s) * (4000 / s);
         assert!(f64::from(rays) * 1e-6 <= 1.0 / TARGET_FPS);
         // Cheap scenes render at full size; tiny images never go below
@@ -78,7 +84,7 @@ mod tests {
 
     #[test]
     fn refining_goes_to_full_size_in_at_most_two_passes() {
-        assert_eq!(Pace::refine(22), vec![5, 1]);
+        assert_eq!(Pace::refine(27), vec![6, 1]);
         assert_eq!(Pace::refine(6), vec![1]);
         assert_eq!(Pace::refine(1), vec![1]);
     }

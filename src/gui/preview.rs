@@ -42,6 +42,22 @@ pub struct Preview {
     first_pass: Option<Duration>,
     /// When the pass now rendering started.
     pass_started: Option<Instant>,
+    /// The picture of a coarse pass (1/scale of each side, scale at least
+    /// [`COARSE`]) at its own size: shown stretched, so a coarse picture
+    /// costs its few pixels rather than a full-size write and upload.
+    coarse: Option<Coarse>,
+}
+
+/// Passes this coarse or coarser are kept at their own size.
+pub const COARSE: u32 = 4;
+
+/// A coarse pass's picture.
+#[derive(Debug, Clone)]
+pub struct Coarse {
+    pub scale: u32,
+    pub image: RgbImage,
+    /// Changed since [`Preview::take_coarse_dirty`].
+    dirty: bool,
 }
 
 impl Default for Preview {
@@ -54,6 +70,7 @@ impl Default for Preview {
             last_render: None,
             first_pass: None,
             pass_started: None,
+            coarse: None,
         }
     }
 }
@@ -110,6 +127,19 @@ impl Preview {
         self.last_render.is_some() || self.generation != 0
     }
 
+    /// The coarse picture to show instead of [`Preview::image`], if the
+    /// newest pass is coarse.
+    pub fn coarse(&self) -> Option<&Coarse> {
+        self.coarse.as_ref()
+    }
+
+    /// True once after the coarse picture changed.
+    pub fn take_coarse_dirty(&mut self) -> bool {
+        self.coarse
+            .as_mut()
+            .is_some_and(|c| std::mem::take(&mut c.dirty))
+    }
+
     /// What changed since the last call: the texture uploads only that.
     pub fn take_dirty(&mut self) -> Dirty {
         std::mem::take(&mut self.dirty)
@@ -136,6 +166,31 @@ impl Preview {
                     self.image = RgbImage::new(width, height);
                     self.dirty = Dirty::Whole;
                 }
+                if scale >= COARSE {
+                    let size = (width.div_ceil(scale), height.div_ceil(scale));
+                    if self
+                        .coarse
+                        .as_ref()
+                        .is_none_or(|c| c.scale != scale || c.image.dimensions() != size)
+                    {
+                        self.coarse = Some(Coarse {
+                            scale,
+                            image: RgbImage::new(size.0, size.1),
+                            dirty: true,
+                        });
+                    }
+                } else if let Some(coarse) = self.coarse.take() {
+                    // A finer pass paints over the coarse picture, which
+                    // shows through until it is done: write it once at
+                    // full size.
+                    self.image = image::imageops::resize(
+                        &coarse.image,
+                        width,
+                        height,
+                        image::imageops::FilterType::Nearest,
+                    );
+                    self.dirty = Dirty::Whole;
+                }
                 let tiles_total = crate::render::tiles(
                     width.div_ceil(scale),
                     height.div_ceil(scale),
@@ -155,7 +210,10 @@ impl Preview {
                 pixels,
                 ..
             } => {
-                self.paint(scale, &tile, &pixels);
+                match &mut self.coarse {
+                    Some(coarse) if coarse.scale == scale => coarse.paint(&tile, &pixels),
+                    _ => self.paint(scale, &tile, &pixels),
+                }
                 if let RenderState::Rendering { tiles_done, .. } = &mut self.state {
                     *tiles_done += 1;
                 }
@@ -211,6 +269,25 @@ impl Preview {
     }
 }
 
+impl Coarse {
+    /// Copies a tile's rows into the coarse picture.
+    fn paint(&mut self, tile: &crate::render::Tile, pixels: &[u8]) {
+        let (width, height) = self.image.dimensions();
+        let row_bytes = tile.width as usize * 3;
+        for (row, line) in pixels.chunks_exact(row_bytes).enumerate() {
+            let y = tile.y + row as u32;
+            for (col, rgb) in line.chunks_exact(3).enumerate() {
+                let x = tile.x + col as u32;
+                if x < width && y < height {
+                    self.image
+                        .put_pixel(x, y, image::Rgb([rgb[0], rgb[1], rgb[2]]));
+                }
+            }
+        }
+        self.dirty = true;
+    }
+}
+
 /// A rectangle of the image, in pixels.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Region {
@@ -232,9 +309,27 @@ pub enum Dirty {
     Whole,
 }
 
+impl Region {
+    /// The smallest region holding both.
+    fn union(self, other: Region) -> Region {
+        let x = self.x.min(other.x);
+        let y = self.y.min(other.y);
+        let right = (self.x + self.width).max(other.x + other.width);
+        let bottom = (self.y + self.height).max(other.y + other.height);
+        Region {
+            x,
+            y,
+            width: right - x,
+            height: bottom - y,
+        }
+    }
+}
+
 impl Dirty {
-    /// More regions than this are uploaded as the whole image.
-    const MAX_REGIONS: usize = 256;
+    /// Past this many regions in one frame, the rest join the last one
+    /// (tiles come roughly in reading order: a band of rows, still far
+    /// less than the whole image).
+    const MAX_REGIONS: usize = 64;
 
     fn add(&mut self, region: Region) {
         if region.width == 0 || region.height == 0 {
@@ -243,7 +338,11 @@ impl Dirty {
         match self {
             Dirty::Whole => {}
             Dirty::Nothing => *self = Dirty::Regions(vec![region]),
-            Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => *self = Dirty::Whole,
+            Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => {
+                if let Some(last) = list.last_mut() {
+                    *last = last.union(region);
+                }
+            }
             Dirty::Regions(list) => list.push(region),
         }
     }
@@ -266,6 +365,30 @@ mod tests {
             },
             pixels: vec![200; (width * height * 3) as usize],
         }
+    }
+
+    #[test]
+    fn coarse_passes_stay_small_until_a_finer_one_starts() {
+        let mut p = Preview::default();
+        let start = |scale| Event::PassStarted {
+            generation: 1,
+            scale,
+            width: 100,
+            height: 60,
+        };
+        p.apply(1, start(8));
+        let _ = p.take_dirty();
+        p.apply(1, tile(0, 0, 13, 8, 8));
+        let coarse = p.coarse().expect("a coarse picture");
+        assert_eq!(coarse.image.dimensions(), (13, 8));
+        assert_eq!(coarse.image.get_pixel(12, 7).0, [200, 200, 200]);
+        assert!(p.take_coarse_dirty());
+        assert_eq!(p.take_dirty(), Dirty::Nothing, "the full image untouched");
+        // A finer pass: the coarse picture, written once at full size.
+        p.apply(1, start(2));
+        assert!(p.coarse().is_none());
+        assert_eq!(p.take_dirty(), Dirty::Whole);
+        assert_eq!(p.image().get_pixel(99, 59).0, [200, 200, 200]);
     }
 
     #[test]
@@ -293,10 +416,23 @@ mod tests {
             }])
         );
         assert_eq!(p.image().get_pixel(99, 59).0, [200, 200, 200]);
-        // Many tiles at once: the whole image in one upload.
-        for k in 0..300 {
-            p.apply(1, tile(k % 50, 0, 1, 1, 2));
+        // Many tiles at once: past 64 regions, the rest join the last one.
+        for k in 0..50 {
+            p.apply(1, tile(k, 0, 1, 1, 2));
         }
-        assert_eq!(p.take_dirty(), Dirty::Whole);
+        let Dirty::Regions(regions) = p.take_dirty() else {
+            panic!("regions")
+        };
+        assert_eq!(regions.len(), 50);
+        for k in 0..200 {
+            p.apply(1, tile(k % 50, k / 50, 1, 1, 2));
+        }
+        let Dirty::Regions(regions) = p.take_dirty() else {
+            panic!("regions")
+        };
+        assert_eq!(regions.len(), 64);
+        let last = regions[63];
+        // Tiles 63 to 199: from the second row of tiles (y 2) to the fourth.
+        assert_eq!((last.x, last.y, last.width, last.height), (0, 2, 100, 6));
     }
 }

@@ -42,6 +42,10 @@ use std::sync::Arc;
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::time::{Duration, Instant};
 
+/// How long an interactive picture may keep the next one waiting (one
+/// that was cancelled never says it is done).
+const IN_FLIGHT_PATIENCE: Duration = Duration::from_millis(500);
+
 /// What background threads send to the UI thread.
 enum Background {
     /// A file event from the watcher of this generation.
@@ -57,6 +61,8 @@ pub struct RayOfLightApp {
     worker: Worker,
     preview: Preview,
     texture: Option<egui::TextureHandle>,
+    /// The coarse pass's picture at its own size (see [`Preview::coarse`]).
+    coarse_texture: Option<egui::TextureHandle>,
     watcher: Option<SceneWatcher>,
     background: Receiver<Background>,
     background_tx: Sender<Background>,
@@ -82,6 +88,9 @@ pub struct RayOfLightApp {
     /// Which watcher is the current one: events of an older one (for a
     /// file no longer open) still in the channel are dropped.
     watch_generation: u64,
+    /// When the pictures (finished passes) of the last second were done:
+    /// pictures a second while the mouse moves.
+    pictures: VecDeque<Instant>,
     /// Frame times of the last second, for the frames-per-second readout.
     frames: VecDeque<Instant>,
     /// The pixel under the cursor and its colour.
@@ -106,6 +115,10 @@ pub struct RayOfLightApp {
     /// The newest request was one interactive pass at this scale: refine
     /// once the mouse stops.
     interactive: Option<u32>,
+    /// The interactive pass being rendered (generation, asked when), and
+    /// whether the scene changed since: render again when it is done.
+    in_flight: Option<(u64, Instant)>,
+    render_pending: bool,
     /// The window title last sent.
     title: String,
     /// The user chose to quit without saving.
@@ -130,6 +143,7 @@ impl RayOfLightApp {
             worker,
             preview: Preview::default(),
             texture: None,
+            coarse_texture: None,
             watcher: None,
             background,
             background_tx,
@@ -150,6 +164,7 @@ impl RayOfLightApp {
             recent,
             watch_generation: 0,
             frames: VecDeque::new(),
+            pictures: VecDeque::new(),
             hovered: None,
             navigation: None,
             light_drag: None,
@@ -161,6 +176,8 @@ impl RayOfLightApp {
             help_open: false,
             pace: Pace::default(),
             interactive: None,
+            in_flight: None,
+            render_pending: false,
             ctx: ctx.clone(),
         };
         app.watch();
@@ -231,6 +248,16 @@ impl RayOfLightApp {
     /// from that scale.
     fn request_render(&mut self) {
         let interacting = self.interacting();
+        // While the mouse moves, a new picture waits for the one being
+        // rendered: cancelling it at every move would starve the screen.
+        if interacting
+            && let Some((_, since)) = self.in_flight
+            && since.elapsed() < IN_FLIGHT_PATIENCE
+        {
+            self.render_pending = true;
+            return;
+        }
+        self.render_pending = false;
         let dragging = self.methods.dragging.is_some() && interacting;
         let options = self.methods.options(self.doc.scene(), dragging, self.aa);
         self.rendered_dragging = dragging;
@@ -247,6 +274,7 @@ impl RayOfLightApp {
         let generation =
             self.worker
                 .request_passes(Arc::new(self.doc.scene().clone()), options, passes);
+        self.in_flight = interacting.then(|| (generation, Instant::now()));
         self.study.superseded(generation);
         if self.study.open {
             self.study.set_plan(self.doc.scene());
@@ -311,10 +339,36 @@ impl RayOfLightApp {
                 | Event::StudyFinished { .. }
                 | Event::StudyStopped { .. } => study_ended |= self.study.apply(event),
                 _ => {
-                    if let Event::PassFinished { elapsed, rays, .. } = &event {
-                        self.pace.measured(*rays, *elapsed);
+                    let finished = match &event {
+                        Event::PassFinished {
+                            elapsed,
+                            rays,
+                            scale,
+                            since_start,
+                            ..
+                        } => {
+                            self.pace.measured(*rays, *elapsed);
+                            if self.stats && *scale == 1 {
+                                eprintln!(
+                                    "stats: full picture {:.1} ms after its request",
+                                    since_start.as_secs_f64() * 1e3
+                                );
+                            }
+                            true
+                        }
+                        _ => false,
+                    };
+                    let generation = event.generation();
+                    if self.preview.apply(newest, event) && finished {
+                        self.pictures.push_back(Instant::now());
+                        // The interactive picture is done: the next one.
+                        if self.in_flight.is_some_and(|(g, _)| g == generation) {
+                            self.in_flight = None;
+                            if self.render_pending {
+                                self.request_render();
+                            }
+                        }
                     }
-                    self.preview.apply(newest, event);
                 }
             }
         }
@@ -424,13 +478,15 @@ impl RayOfLightApp {
         }
         // The mouse stopped: refine the coarse picture, exact again if a
         // value was dragged with a cheaper method.
-        if (self.rendered_dragging || self.interactive.is_some()) && !self.interacting() {
+        if (self.rendered_dragging || self.interactive.is_some() || self.render_pending)
+            && !self.interacting()
+        {
             self.request_render();
         }
         if self.study.is_running() {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
-        if matches!(self.preview.state(), RenderState::Rendering { .. }) || self.stats {
+        if matches!(self.preview.state(), RenderState::Rendering { .. }) {
             // Keep the progress bar moving between tiles.
             ctx.request_repaint_after(Duration::from_millis(16));
         }

@@ -49,9 +49,31 @@ impl RayOfLightApp {
     pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
         egui::CentralPanel::default().show(ui, |ui| {
             self.upload(ui.ctx());
-            let Some(texture) = self.texture.as_ref().map(egui::TextureHandle::id) else {
+            let Some(mut texture) = self.texture.as_ref().map(egui::TextureHandle::id) else {
                 return;
             };
+            // A coarse pass shows at its own size, stretched.
+            let coarse_dirty = self.preview.take_coarse_dirty();
+            if let Some(coarse) = self.preview.coarse() {
+                if coarse_dirty || self.coarse_texture.is_none() {
+                    let (w, h) = coarse.image.dimensions();
+                    let image =
+                        egui::ColorImage::from_rgb([w as usize, h as usize], coarse.image.as_raw());
+                    match &mut self.coarse_texture {
+                        Some(t) => t.set(image, TextureOptions::NEAREST),
+                        None => {
+                            self.coarse_texture = Some(ui.ctx().load_texture(
+                                "render-coarse",
+                                image,
+                                TextureOptions::NEAREST,
+                            ))
+                        }
+                    }
+                }
+                if let Some(t) = &self.coarse_texture {
+                    texture = t.id();
+                }
+            }
             let area = ui.available_rect_before_wrap();
             let response = ui.allocate_rect(area, Sense::click_and_drag());
             let (w, h) = self.preview.image().dimensions();

@@ -111,14 +111,22 @@ impl RayOfLightApp {
         if self.stats && now.duration_since(self.last_stats) >= Duration::from_secs(1) {
             self.last_stats = now;
             eprintln!(
-                "stats: fps={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
+                "stats: fps={} pictures={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
                 self.frames.len(),
+                self.pictures.len(),
                 self.preview.state(),
                 self.preview.first_pass().map(|d| d.as_secs_f64() * 1e3),
                 self.preview
                     .last_render()
                     .map(|(d, _)| d.as_secs_f64() * 1e3),
             );
+        }
+        while self
+            .pictures
+            .front()
+            .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
+        {
+            self.pictures.pop_front();
         }
         self.frames.push_back(now);
         while self

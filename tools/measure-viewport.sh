@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# Measures the viewport the way the issue asks, on this machine: pictures
+# per second while orbiting (room.xml and a 4000x4000 scene), UI frames per
+# second during a 4000x4000 render, idle CPU, and the time from releasing
+# the mouse to the full picture. Drives the release build under Xvfb with
+# xdotool and reads the app's RAYOFLIGHT_STATS lines.
+# Usage: tools/measure-viewport.sh [OUT_DIR]   (needs xvfb, xdotool)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+out=${1:-/tmp/measure-viewport}
+mkdir -p "$out"
+bin=target/release/rayoflight
+[ -x "$bin" ] || cargo build --release
+
+# A floor, 30 spheres, three lights, whitted depth 5, 4000x4000.
+big="$out/big-4000.xml"
+{
+  echo '<scene>'
+  echo '  <plane><color red="0.8" green="0.8" blue="0.8"/><material ks="0.3"/><transformation><rotate-x angle="1.5707963"/><translate y="1"/></transformation></plane>'
+  for i in $(seq 0 29); do
+    x=$(( (i % 6) * 2 - 5 )); z=$(( (i / 6) * 2 ))
+    echo "  <sphere><color red=\"0.$((i % 9 + 1))\" green=\"0.5\" blue=\"0.$(((i * 7) % 9 + 1))\"/><material ks=\"0.4\"/><transformation><scale factor=\"0.6\"/><translate x=\"$x\" y=\"0.4\" z=\"$z\"/></transformation></sphere>"
+  done
+  echo '  <light x="-5" y="-8" z="-5"/><light x="5" y="-8" z="-5"/><light x="0" y="-10" z="10"/>'
+  echo '  <camera width="4000" height="4000" eyeDistance="2"><transformation><rotate-x angle="-0.3"/><translate y="-4" z="-12"/></transformation></camera>'
+  echo '  <model type="whitted" depth="5"/>'
+  echo '</scene>'
+} > "$big"
+
+display=:93
+Xvfb $display -screen 0 1280x900x24 -nolisten tcp >/dev/null 2>&1 &
+xvfb=$!
+trap 'kill $xvfb 2>/dev/null || true' EXIT
+sleep 1
+export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 XDG_CONFIG_HOME=$out
+
+# run SCENE NAME: start the app, wait for its first full picture, orbit for
+# 4 s, release, then stay idle for 6 s.
+run() {
+  local scene=$1 name=$2 log="$out/$2.log"
+  RAYOFLIGHT_STATS=1 "$bin" "$scene" 2>"$log" &
+  local app=$!
+  local start=$SECONDS
+  until grep -q "full picture" "$log"; do
+    sleep 0.5
+    if (( SECONDS - start > 300 )); then echo "$name: no full picture in 300 s"; break; fi
+  done
+  echo "== $name: first full picture after $((SECONDS - start)) s (render stats before the drag:)"
+  grep "stats: fps" "$log" | tail -n 3 || true
+  local win
+  win=$(xdotool search --name RayOfLight | head -n 1)
+  xdotool windowfocus --sync "$win"
+  local cx=780 cy=450
+  : > "$out/$name.drag-start"
+  local mark
+  mark=$(wc -l < "$log")
+  xdotool mousemove $cx $cy mousedown 1
+  for k in $(seq 1 130); do
+    xdotool mousemove $((cx + (k % 60) * 3)) $cy
+    sleep 0.03
+  done
+  local during
+  during=$(tail -n +"$mark" "$log" | grep "stats: fps" || true)
+  mark=$(wc -l < "$log")
+  xdotool mouseup 1
+  sleep 8
+  echo "-- during the orbit (one line a second: UI frames/s, pictures/s):"
+  echo "$during"
+  echo "-- after the release:"
+  tail -n +"$mark" "$log" | grep "full picture" | head -n 1 || true
+  local pid=$app
+  local t0 t1
+  t0=$(awk '{print $14 + $15}' /proc/$pid/stat)
+  sleep 5
+  t1=$(awk '{print $14 + $15}' /proc/$pid/stat)
+  echo "-- idle CPU over 5 s: $(( (t1 - t0) * 100 / 500 )) % (ticks $t0 -> $t1)"
+  kill $app
+  wait $app 2>/dev/null || true
+}
+
+run scenes/bench/room.xml room
+run "$big" big-4000
