@@ -1,0 +1,176 @@
+//! The live preview and the events that reach the app: render requests
+//! (coarse to fine, or one interactive pass at the pace's scale while the
+//! mouse moves, each waiting for the one in flight), the worker's tiles and
+//! passes, the watcher's file events, dialogs' answers, the Study window's
+//! runs.
+
+use super::*;
+
+/// How long an interactive picture may keep the next one waiting (one
+/// that was cancelled never says it is done).
+pub(super) const IN_FLIGHT_PATIENCE: Duration = Duration::from_millis(500);
+
+impl RayOfLightApp {
+    /// Asks the worker for the preview of the current scene, with the
+    /// while-dragging method when one is set and a button is held.
+    ///
+    /// While the mouse moves the camera or drags a value, only one pass is
+    /// rendered, as coarse as keeps [`TARGET_FPS`](super::pace::TARGET_FPS)
+    /// pictures a second; the next request after the mouse stops refines
+    /// from that scale.
+    pub(super) fn request_render(&mut self) {
+        let interacting = self.interacting();
+        // While the mouse moves, a new picture waits for the one being
+        // rendered: cancelling it at every move would starve the screen.
+        if interacting
+            && let Some((_, since)) = self.in_flight
+            && since.elapsed() < IN_FLIGHT_PATIENCE
+        {
+            self.render_pending = true;
+            return;
+        }
+        self.render_pending = false;
+        let dragging = self.methods.dragging.is_some() && interacting;
+        let options = self.methods.options(self.doc.scene(), dragging, self.aa);
+        self.rendered_dragging = dragging;
+        let camera = &self.doc.scene().camera;
+        let passes = if interacting {
+            let scale = self.pace.interactive_scale(camera.width, camera.height);
+            self.interactive = Some(scale);
+            vec![scale]
+        } else if let Some(scale) = self.interactive.take() {
+            Pace::refine(scale)
+        } else {
+            crate::gui::worker::passes(camera.width, camera.height)
+        };
+        let generation =
+            self.worker
+                .request_passes(Arc::new(self.doc.scene().clone()), options, passes);
+        self.in_flight = interacting.then(|| (generation, Instant::now()));
+        self.study.superseded(generation);
+        if self.study.open {
+            self.study.set_plan(self.doc.scene());
+        }
+    }
+
+    /// A drag of the camera or of a value is under way.
+    pub(super) fn interacting(&self) -> bool {
+        self.navigation.is_some() || self.grab.is_some() || self.ctx.dragged_id().is_some()
+    }
+
+    /// Handles what the watcher, the worker and the dialogs sent.
+    pub(super) fn drain_events(&mut self) {
+        let newest = self.worker.newest();
+        let events: Vec<_> = self.worker.events().collect();
+        let mut study_ended = false;
+        for event in events {
+            match event {
+                Event::StudyStarted { .. }
+                | Event::StudyRow { .. }
+                | Event::StudyFinished { .. }
+                | Event::StudyStopped { .. } => study_ended |= self.study.apply(event),
+                _ => {
+                    let finished = match &event {
+                        Event::PassFinished {
+                            elapsed,
+                            rays,
+                            scale,
+                            since_start,
+                            ..
+                        } => {
+                            self.pace.measured(*rays, *elapsed);
+                            if self.stats && *scale == 1 {
+                                eprintln!(
+                                    "stats: full picture {:.1} ms after its request",
+                                    since_start.as_secs_f64() * 1e3
+                                );
+                            }
+                            true
+                        }
+                        _ => false,
+                    };
+                    let generation = event.generation();
+                    if self.preview.apply(newest, event) && finished {
+                        self.pictures.push_back(Instant::now());
+                        // The interactive picture is done: the next one.
+                        if self.in_flight.is_some_and(|(g, _)| g == generation) {
+                            self.in_flight = None;
+                            if self.render_pending {
+                                self.request_render();
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // The study took the worker from an unfinished preview: finish it.
+        if study_ended && !matches!(self.preview.state(), RenderState::Done { .. }) {
+            self.request_render();
+        }
+        while let Ok(message) = self.background.try_recv() {
+            match message {
+                Background::Ids(key, ids) => self.outline_ready(key, ids),
+                Background::File(generation, event) => {
+                    if generation == self.watch_generation {
+                        self.file_event(event);
+                    }
+                }
+                Background::Exported(path, Ok(())) => {
+                    self.notify(format!("exported {}", path.display()))
+                }
+                Background::Exported(_, Err(e)) => self.notify(format!("export failed: {e}")),
+                Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
+            }
+        }
+    }
+
+    pub(super) fn file_event(&mut self, event: FileEvent) {
+        match event {
+            FileEvent::Loaded(text, scene) => match self.doc.file_loaded(text, *scene) {
+                Reload::Replaced => self.after_edit(),
+                Reload::Merged => {
+                    self.notify("the file changed on disk: your edits were applied onto it".into());
+                    self.after_edit();
+                }
+                Reload::Conflict => self.conflict_choices.clear(),
+                Reload::Unchanged | Reload::Broken => {}
+            },
+            FileEvent::Broken(error) => {
+                self.doc.file_broken(&error);
+            }
+            FileEvent::Missing => self.doc.file_missing(),
+        }
+    }
+
+    /// Runs the study of the current scene in the worker.
+    pub fn run_study(&mut self) {
+        let name = self.doc.path().and_then(Path::file_stem).map_or_else(
+            || "example".to_owned(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        let scene = crate::study::StudyScene {
+            name: name.clone(),
+            scene: self.doc.scene().clone(),
+        };
+        let generation = self.worker.study(scene, self.study.runs);
+        self.study.started(generation, name);
+        self.study.set_plan(self.doc.scene());
+    }
+
+    /// Does what the Study window asked.
+    pub fn study_action(&mut self, action: study::Action) {
+        match action {
+            study::Action::Run => self.run_study(),
+            study::Action::Cancel => self.worker.cancel(),
+            study::Action::Preview(name) => {
+                if let Some(method) = crate::study::method(name) {
+                    self.methods.preview = method;
+                    self.request_render();
+                }
+            }
+            study::Action::WhileDragging(name) => {
+                self.methods.dragging = name.and_then(crate::study::method);
+            }
+        }
+    }
+}
