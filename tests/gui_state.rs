@@ -5,6 +5,8 @@
 //! save-back and merges are tests/editing.rs.
 #![cfg(feature = "gui")]
 
+mod common;
+
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;
 use rayoflight::gui::document::{Document, FileState, Reload};
@@ -38,18 +40,9 @@ fn parse(text: &str) -> Scene {
     scene::parse(text, Path::new("test.xml")).unwrap()
 }
 
-/// Two facing perfect mirrors and the camera between them: every pixel
-/// bounces `depth` times. Very slow on purpose.
+/// The slow two-mirror scene (tests/common).
 fn mirrors(depth: u32, width: u32, height: u32) -> Scene {
-    parse(&format!(
-        r#"<scene>
-  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
-  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
-  <light x="0" y="-1" z="0"/>
-  <camera width="{width}" height="{height}" eyeDistance="1"/>
-  <model type="whitted" depth="{depth}"/>
-</scene>"#
-    ))
+    parse(&common::mirrors_text(depth, width, height))
 }
 
 /// Collects the worker's events up to the first for which `last` holds;

@@ -19,6 +19,8 @@
 //! when they are missing.
 #![cfg(feature = "gui")]
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
@@ -69,6 +71,53 @@ impl Drop for Killed {
 /// One window test at a time: two starting together could pick the same
 /// free display number, and both apps would share one screen.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+
+/// The app on a scene file of its own, in a window under its own Xvfb.
+/// Dropping it closes both (the app first).
+struct Window {
+    /// Where screenshots go (target/tmp/gui-screenshots).
+    shots: PathBuf,
+    display: String,
+    dir: tempfile::TempDir,
+    path: PathBuf,
+    app: Killed,
+    _xvfb: Killed,
+    _one: std::sync::MutexGuard<'static, ()>,
+}
+
+impl Window {
+    /// Writes `text` to `name` in a new folder and opens the app on it.
+    fn open(name: &str, text: &str) -> Window {
+        let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
+        std::fs::create_dir_all(&shots).unwrap();
+        let one = ONE_AT_A_TIME
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let (xvfb, display) = start_xvfb();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+            .arg(&path)
+            .env("DISPLAY", &display)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("XDG_CONFIG_HOME", dir.path())
+            .env("LIBGL_ALWAYS_SOFTWARE", "1")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        Window {
+            shots,
+            display,
+            dir,
+            path,
+            app: Killed(app),
+            _xvfb: xvfb,
+            _one: one,
+        }
+    }
+}
 
 fn start_xvfb() -> (Killed, String) {
     for n in 90..200 {
@@ -143,27 +192,14 @@ fn wait_for(
 
 #[test]
 fn the_window_follows_saves_of_the_scene_file() {
-    let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
-    std::fs::create_dir_all(&shots).unwrap();
-    let _one = ONE_AT_A_TIME
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (_xvfb, display) = start_xvfb();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    std::fs::write(&path, scene(RED)).unwrap();
-
-    let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
-        .arg(&path)
-        .env("DISPLAY", &display)
-        .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_CONFIG_HOME", dir.path())
-        .env("LIBGL_ALWAYS_SOFTWARE", "1")
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut app = Killed(app);
+    // The Xvfb server and the lock live as long as `opened`.
+    let mut opened = Window::open("scene.xml", &scene(RED));
+    let (shots, display, path) = (
+        opened.shots.clone(),
+        opened.display.clone(),
+        opened.path.clone(),
+    );
+    let app = &mut opened.app;
     let sphere = 5_000;
 
     let took = wait_for(
@@ -220,7 +256,7 @@ fn the_window_follows_saves_of_the_scene_file() {
 
     // A long render (whitted depth 10 000 between two perfect mirrors,
     // 3840×2160), then Ctrl+Q: the window closes within 1 s (3x allowed).
-    atomic_save(&path, MIRRORS);
+    atomic_save(&path, &common::mirrors_text(10_000, 3840, 2160));
     std::thread::sleep(Duration::from_millis(800));
     assert!(
         app.0.try_wait().unwrap().is_none(),
@@ -257,17 +293,6 @@ fn the_window_follows_saves_of_the_scene_file() {
         std::thread::sleep(Duration::from_millis(10));
     }
 }
-
-/// Two facing perfect mirrors with the camera between them, whitted depth
-/// 10 000 at 3840×2160: every pixel bounces until the depth runs out.
-const MIRRORS: &str = r#"<scene>
-  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
-  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
-  <light x="0" y="-1" z="0"/>
-  <camera width="3840" height="2160" eyeDistance="1"/>
-  <model type="whitted" depth="10000"/>
-</scene>
-"#;
 
 /// Two spheres of exact colours (ambient, ka = 1), red left, green right.
 const TWO_SPHERES: &str = r#"<?xml version="1.0"?>
@@ -322,26 +347,14 @@ fn cpu_seconds(pid: u32) -> f64 {
 
 #[test]
 fn orbiting_with_the_mouse_moves_the_view_undoes_and_saves_what_is_shown() {
-    let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
-    std::fs::create_dir_all(&shots).unwrap();
-    let _one = ONE_AT_A_TIME
-        .lock()
-        .unwrap_or_else(std::sync::PoisonError::into_inner);
-    let (_xvfb, display) = start_xvfb();
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("two.xml");
-    std::fs::write(&path, TWO_SPHERES).unwrap();
-    let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
-        .arg(&path)
-        .env("DISPLAY", &display)
-        .env_remove("WAYLAND_DISPLAY")
-        .env("XDG_CONFIG_HOME", dir.path())
-        .env("LIBGL_ALWAYS_SOFTWARE", "1")
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let app = Killed(app);
+    // The Xvfb server and the lock live as long as `opened`.
+    let opened = Window::open("two.xml", TWO_SPHERES);
+    let (shots, display, path) = (
+        opened.shots.clone(),
+        opened.display.clone(),
+        opened.path.clone(),
+    );
+    let (dir, app) = (&opened.dir, &opened.app);
     let xdotool = |args: &[&str]| {
         let out = Command::new("xdotool")
             .args(args)

@@ -5,6 +5,8 @@
 //! camera.
 #![cfg(feature = "gui")]
 
+mod common;
+
 use std::path::Path;
 use std::time::{Duration, Instant};
 
@@ -240,18 +242,7 @@ fn the_saved_view_renders_on_the_command_line_as_on_screen_and_home_returns() {
 fn esc_cancels_at_once_and_the_status_says_so() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("mirrors.xml");
-    // Two facing perfect mirrors at depth 10 000: seconds of work.
-    std::fs::write(
-        &path,
-        r#"<scene>
-  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
-  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
-  <light x="0" y="-1" z="0"/>
-  <camera width="1920" height="1080" eyeDistance="1"/>
-  <model type="whitted" depth="10000"/>
-</scene>"#,
-    )
-    .unwrap();
+    std::fs::write(&path, common::mirrors_text(10_000, 1920, 1080)).unwrap();
     let mut harness = app(&path);
     let start = Instant::now();
     while !matches!(

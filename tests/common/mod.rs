@@ -31,6 +31,22 @@ pub const TINY: &str = r#"<scene>
 </scene>
 "#;
 
+/// Two facing perfect mirrors with the camera between them, whitted
+/// `depth`: every pixel bounces until the depth runs out. Slow on purpose
+/// (depth 10 000 at 1920×1080 is seconds of work).
+pub fn mirrors_text(depth: u32, width: u32, height: u32) -> String {
+    format!(
+        r#"<scene>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="5"/></transformation></plane>
+  <plane><material ka="0" kd="0.1" ks="1" m="1"/><transformation><translate z="-5"/></transformation></plane>
+  <light x="0" y="-1" z="0"/>
+  <camera width="{width}" height="{height}" eyeDistance="1"/>
+  <model type="whitted" depth="{depth}"/>
+</scene>
+"#
+    )
+}
+
 /// Runs the built binary in `dir` with no display, so that it never opens
 /// a window.
 pub fn rayoflight(dir: &Path, args: &[&str]) -> Output {
