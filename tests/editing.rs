@@ -12,7 +12,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::{Command, RayOfLightApp};
 use rayoflight::gui::document::{Document, Reload, SaveError};
-use rayoflight::gui::recent::Recent;
+use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
 use rayoflight::scene::edit::{Coef, Edit, Field, Item, NewElement, Owner, Value};
@@ -95,7 +95,7 @@ fn read(path: &Path) -> String {
 }
 
 fn app_on(doc: Document) -> Harness<'static, RayOfLightApp> {
-    let app = RayOfLightApp::new(&egui::Context::default(), doc, Recent::in_memory());
+    let app = RayOfLightApp::new(&egui::Context::default(), doc, Persisted::in_memory());
     let mut harness = Harness::builder()
         .with_size(egui::vec2(1200.0, 900.0))
         .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);

@@ -11,7 +11,7 @@ use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;
 use rayoflight::gui::document::{Document, FileState, Reload};
 use rayoflight::gui::preview::{Preview, RenderState};
-use rayoflight::gui::recent::Recent;
+use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::render::{self, RenderOptions};
@@ -337,7 +337,7 @@ fn a_panel_edit_renders_the_edited_scene() {
     let app = RayOfLightApp::new(
         &egui::Context::default(),
         Document::builtin(),
-        Recent::in_memory(),
+        Persisted::in_memory(),
     );
     let mut harness = egui_kittest::Harness::builder()
         .with_size(egui::vec2(1200.0, 800.0))
@@ -464,7 +464,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
     let app = RayOfLightApp::new(
         &egui::Context::default(),
         Document::builtin(),
-        Recent::in_memory(),
+        Persisted::in_memory(),
     );
     let mut harness = egui_kittest::Harness::builder()
         .with_size(egui::vec2(1400.0, 1000.0))

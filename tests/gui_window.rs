@@ -284,6 +284,13 @@ fn the_window_follows_saves_of_the_scene_file() {
             eprintln!("window closed during a long render in {took:?} ({status})");
             assert!(status.success(), "clean exit");
             assert!(took < Duration::from_secs(3), "closing took {took:?}");
+            // The window's size and the settings were saved on the way out.
+            let saved = std::fs::read_to_string(opened.dir.path().join("rayoflight/settings.txt"))
+                .expect("settings.txt written on exit");
+            assert!(
+                saved.contains("window = 1200x800") && saved.contains("aa = 1"),
+                "{saved}"
+            );
             break;
         }
         assert!(

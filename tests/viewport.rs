@@ -17,7 +17,7 @@ use glam::DVec3;
 use rayoflight::gui::app::RayOfLightApp;
 use rayoflight::gui::document::Document;
 use rayoflight::gui::preview::RenderState;
-use rayoflight::gui::recent::Recent;
+use rayoflight::gui::settings::Persisted;
 use rayoflight::render::{self, navigate::Pose};
 use rayoflight::scene;
 
@@ -46,7 +46,7 @@ fn app(path: &Path) -> Harness<'static, RayOfLightApp> {
     let app = RayOfLightApp::new(
         &egui::Context::default(),
         Document::open(path).unwrap(),
-        Recent::in_memory(),
+        Persisted::in_memory(),
     );
     let mut harness = Harness::builder()
         .with_size(egui::vec2(1200.0, 900.0))
@@ -369,4 +369,20 @@ fn g_moves_the_selected_object_in_the_view_plane_and_esc_puts_it_back() {
     harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::Z);
     harness.run_steps(2);
     assert_eq!(harness.state().document().scene(), &original);
+}
+
+#[test]
+fn the_app_starts_from_its_saved_settings() {
+    let (_dir, path) = file();
+    let mut persisted = Persisted::in_memory();
+    persisted.settings.aa = 3;
+    persisted.settings.study_runs = 7;
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(&path).unwrap(),
+        persisted,
+    );
+    let settings = app.settings();
+    assert_eq!((settings.aa, settings.study_runs), (3, 7));
+    assert_eq!(app.study_window().runs, 7);
 }

@@ -9,6 +9,8 @@
 //!   and redo, saves that never write over unread text, merges.
 //! - [`worker`]: the background render thread, coarse to fine, newest wins.
 //! - [`pace`]: how coarse to render while the mouse moves.
+//! - [`settings`]: what the app remembers between runs ([`recent`] files
+//!   among it).
 //! - [`preview`]: the picture assembled from the worker's tiles.
 //! - [`watcher`]: the file watcher (notify), debounced.
 //! - [`study`]: the Study window and the live preview's choice of method.
@@ -22,6 +24,7 @@ pub mod pace;
 mod panel;
 pub mod preview;
 pub mod recent;
+pub mod settings;
 pub mod study;
 pub mod watcher;
 pub mod worker;
@@ -55,9 +58,10 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
         Some(path) => document::Document::open(path)?,
         None => document::Document::builtin(),
     };
+    let persisted = settings::Persisted::user();
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
-            .with_inner_size([1200.0, 800.0])
+            .with_inner_size(persisted.settings.window.unwrap_or([1200.0, 800.0]))
             .with_min_inner_size([480.0, 320.0])
             .with_drag_and_drop(true)
             .with_title("RayOfLight"),
@@ -70,7 +74,7 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
             Ok(Box::new(app::RayOfLightApp::new(
                 &cc.egui_ctx,
                 doc,
-                recent::Recent::user(),
+                persisted,
             )))
         }),
     )

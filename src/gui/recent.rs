@@ -18,11 +18,7 @@ pub struct Recent {
 impl Recent {
     /// The user's list, from the config directory.
     pub fn user() -> Recent {
-        let store = std::env::var_os("XDG_CONFIG_HOME")
-            .map(PathBuf::from)
-            .filter(|p| p.is_absolute())
-            .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))
-            .map(|base| base.join("rayoflight").join("recent.txt"));
+        let store = super::settings::config_file("recent.txt");
         let paths = store
             .as_ref()
             .and_then(|f| std::fs::read_to_string(f).ok())

@@ -110,6 +110,14 @@ impl Default for StudyWindow {
 }
 
 impl StudyWindow {
+    /// A closed window whose study renders each method `runs` times.
+    pub fn with_runs(runs: usize) -> StudyWindow {
+        StudyWindow {
+            runs,
+            ..StudyWindow::default()
+        }
+    }
+
     pub fn state(&self) -> &StudyState {
         &self.state
     }

@@ -35,6 +35,7 @@ use super::pace::Pace;
 use super::panel::{self, Selection};
 use super::preview::{Dirty, Preview, RenderState};
 use super::recent::Recent;
+use super::settings::{Persisted, Settings};
 use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
 use super::worker::{Event, Worker};
@@ -86,6 +87,8 @@ pub struct RayOfLightApp {
     /// A transient message for the status bar (export done, save failed).
     notice: Option<(String, Instant)>,
     recent: Recent,
+    /// Window size, anti-aliasing and study runs, saved on exit.
+    settings: Settings,
     /// Which watcher is the current one: events of an older one (for a
     /// file no longer open) still in the channel are dropped.
     watch_generation: u64,
@@ -131,9 +134,10 @@ pub struct RayOfLightApp {
 }
 
 impl RayOfLightApp {
-    /// The app on `doc`, with the recent-files list `recent`
-    /// ([`Recent::user`] in the app, [`Recent::in_memory`] in tests).
-    pub fn new(ctx: &egui::Context, doc: Document, recent: Recent) -> RayOfLightApp {
+    /// The app on `doc`, with what it remembers between runs
+    /// ([`Persisted::user`] in the app, [`Persisted::in_memory`] in tests).
+    pub fn new(ctx: &egui::Context, doc: Document, persisted: Persisted) -> RayOfLightApp {
+        let Persisted { settings, recent } = persisted;
         let wake_ctx = ctx.clone();
         let worker = Worker::spawn(Worker::default_threads(), move || {
             wake_ctx.request_repaint()
@@ -157,12 +161,13 @@ impl RayOfLightApp {
             selection: Selection::default(),
             confirm: None,
             conflict_choices: Vec::new(),
-            aa: 1,
+            aa: settings.aa,
             methods: PreviewMethods::default(),
             rendered_dragging: false,
-            study: StudyWindow::default(),
+            study: StudyWindow::with_runs(settings.study_runs),
             notice: None,
             recent,
+            settings,
             watch_generation: 0,
             frames: VecDeque::new(),
             pictures: VecDeque::new(),
@@ -227,6 +232,19 @@ impl RayOfLightApp {
         self.recent.push(&path);
     }
 
+    /// The settings as they stand now, to save on exit.
+    pub fn settings(&self) -> Settings {
+        let window = self
+            .ctx
+            .input(|i| i.viewport().inner_rect)
+            .map(|r| [r.width(), r.height()]);
+        let mut settings = self.settings.clone();
+        settings.window = window.or(settings.window);
+        settings.aa = self.aa;
+        settings.study_runs = self.study.runs;
+        settings
+    }
+
     pub fn document(&self) -> &Document {
         &self.doc
     }
@@ -273,6 +291,10 @@ impl RayOfLightApp {
 impl eframe::App for RayOfLightApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         self.draw(ui);
+    }
+
+    fn on_exit(&mut self, _gl: Option<&eframe::glow::Context>) {
+        self.settings().save();
     }
 }
 

@@ -1,0 +1,159 @@
+//! What the app remembers between runs, in its own struct: the window's
+//! size, the anti-aliasing and the study's runs ([`Settings`]), and the
+//! recent files ([`Recent`]). Both live in `$XDG_CONFIG_HOME/rayoflight/`
+//! (or `~/.config/rayoflight/`); tests use them in memory only.
+//!
+//! `settings.txt` holds `key = value` lines. Unknown keys and bad values
+//! are ignored: a stale or hand-edited file never stops the app.
+
+use std::path::PathBuf;
+
+use super::recent::Recent;
+
+/// The file `name` in the app's config directory, if there is a home.
+pub fn config_file(name: &str) -> Option<PathBuf> {
+    std::env::var_os("XDG_CONFIG_HOME")
+        .map(PathBuf::from)
+        .filter(|p| p.is_absolute())
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))
+        .map(|base| base.join("rayoflight").join(name))
+}
+
+/// Everything persisted.
+#[derive(Debug, Clone, Default)]
+pub struct Persisted {
+    pub settings: Settings,
+    pub recent: Recent,
+}
+
+impl Persisted {
+    /// The user's, from the config directory.
+    pub fn user() -> Persisted {
+        Persisted {
+            settings: Settings::load(config_file("settings.txt")),
+            recent: Recent::user(),
+        }
+    }
+
+    /// Defaults, never written anywhere (tests).
+    pub fn in_memory() -> Persisted {
+        Persisted::default()
+    }
+}
+
+/// The app's settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// The window's inner size, in points.
+    pub window: Option<[f32; 2]>,
+    /// Anti-aliasing of the preview and of exports (N×N rays a pixel).
+    pub aa: u32,
+    /// Renders a method gets in the Study window.
+    pub study_runs: usize,
+    /// Where they are saved; `None`: nowhere.
+    store: Option<PathBuf>,
+}
+
+impl Default for Settings {
+    fn default() -> Settings {
+        Settings {
+            window: None,
+            aa: 1,
+            study_runs: 3,
+            store: None,
+        }
+    }
+}
+
+impl Settings {
+    /// Reads `store` (defaults for what it lacks) and saves there later.
+    pub fn load(store: Option<PathBuf>) -> Settings {
+        let text = store
+            .as_deref()
+            .and_then(|p| std::fs::read_to_string(p).ok())
+            .unwrap_or_default();
+        Settings {
+            store,
+            ..Settings::parse(&text)
+        }
+    }
+
+    fn parse(text: &str) -> Settings {
+        let mut s = Settings::default();
+        for line in text.lines() {
+            let Some((key, value)) = line.split_once('=') else {
+                continue;
+            };
+            let value = value.trim();
+            match key.trim() {
+                "window" => {
+                    s.window = value
+                        .split_once('x')
+                        .and_then(|(w, h)| Some([w.trim().parse().ok()?, h.trim().parse().ok()?]))
+                        .filter(|[w, h]: &[f32; 2]| {
+                            w.is_finite() && h.is_finite() && *w >= 100.0 && *h >= 100.0
+                        });
+                }
+                "aa" => {
+                    if let Some(aa) = value.parse().ok().filter(|aa| (1..=4).contains(aa)) {
+                        s.aa = aa;
+                    }
+                }
+                "study_runs" => {
+                    if let Some(runs) = value.parse().ok().filter(|r| (1..=1000).contains(r)) {
+                        s.study_runs = runs;
+                    }
+                }
+                _ => {}
+            }
+        }
+        s
+    }
+
+    fn to_text(&self) -> String {
+        let mut text = String::new();
+        if let Some([w, h]) = self.window {
+            text.push_str(&format!("window = {w}x{h}\n"));
+        }
+        text.push_str(&format!("aa = {}\n", self.aa));
+        text.push_str(&format!("study_runs = {}\n", self.study_runs));
+        text
+    }
+
+    /// Writes them where they were loaded from (best effort: a read-only
+    /// home only loses them).
+    pub fn save(&self) {
+        let Some(file) = &self.store else { return };
+        if let Some(dir) = file.parent() {
+            let _ = std::fs::create_dir_all(dir);
+        }
+        let _ = crate::output::write_atomic(file, self.to_text().as_bytes());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn settings_are_saved_and_read_back() {
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("rayoflight/settings.txt");
+        let mut s = Settings::load(Some(file.clone()));
+        assert_eq!(s.aa, 1);
+        s.window = Some([900.0, 700.5]);
+        s.aa = 3;
+        s.study_runs = 5;
+        s.save();
+        let back = Settings::load(Some(file));
+        assert_eq!(back, s);
+    }
+
+    #[test]
+    fn a_stale_or_broken_file_gives_defaults_for_what_it_breaks() {
+        let s = Settings::parse("aa = 9\nwindow = 10x10\nstudy_runs = x\nnew_key = 1\nnonsense\n");
+        assert_eq!(s, Settings::default());
+        let s = Settings::parse("window = 1200 x 800\naa=2");
+        assert_eq!((s.window, s.aa), (Some([1200.0, 800.0]), 2));
+    }
+}
