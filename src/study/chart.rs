@@ -71,8 +71,9 @@ pub fn fastest_accurate(rows: &[Row]) -> Vec<&Row> {
     best
 }
 
-/// Eleven colours that stay apart (Tableau 10 and black).
-const COLOURS: [RGBColor; 11] = [
+/// Twelve colours that stay apart (Tableau 10, black and navy): one per
+/// study method, so that no two share a colour.
+const COLOURS: [RGBColor; 12] = [
     RGBColor(0, 0, 0),
     RGBColor(31, 119, 180),
     RGBColor(255, 127, 14),
@@ -84,6 +85,7 @@ const COLOURS: [RGBColor; 11] = [
     RGBColor(127, 127, 127),
     RGBColor(188, 189, 34),
     RGBColor(23, 190, 207),
+    RGBColor(0, 0, 128),
 ];
 
 /// The colour of method number `i` (as RGB), the same in the chart and in
@@ -101,7 +103,7 @@ pub fn method_shape(i: usize) -> usize {
 
 /// The marker of method number `i` at `coord`: the colour changes with
 /// every method and the shape with every one of five, so that no two of
-/// 55 methods look alike.
+/// 60 methods look alike.
 struct Marker<C> {
     coord: C,
     i: usize,
@@ -337,6 +339,13 @@ pub fn failure_file_name(row: &Row) -> String {
 mod tests {
     use super::*;
     use std::time::Duration;
+
+    #[test]
+    fn no_two_methods_share_a_colour() {
+        let n = crate::study::methods().len();
+        let colours: std::collections::HashSet<_> = (0..n).map(method_colour).collect();
+        assert_eq!(colours.len(), n, "{n} methods");
+    }
 
     fn row(scene: &str, method: &'static str, ms: u64, within1: f64) -> Row {
         Row {
