@@ -93,6 +93,19 @@ fn drag(harness: &mut Harness<'_, RayOfLightApp>, from: Pos2, to: Pos2, modifier
     harness.run_steps(2);
 }
 
+/// Presses and releases the primary button at `at`, without moving.
+fn click(harness: &mut Harness<'_, RayOfLightApp>, at: Pos2) {
+    for pressed in [true, false] {
+        harness.event(Event::PointerButton {
+            pos: at,
+            button: PointerButton::Primary,
+            pressed,
+            modifiers: Modifiers::NONE,
+        });
+        harness.run_steps(1);
+    }
+}
+
 fn pose(harness: &Harness<'_, RayOfLightApp>) -> Pose {
     Pose::of(&harness.state().document().scene().camera).unwrap()
 }
@@ -175,15 +188,7 @@ fn a_click_without_a_drag_still_selects() {
     assert!(harness.query_by_label("Remove object").is_none());
     harness.event(Event::PointerMoved(MIDDLE));
     harness.run_steps(1);
-    for pressed in [true, false] {
-        harness.event(Event::PointerButton {
-            pos: MIDDLE,
-            button: PointerButton::Primary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-        harness.run_steps(1);
-    }
+    click(&mut harness, MIDDLE);
     harness.run_steps(2);
     assert!(harness.query_by_label("Remove object").is_some());
     let camera = &harness.state().document().scene().camera;
@@ -268,10 +273,21 @@ fn dragging_a_light_marker_moves_the_light_in_the_view_plane() {
     let (_dir, path) = file();
     let mut harness = app(&path);
     let start = harness.state().document().scene().lights[0].position;
-    let marker = harness
-        .state()
-        .light_marker(0)
-        .expect("the light is in view");
+    // Markers are placed on the picture, which takes its size from the
+    // first render: wait for it (a busy machine may be slower than the
+    // three frames `app` runs).
+    let began = Instant::now();
+    let marker = loop {
+        if let Some(marker) = harness.state().light_marker(0) {
+            break marker;
+        }
+        assert!(
+            began.elapsed() < Duration::from_secs(10),
+            "the light is never in view"
+        );
+        harness.step();
+        std::thread::sleep(Duration::from_millis(5));
+    };
     drag(
         &mut harness,
         marker,
@@ -349,15 +365,7 @@ fn g_moves_the_selected_object_in_the_view_plane_and_esc_puts_it_back() {
     let to = MIDDLE + Vec2::new(60.0, 0.0);
     harness.event(Event::PointerMoved(to));
     harness.run_steps(2);
-    for pressed in [true, false] {
-        harness.event(Event::PointerButton {
-            pos: to,
-            button: PointerButton::Primary,
-            pressed,
-            modifiers: Modifiers::NONE,
-        });
-        harness.run_steps(1);
-    }
+    click(&mut harness, to);
     harness.run_steps(2);
     let doc = harness.state().document();
     let moved = doc.scene().objects[0].transform.to_world().translation;

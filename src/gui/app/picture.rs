@@ -127,7 +127,14 @@ impl RayOfLightApp {
             }
             let to_screen =
                 |x: f64, y: f64| rect.min + Vec2::new(x as f32, y as f32) / image_size * size;
-            self.light_markers(ui, area, to_screen, image_per_point);
+            // Markers belong on a picture of the camera's size (not the
+            // blank one shown before the first render, nor an old size).
+            let camera = &self.doc.scene().camera;
+            if (w, h) == (camera.width, camera.height) {
+                self.light_markers(ui, area, to_screen, image_per_point);
+            } else {
+                self.markers.clear();
+            }
         });
     }
 
