@@ -14,7 +14,7 @@ use egui::{Event, Modifiers, PointerButton, Pos2, Vec2};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use glam::DVec3;
-use rayoflight::gui::app::RayOfLightApp;
+use rayoflight::gui::app::{Command, RayOfLightApp};
 use rayoflight::gui::document::Document;
 use rayoflight::gui::preview::RenderState;
 use rayoflight::gui::settings::Persisted;
@@ -268,6 +268,55 @@ fn esc_cancels_at_once_and_the_status_says_so() {
     assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
 }
 
+/// Steps the app until a label containing `text` shows, for up to `limit`.
+fn wait_for_label(harness: &mut Harness<'_, RayOfLightApp>, text: &str, limit: Duration) {
+    let start = Instant::now();
+    while harness.query_all_by_label_contains(text).next().is_none() {
+        assert!(
+            start.elapsed() < limit,
+            "no label with {text:?} in {limit:?}"
+        );
+        harness.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn an_export_shows_its_progress_and_time_left_and_can_be_cancelled() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("mirrors.xml");
+    // Tens of seconds of work: long enough to see progress, then cancel.
+    std::fs::write(&path, common::mirrors_text(10_000, 640, 360)).unwrap();
+    let out = dir.path().join("out.png");
+    let mut harness = app(&path);
+    harness.state_mut().run(Command::ExportPath);
+    harness.run_steps(2);
+    harness
+        .get_by_role(egui::accesskit::Role::TextInput)
+        .type_text(out.to_str().unwrap());
+    harness.run_steps(1);
+    harness.key_press(egui::Key::Enter);
+    harness.run_steps(2);
+    wait_for_label(&mut harness, "exporting out.png", Duration::from_secs(5));
+    // After a second with tiles done: a percentage and the time left.
+    wait_for_label(&mut harness, "s left", Duration::from_secs(60));
+    harness.get_by_label("Cancel").click();
+    wait_for_label(&mut harness, "export of", Duration::from_secs(10));
+    assert!(
+        harness
+            .query_all_by_label_contains("cancelled")
+            .next()
+            .is_some()
+    );
+    assert!(
+        harness
+            .query_all_by_label_contains("exporting out.png")
+            .next()
+            .is_none()
+    );
+    assert!(!out.exists(), "a cancelled export writes nothing");
+}
+
 #[test]
 fn dragging_a_light_marker_moves_the_light_in_the_view_plane() {
     let (_dir, path) = file();
@@ -393,4 +442,32 @@ fn the_app_starts_from_its_saved_settings() {
     let settings = app.settings();
     assert_eq!((settings.aa, settings.study_runs), (3, 7));
     assert_eq!(app.study_window().runs, 7);
+    // The file open now is the one to reopen next time.
+    let saved = settings.last_file.expect("the open file is remembered");
+    assert_eq!(saved, std::path::absolute(&path).unwrap());
+}
+
+#[test]
+fn without_a_file_the_app_reopens_the_last_one_if_it_is_still_there() {
+    let (dir, path) = file();
+    let mut settings = Persisted::in_memory().settings;
+    fn first(s: &rayoflight::gui::settings::Settings) -> Document {
+        rayoflight::gui::first_document(None, s).unwrap()
+    }
+    assert!(
+        first(&settings).path().is_none(),
+        "a fresh machine: built-in"
+    );
+    settings.last_file = Some(path.clone());
+    assert_eq!(first(&settings).path(), Some(path.as_path()));
+    // Given a file, that one.
+    let other = dir.path().join("other.xml");
+    std::fs::write(&other, SCENE).unwrap();
+    let given = rayoflight::gui::first_document(Some(&other), &settings).unwrap();
+    assert_eq!(given.path(), Some(other.as_path()));
+    // Gone (or a folder now): the built-in example.
+    std::fs::remove_file(&path).unwrap();
+    assert!(first(&settings).path().is_none());
+    std::fs::create_dir(&path).unwrap();
+    assert!(first(&settings).path().is_none());
 }

@@ -26,6 +26,7 @@ pub mod preview;
 pub mod recent;
 pub mod settings;
 pub mod study;
+pub mod texture;
 pub mod watcher;
 pub mod worker;
 
@@ -41,6 +42,24 @@ pub enum GuiError {
     Window(String),
 }
 
+/// The document the app starts on: `scene` when given (its errors are the
+/// user's to see), otherwise the last file if it is still there and opens,
+/// otherwise the built-in example.
+pub fn first_document(
+    scene: Option<&Path>,
+    settings: &settings::Settings,
+) -> Result<document::Document, GuiError> {
+    if let Some(path) = scene {
+        return Ok(document::Document::open(path)?);
+    }
+    Ok(settings
+        .last_file
+        .as_deref()
+        .filter(|p| p.is_file())
+        .and_then(|p| document::Document::open(p).ok())
+        .unwrap_or_else(document::Document::builtin))
+}
+
 /// Whether a display server is reachable by the environment's say-so.
 pub fn display_available() -> bool {
     ["DISPLAY", "WAYLAND_DISPLAY"]
@@ -48,17 +67,14 @@ pub fn display_available() -> bool {
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
 }
 
-/// Opens the app on `scene` (or the built-in example) and returns when the
-/// window is closed.
+/// Opens the app on `scene` (without one: the file open when it last
+/// closed, or the built-in example) and returns when the window is closed.
 pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
     if !display_available() {
         return Err(GuiError::NoDisplay);
     }
-    let doc = match scene {
-        Some(path) => document::Document::open(path)?,
-        None => document::Document::builtin(),
-    };
     let persisted = settings::Persisted::user();
+    let doc = first_document(scene, &persisted.settings)?;
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size(persisted.settings.window.unwrap_or([1200.0, 800.0]))

@@ -5,6 +5,7 @@
 //! full pass exact pixels. Events of any generation but the newest are
 //! dropped, so a stale render can never paint over a newer one.
 
+use super::texture::{Dirty, Region};
 use super::worker::Event;
 use image::RgbImage;
 use std::time::{Duration, Instant};
@@ -108,9 +109,7 @@ impl Preview {
         };
         let fraction = tiles_done as f32 / tiles_total.max(1) as f32;
         let elapsed = self.pass_started?.elapsed();
-        let left = (elapsed >= Duration::from_secs(1) && tiles_done > 0).then(|| {
-            elapsed.mul_f64((tiles_total - tiles_done.min(tiles_total)) as f64 / tiles_done as f64)
-        });
+        let left = crate::render::time_left(elapsed, tiles_done as u64, tiles_total as u64);
         Some((fraction, left))
     }
 
@@ -183,12 +182,8 @@ impl Preview {
                     // A finer pass paints over the coarse picture, which
                     // shows through until it is done: write it once at
                     // full size.
-                    self.image = image::imageops::resize(
-                        &coarse.image,
-                        width,
-                        height,
-                        image::imageops::FilterType::Nearest,
-                    );
+                    self.image = RgbImage::new(width, height);
+                    blow_up(&mut self.image, 0, 0, coarse.scale, &coarse.image);
                     self.dirty = Dirty::Whole;
                 }
                 let tiles_total = crate::render::tiles(
@@ -211,8 +206,8 @@ impl Preview {
                 ..
             } => {
                 match &mut self.coarse {
-                    Some(coarse) if coarse.scale == scale => coarse.paint(&tile, &pixels),
-                    _ => self.paint(scale, &tile, &pixels),
+                    Some(coarse) if coarse.scale == scale => coarse.paint(&tile, pixels),
+                    _ => self.paint(scale, &tile, pixels),
                 }
                 if let RenderState::Rendering { tiles_done, .. } = &mut self.state {
                     *tiles_done += 1;
@@ -242,108 +237,57 @@ impl Preview {
     }
 
     /// Paints a tile of a pass at 1/`scale` resolution into the full image.
-    fn paint(&mut self, scale: u32, tile: &crate::render::Tile, pixels: &[u8]) {
+    fn paint(&mut self, scale: u32, tile: &crate::render::Tile, pixels: Vec<u8>) {
         let (width, height) = self.image.dimensions();
         let x = (tile.x * scale).min(width);
         let y = (tile.y * scale).min(height);
-        let region = Region {
+        let Some(pixels) = RgbImage::from_raw(tile.width, tile.height, pixels) else {
+            return;
+        };
+        blow_up(&mut self.image, x, y, scale, &pixels);
+        self.dirty.add(Region {
             x,
             y,
             width: (tile.width * scale).min(width - x),
             height: (tile.height * scale).min(height - y),
-        };
-        let row_bytes = tile.width as usize * 3;
-        for (row, line) in pixels.chunks_exact(row_bytes).enumerate() {
-            let y0 = (tile.y + row as u32) * scale;
-            for (col, rgb) in line.chunks_exact(3).enumerate() {
-                let x0 = (tile.x + col as u32) * scale;
-                let color = image::Rgb([rgb[0], rgb[1], rgb[2]]);
-                for y in y0..(y0 + scale).min(height) {
-                    for x in x0..(x0 + scale).min(width) {
-                        self.image.put_pixel(x, y, color);
-                    }
-                }
+        });
+    }
+}
+
+/// Writes `small` into `image` at (`x`, `y`), each of its pixels as a block
+/// of `scale × scale`, cut at the image's edges: one row built, then copied.
+fn blow_up(image: &mut RgbImage, x: u32, y: u32, scale: u32, small: &RgbImage) {
+    let (width, height) = image.dimensions();
+    if x >= width || y >= height {
+        return;
+    }
+    let scale = scale.max(1) as usize;
+    let span = ((width - x) as usize).min(small.width() as usize * scale);
+    let stride = width as usize * 3;
+    let raw: &mut [u8] = image;
+    let mut line = Vec::with_capacity(span * 3);
+    for (row, pixels) in small.rows().enumerate() {
+        line.clear();
+        for p in pixels {
+            for _ in 0..scale {
+                line.extend_from_slice(&p.0);
             }
         }
-        self.dirty.add(region);
+        line.truncate(span * 3);
+        let top = y as usize + row * scale;
+        for out in top..(top + scale).min(height as usize) {
+            let start = out * stride + x as usize * 3;
+            raw[start..start + line.len()].copy_from_slice(&line);
+        }
     }
 }
 
 impl Coarse {
     /// Copies a tile's rows into the coarse picture.
-    fn paint(&mut self, tile: &crate::render::Tile, pixels: &[u8]) {
-        let (width, height) = self.image.dimensions();
-        let row_bytes = tile.width as usize * 3;
-        for (row, line) in pixels.chunks_exact(row_bytes).enumerate() {
-            let y = tile.y + row as u32;
-            for (col, rgb) in line.chunks_exact(3).enumerate() {
-                let x = tile.x + col as u32;
-                if x < width && y < height {
-                    self.image
-                        .put_pixel(x, y, image::Rgb([rgb[0], rgb[1], rgb[2]]));
-                }
-            }
-        }
-        self.dirty = true;
-    }
-}
-
-/// A rectangle of the image, in pixels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Region {
-    pub x: u32,
-    pub y: u32,
-    pub width: u32,
-    pub height: u32,
-}
-
-/// What of the image changed since the texture was last uploaded.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub enum Dirty {
-    #[default]
-    Nothing,
-    /// These tiles: only they are uploaded (a 4000×4000 image is 48 MB; a
-    /// tile is 3 KB to 50 KB).
-    Regions(Vec<Region>),
-    /// Everything (a new size).
-    Whole,
-}
-
-impl Region {
-    /// The smallest region holding both.
-    fn union(self, other: Region) -> Region {
-        let x = self.x.min(other.x);
-        let y = self.y.min(other.y);
-        let right = (self.x + self.width).max(other.x + other.width);
-        let bottom = (self.y + self.height).max(other.y + other.height);
-        Region {
-            x,
-            y,
-            width: right - x,
-            height: bottom - y,
-        }
-    }
-}
-
-impl Dirty {
-    /// Past this many regions in one frame, the rest join the last one
-    /// (tiles come roughly in reading order: a band of rows, still far
-    /// less than the whole image).
-    const MAX_REGIONS: usize = 64;
-
-    fn add(&mut self, region: Region) {
-        if region.width == 0 || region.height == 0 {
-            return;
-        }
-        match self {
-            Dirty::Whole => {}
-            Dirty::Nothing => *self = Dirty::Regions(vec![region]),
-            Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => {
-                if let Some(last) = list.last_mut() {
-                    *last = last.union(region);
-                }
-            }
-            Dirty::Regions(list) => list.push(region),
+    fn paint(&mut self, tile: &crate::render::Tile, pixels: Vec<u8>) {
+        if let Some(pixels) = RgbImage::from_raw(tile.width, tile.height, pixels) {
+            blow_up(&mut self.image, tile.x, tile.y, 1, &pixels);
+            self.dirty = true;
         }
     }
 }

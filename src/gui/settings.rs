@@ -1,12 +1,13 @@
 //! What the app remembers between runs, in its own struct: the window's
-//! size, the anti-aliasing and the study's runs ([`Settings`]), and the
+//! size, the anti-aliasing, the study's runs and the last file open
+//! ([`Settings`]), and the
 //! recent files ([`Recent`]). Both live in `$XDG_CONFIG_HOME/rayoflight/`
 //! (or `~/.config/rayoflight/`); tests use them in memory only.
 //!
 //! `settings.txt` holds `key = value` lines. Unknown keys and bad values
 //! are ignored: a stale or hand-edited file never stops the app.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::recent::Recent;
 
@@ -50,6 +51,9 @@ pub struct Settings {
     pub aa: u32,
     /// Renders a method gets in the Study window.
     pub study_runs: usize,
+    /// The scene file open when the app last closed (`None`: the built-in
+    /// example); the app reopens it when started without a file.
+    pub last_file: Option<PathBuf>,
     /// Where they are saved; `None`: nowhere.
     store: Option<PathBuf>,
 }
@@ -60,6 +64,7 @@ impl Default for Settings {
             window: None,
             aa: 1,
             study_runs: 3,
+            last_file: None,
             store: None,
         }
     }
@@ -104,6 +109,7 @@ impl Settings {
                         s.study_runs = runs;
                     }
                 }
+                "last_file" if !value.is_empty() => s.last_file = Some(PathBuf::from(value)),
                 _ => {}
             }
         }
@@ -117,6 +123,14 @@ impl Settings {
         }
         text.push_str(&format!("aa = {}\n", self.aa));
         text.push_str(&format!("study_runs = {}\n", self.study_runs));
+        // A path this line format cannot hold as it is (not UTF-8, a line
+        // break, spaces at its ends) is not remembered.
+        if let Some(path) = self.last_file.as_deref().and_then(Path::to_str)
+            && !path.contains(['\n', '\r'])
+            && path.trim() == path
+        {
+            text.push_str(&format!("last_file = {path}\n"));
+        }
         text
     }
 
@@ -144,6 +158,7 @@ mod tests {
         s.window = Some([900.0, 700.5]);
         s.aa = 3;
         s.study_runs = 5;
+        s.last_file = Some(dir.path().join("a scene.xml"));
         s.save();
         let back = Settings::load(Some(file));
         assert_eq!(back, s);
@@ -155,5 +170,16 @@ mod tests {
         assert_eq!(s, Settings::default());
         let s = Settings::parse("window = 1200 x 800\naa=2");
         assert_eq!((s.window, s.aa), (Some([1200.0, 800.0]), 2));
+    }
+
+    #[test]
+    fn a_path_the_file_cannot_hold_is_not_remembered() {
+        for odd in ["two\nlines.xml", " padded.xml"] {
+            let s = Settings {
+                last_file: Some(PathBuf::from(odd)),
+                ..Settings::default()
+            };
+            assert_eq!(Settings::parse(&s.to_text()).last_file, None, "{odd:?}");
+        }
     }
 }

@@ -3,8 +3,9 @@
 //! [`prepare`] turns the scene into a [`Prepared`] scene (what tracing needs
 //! and nothing more); [`render_tile`] traces one rectangle of pixels, checking
 //! a [`Cancel`] token once per pixel; [`render`] does the whole image on a
-//! rayon pool. [`RenderOptions`] holds every method choice; its default is
-//! the contract's reference image. [`navigate`] moves the camera as a
+//! rayon pool ([`render_watched`] counting its [`Progress`]).
+//! [`RenderOptions`] holds every method choice; its default is the
+//! contract's reference image. [`navigate`] moves the camera as a
 //! viewport does (orbit, pan, dolly); [`object_ids`] says which object each
 //! pixel shows.
 
@@ -13,12 +14,14 @@ mod camera;
 mod ids;
 pub mod navigate;
 mod prepared;
+mod progress;
 mod tile;
 
 pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
 pub use ids::{ObjectIds, object_ids};
 pub use prepared::{Hit, Prepared, prepare};
+pub use progress::{Progress, time_left};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
 
 use crate::scene::Scene;
@@ -181,15 +184,26 @@ pub fn render_cancellable(
     options: &RenderOptions,
     cancel: &Cancel,
 ) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
+    render_watched(scene, options, cancel, &Progress::default())
+}
+
+/// Like [`render_cancellable`], counting the pixels done in `progress` as
+/// tiles finish.
+pub fn render_watched(
+    scene: &Scene,
+    options: &RenderOptions,
+    cancel: &Cancel,
+    progress: &Progress,
+) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
     options.validate()?;
     match options.threads {
-        None => Ok(render_all(scene, options, cancel)),
+        None => Ok(render_all(scene, options, cancel, progress)),
         Some(threads) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .map_err(|source| RenderError::ThreadPool { threads, source })?;
-            Ok(pool.install(|| render_all(scene, options, cancel)))
+            Ok(pool.install(|| render_all(scene, options, cancel, progress)))
         }
     }
 }
@@ -198,9 +212,11 @@ fn render_all(
     scene: &Scene,
     options: &RenderOptions,
     cancel: &Cancel,
+    progress: &Progress,
 ) -> Option<(RgbImage, RenderStats)> {
     let prepared = prepare(scene, options);
     let (width, height) = (prepared.width(), prepared.height());
+    progress.start(u64::from(width) * u64::from(height));
     // Bands of TILE_SIZE rows spread over the pool by rayon; each band is
     // traced tile by tile (so each tile culls once) and copied in place.
     let mut image = RgbImage::new(width, height);
@@ -221,6 +237,7 @@ fn render_all(
                     height: band_height,
                 };
                 rays += prepared.render_tile_into(&tile, cancel, &mut pixels)?;
+                progress.add(u64::from(tile.width) * u64::from(tile.height));
                 let tile_row = tile.width as usize * 3;
                 for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
                     let start = r * row_bytes + x as usize * 3;

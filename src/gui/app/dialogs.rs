@@ -4,6 +4,7 @@
 //! disk.
 
 use super::*;
+use std::sync::atomic::AtomicU64;
 
 /// A question the app is waiting on.
 #[derive(Debug, Clone, PartialEq)]
@@ -99,8 +100,16 @@ impl RayOfLightApp {
     }
 
     /// Renders at full resolution with the chosen anti-aliasing on a
-    /// background thread and writes the file atomically.
+    /// background thread and writes the file atomically; the status bar
+    /// shows its progress and can cancel it.
     pub(super) fn export(&mut self, path: PathBuf) {
+        if let Some(export) = &self.export {
+            self.notify(format!(
+                "already exporting {}: wait for it or cancel it",
+                export.path.display()
+            ));
+            return;
+        }
         if let Err(e) = crate::output::format_for(&path) {
             self.notify(e.to_string());
             return;
@@ -112,15 +121,37 @@ impl RayOfLightApp {
             aa: self.aa,
             ..render::auto(&scene).options
         };
+        let export = Export {
+            path: path.clone(),
+            progress: Arc::new(render::Progress::default()),
+            stop: Arc::new(AtomicU64::new(0)),
+            started: Instant::now(),
+        };
+        let progress = export.progress.clone();
+        let cancel = render::Cancel::new(export.stop.clone(), 0);
+        self.export = Some(export);
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
-        self.notify(format!("exporting {}…", path.display()));
         std::thread::spawn(move || {
-            let result = render::render(&scene, &options)
-                .map_err(|e| e.to_string())
-                .and_then(|image| crate::output::save(&image, &path).map_err(|e| e.to_string()));
+            let result = match render::render_watched(&scene, &options, &cancel, &progress) {
+                Ok(Some((image, _))) => crate::output::save(&image, &path)
+                    .map(|()| true)
+                    .map_err(|e| e.to_string()),
+                Ok(None) => Ok(false),
+                Err(e) => Err(e.to_string()),
+            };
             let _ = tx.send(Background::Exported(path, result));
             ctx.request_repaint();
+        });
+    }
+
+    /// The export ended (see [`Background::Exported`]).
+    pub(super) fn exported(&mut self, path: &Path, result: Result<bool, String>) {
+        self.export = None;
+        self.notify(match result {
+            Ok(true) => format!("exported {}", path.display()),
+            Ok(false) => format!("export of {} cancelled", path.display()),
+            Err(e) => format!("export failed: {e}"),
         });
     }
 
@@ -356,5 +387,20 @@ impl RayOfLightApp {
                 self.path_chosen(prompt.kind, path);
             }
         }
+    }
+}
+
+/// An export under way: where it goes, how far it is, and its stop switch
+/// (the render's cancel token for generation 0 stops once it is set to 1).
+pub(super) struct Export {
+    pub(super) path: PathBuf,
+    pub(super) progress: Arc<render::Progress>,
+    pub(super) stop: Arc<AtomicU64>,
+    pub(super) started: Instant,
+}
+
+impl Export {
+    pub(super) fn cancel(&self) {
+        self.stop.store(1, std::sync::atomic::Ordering::Relaxed);
     }
 }

@@ -115,10 +115,7 @@ impl RayOfLightApp {
                         self.file_event(event);
                     }
                 }
-                Background::Exported(path, Ok(())) => {
-                    self.notify(format!("exported {}", path.display()))
-                }
-                Background::Exported(_, Err(e)) => self.notify(format!("export failed: {e}")),
+                Background::Exported(path, result) => self.exported(&path, result),
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
             }
         }

@@ -33,7 +33,7 @@ use picture::View;
 use super::document::{Document, FileState, Reload, SaveError};
 use super::pace::Pace;
 use super::panel::{self, Selection};
-use super::preview::{Dirty, Preview, RenderState};
+use super::preview::{Preview, RenderState};
 use super::recent::Recent;
 use super::settings::{Persisted, Settings};
 use super::study::{self, PreviewMethods, StudyWindow};
@@ -54,7 +54,8 @@ enum Background {
     File(u64, FileEvent),
     /// The object-id buffer for the outline of (object, render generation).
     Ids((u32, u64), crate::render::ObjectIds),
-    Exported(PathBuf, Result<(), String>),
+    /// An export ended: written, failed, or (`Ok(false)`) cancelled.
+    Exported(PathBuf, Result<bool, String>),
     Dialog(DialogKind, Option<PathBuf>, Duration),
 }
 
@@ -62,9 +63,11 @@ pub struct RayOfLightApp {
     doc: Document,
     worker: Worker,
     preview: Preview,
-    texture: Option<egui::TextureHandle>,
+    texture: crate::gui::texture::PictureTexture,
     /// The coarse pass's picture at its own size (see [`Preview::coarse`]).
     coarse_texture: Option<egui::TextureHandle>,
+    /// The coarse picture is on screen (until the finer one is uploaded).
+    showing_coarse: bool,
     watcher: Option<SceneWatcher>,
     background: Receiver<Background>,
     background_tx: Sender<Background>,
@@ -86,6 +89,8 @@ pub struct RayOfLightApp {
     study: StudyWindow,
     /// A transient message for the status bar (export done, save failed).
     notice: Option<(String, Instant)>,
+    /// The export running in the background, if any.
+    export: Option<dialogs::Export>,
     recent: Recent,
     /// Window size, anti-aliasing and study runs, saved on exit.
     settings: Settings,
@@ -147,7 +152,8 @@ impl RayOfLightApp {
             doc,
             worker,
             preview: Preview::default(),
-            texture: None,
+            texture: Default::default(),
+            showing_coarse: false,
             coarse_texture: None,
             watcher: None,
             background,
@@ -166,6 +172,7 @@ impl RayOfLightApp {
             rendered_dragging: false,
             study: StudyWindow::with_runs(settings.study_runs),
             notice: None,
+            export: None,
             recent,
             settings,
             watch_generation: 0,
@@ -242,6 +249,10 @@ impl RayOfLightApp {
         settings.window = window.or(settings.window);
         settings.aa = self.aa;
         settings.study_runs = self.study.runs;
+        settings.last_file = self
+            .doc
+            .path()
+            .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.to_owned()));
         settings
     }
 

@@ -48,11 +48,10 @@ impl Default for View {
 impl RayOfLightApp {
     pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
         egui::CentralPanel::default().show(ui, |ui| {
-            self.upload(ui.ctx());
-            let Some(mut texture) = self.texture.as_ref().map(egui::TextureHandle::id) else {
-                return;
-            };
-            // A coarse pass shows at its own size, stretched.
+            let dirty = self.preview.take_dirty();
+            self.texture.update(ui.ctx(), self.preview.image(), dirty);
+            // A coarse pass shows at its own size, stretched, and stays on
+            // screen until the finer picture is wholly uploaded.
             let coarse_dirty = self.preview.take_coarse_dirty();
             if let Some(coarse) = self.preview.coarse() {
                 if coarse_dirty || self.coarse_texture.is_none() {
@@ -70,10 +69,17 @@ impl RayOfLightApp {
                         }
                     }
                 }
-                if let Some(t) = &self.coarse_texture {
-                    texture = t.id();
-                }
+                self.showing_coarse = true;
+            } else if self.texture.complete() {
+                self.showing_coarse = false;
             }
+            let texture = match &self.coarse_texture {
+                Some(t) if self.showing_coarse => t.id(),
+                _ => match self.texture.id() {
+                    Some(id) => id,
+                    None => return,
+                },
+            };
             let area = ui.available_rect_before_wrap();
             let response = ui.allocate_rect(area, Sense::click_and_drag());
             let (w, h) = self.preview.image().dimensions();
@@ -136,42 +142,6 @@ impl RayOfLightApp {
                 self.markers.clear();
             }
         });
-    }
-
-    /// Brings the texture up to date with the preview: only the tiles that
-    /// changed, or the whole image when its size changed.
-    fn upload(&mut self, ctx: &egui::Context) {
-        let dirty = self.preview.take_dirty();
-        let image = self.preview.image();
-        let whole = || {
-            let (w, h) = image.dimensions();
-            egui::ColorImage::from_rgb([w as usize, h as usize], image.as_raw())
-        };
-        match (&mut self.texture, dirty) {
-            (None, _) => {
-                self.texture = Some(ctx.load_texture("render", whole(), TextureOptions::NEAREST))
-            }
-            (Some(_), Dirty::Nothing) => {}
-            (Some(t), Dirty::Whole) => t.set(whole(), TextureOptions::NEAREST),
-            (Some(t), Dirty::Regions(regions)) => {
-                let raw = image.as_raw();
-                let row = image.width() as usize * 3;
-                for r in regions {
-                    let (x, y) = (r.x as usize, r.y as usize);
-                    let (w, h) = (r.width as usize, r.height as usize);
-                    let mut rgb = Vec::with_capacity(w * h * 3);
-                    for line in y..y + h {
-                        let start = line * row + x * 3;
-                        rgb.extend_from_slice(raw.get(start..start + w * 3).unwrap_or_default());
-                    }
-                    if rgb.len() != w * h * 3 {
-                        continue;
-                    }
-                    let part = egui::ColorImage::from_rgb([w, h], &rgb);
-                    t.set_partial([x, y], part, TextureOptions::NEAREST);
-                }
-            }
-        }
     }
 
     /// What the mouse does on the picture: a drag orbits the camera

@@ -96,12 +96,44 @@ impl RayOfLightApp {
                 }
                 ui.separator();
                 ui.label(format!("{} fps", self.frames.len()));
+                self.export_progress(ui);
                 if let Some((notice, _)) = &self.notice {
                     ui.separator();
                     ui.label(notice.as_str());
                 }
             });
         });
+    }
+
+    /// The export under way: its percentage, the time left once a second
+    /// has passed, and a button that stops it.
+    fn export_progress(&mut self, ui: &mut egui::Ui) {
+        let Some(export) = &self.export else {
+            return;
+        };
+        ui.separator();
+        let name = export.path.file_name().map_or_else(
+            || export.path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        let fraction = export.progress.fraction();
+        let mut text = format!("exporting {name} {:.0} %", fraction * 100.0);
+        if let Some(left) = export.progress.left(export.started.elapsed()) {
+            text += &format!(" · {:.0} s left", left.as_secs_f64().ceil());
+        }
+        ui.add(
+            egui::ProgressBar::new(fraction as f32)
+                .desired_width(220.0)
+                .text(text),
+        );
+        if ui
+            .small_button("Cancel")
+            .on_hover_text("stop the export")
+            .clicked()
+        {
+            export.cancel();
+        }
+        ui.ctx().request_repaint_after(Duration::from_millis(100));
     }
 
     pub(super) fn count_frame(&mut self) {
