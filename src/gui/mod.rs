@@ -12,6 +12,8 @@
 //! - [`settings`]: what the app remembers between runs ([`recent`] files
 //!   among it).
 //! - [`preview`]: the picture assembled from the worker's tiles.
+//! - [`texture`]: that picture on the GPU, uploaded a changed tile (or a
+//!   band of rows) at a time.
 //! - [`watcher`]: the file watcher (notify), debounced.
 //! - [`study`]: the Study window and the live preview's choice of method.
 //!

@@ -6,7 +6,9 @@
 //! A widget that is only shown can therefore never change a value: drag
 //! ranges come from the loader's limits and never clamp a loaded value,
 //! numbers are shown in the shortest form that reads back exactly, and
-//! pressing Enter in a field without typing changes nothing.
+//! pressing Enter in a field without typing changes nothing. The widgets
+//! for one value, and the rule that only a real change is an edit, are in
+//! `form`; this file lays out the scene's sections.
 
 use std::ops::RangeInclusive;
 
@@ -17,6 +19,9 @@ use crate::scene::edit::{
 };
 use crate::scene::{Illumination, Model, Scene};
 use egui::{CollapsingHeader, DragValue, Response, Ui};
+
+mod form;
+use form::Form;
 
 /// The object picked in the picture.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
@@ -35,111 +40,6 @@ pub struct PanelOutput {
     pub dragging: bool,
     /// A drag of a value ended this frame.
     pub drag_ended: bool,
-}
-
-/// Collects the edits of one frame.
-struct Form<'s> {
-    scene: &'s Scene,
-    out: PanelOutput,
-}
-
-impl Form<'_> {
-    fn note(&mut self, response: &Response) {
-        if response.drag_stopped() {
-            self.out.drag_ended = true;
-        }
-    }
-
-    fn set(&mut self, field: Field, value: Value, response: &Response) {
-        self.out.dragging |= response.dragged();
-        self.out.edits.push(Edit::Set(field, value));
-    }
-
-    /// A number field. `range` is what dragging and typing may reach; a
-    /// loaded value outside it is shown as it is.
-    fn number(
-        &mut self,
-        ui: &mut Ui,
-        field: Field,
-        speed: f64,
-        range: RangeInclusive<f64>,
-        prefix: &str,
-    ) -> Response {
-        let Ok(Value::Number(old)) = field.get(self.scene) else {
-            return ui.label("?");
-        };
-        let mut value = old;
-        let response = ui.add(
-            DragValue::new(&mut value)
-                .speed(speed)
-                .range(range)
-                .clamp_existing_to_range(false)
-                .custom_formatter(|v, _| number_text(v))
-                .prefix(prefix),
-        );
-        self.note(&response);
-        if response.changed() && value.to_bits() != old.to_bits() {
-            self.set(field, Value::Number(value), &response);
-        }
-        response
-    }
-
-    /// An angle in radians (as the file holds it), shown in degrees to six
-    /// decimals (-0.1 rad is -5.729578°).
-    fn angle(&mut self, ui: &mut Ui, field: Field) -> Response {
-        let Ok(Value::Number(radians)) = field.get(self.scene) else {
-            return ui.label("?");
-        };
-        let old = radians.to_degrees();
-        let mut degrees = old;
-        let response = ui.add(
-            DragValue::new(&mut degrees)
-                .speed(1.0)
-                .custom_formatter(|v, _| degrees_text(v))
-                .suffix("°"),
-        );
-        self.note(&response);
-        // Enter on an untouched field reads back the text shown: that is no
-        // edit (the file's radians would not survive the round trip).
-        let shown = degrees_text(old).parse::<f64>().unwrap_or(old);
-        let untouched = degrees.to_bits() == old.to_bits() || degrees.to_bits() == shown.to_bits();
-        if response.changed() && !untouched {
-            self.set(field, Value::Number(degrees.to_radians()), &response);
-        }
-        response
-    }
-
-    fn integer(&mut self, ui: &mut Ui, field: Field, range: RangeInclusive<u64>) -> Response {
-        let Ok(Value::Integer(old)) = field.get(self.scene) else {
-            return ui.label("?");
-        };
-        let mut value = old;
-        let response = ui.add(
-            DragValue::new(&mut value)
-                .range(range)
-                .clamp_existing_to_range(false),
-        );
-        self.note(&response);
-        if response.changed() && value != old {
-            self.set(field, Value::Integer(value), &response);
-        }
-        response
-    }
-
-    fn edit(&mut self, edit: Edit) {
-        self.out.edits.push(edit);
-    }
-}
-
-/// Degrees to six decimals, without trailing zeros.
-fn degrees_text(v: f64) -> String {
-    let text = format!("{v:.6}");
-    let text = text.trim_end_matches('0').trim_end_matches('.');
-    if text == "-0" {
-        "0".to_owned()
-    } else {
-        text.to_owned()
-    }
 }
 
 /// The whole panel for `doc`'s scene.

@@ -1,0 +1,223 @@
+//! The scene being edited: the file's text, the scene with its unsaved
+//! edits, undo and redo, and the rules that keep the user's file safe.
+//!
+//! - Every change goes through [`Document::apply`] as an
+//!   [`Edit`](crate::scene::edit::Edit) (panel, keys, viewport) and can be
+//!   undone; a whole drag of one value is one undo step. Saving does not
+//!   clear the history.
+//! - The file is never written over text the app has not read: before each
+//!   write the file is read again and its fingerprint compared with the
+//!   bytes last read or written. A different file is merged with the
+//!   unsaved edits value by value ([`crate::scene::merge`]); the user is
+//!   asked only where both changed the same value; a file that does not
+//!   load is never written over.
+//! - The watcher's reports are compared with that same fingerprint, so an
+//!   external write is never mistaken for what the app already has.
+//! - A reload from disk with nothing unsaved is an undo step too: undoing
+//!   it brings back the scene before it, as unsaved edits.
+//!
+//! Save-back splices the edits into the text last read from disk (the
+//! source the edits' origins point into), so unchanged bytes stay as they
+//! are and undoing everything and saving gives the file back byte for byte.
+//!
+//! The undo history lives in `history`, reading and writing the file in
+//! `disk`.
+
+mod disk;
+mod history;
+
+use disk::fingerprint;
+pub use disk::{PendingMerge, Reload, SaveError};
+use history::Step;
+
+use std::collections::BTreeMap;
+use std::hash::{Hash, Hasher};
+use std::path::{Path, PathBuf};
+
+use crate::scene::edit::{Edit, EditError, Edited, Field, Owner, Undo};
+use crate::scene::merge::{self, Choice, Conflict};
+use crate::scene::{self, LoadError, LoadErrorKind, Scene, splice};
+
+/// Where the scene comes from, and how that source is doing.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum FileState {
+    /// The built-in example, not yet saved anywhere.
+    Builtin,
+    /// A file on disk, watched for changes.
+    Watching,
+    /// The file was deleted or moved away; the last scene stays on screen.
+    Missing,
+}
+#[derive(Debug, Clone)]
+pub struct Document {
+    path: Option<PathBuf>,
+    /// The text last read from the file, which the elements' origins point
+    /// into; saves splice the edits into it.
+    source: String,
+    /// The file's bytes as last read or written, or `None` when unknown
+    /// (never read, or missing).
+    disk: Option<u64>,
+    /// The scene the file holds as of the last read or write.
+    /// (With the origins it had then: reverting keeps every element's text.)
+    saved: Edited,
+    /// The scene on screen: `saved` plus the unsaved edits.
+    edited: Edited,
+    /// `edited` differs from `saved`.
+    dirty: bool,
+    /// The edits since the file was last read or written, replayed onto a
+    /// newer file.
+    log: Vec<Edit>,
+    undo: Vec<Step>,
+    redo: Vec<Step>,
+    state: FileState,
+    /// The last load error (`file:line:col: message`), shown in a banner.
+    error: Option<String>,
+    /// No scene has loaded from the file yet (it was broken when opened):
+    /// the panel is read-only and saving refuses.
+    placeholder: bool,
+    conflict: Option<PendingMerge>,
+    /// The first words of the comment above each object of `source`.
+    labels: Vec<Option<String>>,
+}
+
+impl Document {
+    fn from_text(path: Option<PathBuf>, text: String, scene: Scene, state: FileState) -> Document {
+        Document {
+            path,
+            disk: Some(fingerprint(text.as_bytes())),
+            labels: splice::object_labels(&text),
+            source: text,
+            saved: Edited::new(scene.clone()),
+            edited: Edited::new(scene),
+            dirty: false,
+            log: Vec::new(),
+            undo: Vec::new(),
+            redo: Vec::new(),
+            state,
+            error: None,
+            placeholder: false,
+            conflict: None,
+        }
+    }
+
+    /// The built-in example scene.
+    pub fn builtin() -> Document {
+        let text = crate::EXAMPLE_SCENE.to_owned();
+        let scene = scene::parse(&text, Path::new("example.xml"))
+            .expect("the built-in example scene is valid");
+        let mut doc = Document::from_text(None, text, scene, FileState::Builtin);
+        doc.disk = None;
+        doc
+    }
+
+    /// Opens a file. A file that does not load (or is not there yet) opens
+    /// all the same, on an empty scene with the error shown, and is picked
+    /// up when it is fixed; only a directory is refused.
+    pub fn open(path: &Path) -> Result<Document, LoadError> {
+        match scene::load_with_text(path) {
+            Ok((text, scene)) => Ok(Document::from_text(
+                Some(path.to_owned()),
+                text,
+                scene,
+                FileState::Watching,
+            )),
+            Err(e) if e.kind == LoadErrorKind::IsDirectory => Err(e),
+            Err(e) => {
+                let missing = matches!(
+                    &e.kind,
+                    LoadErrorKind::Io { kind, .. } if *kind == std::io::ErrorKind::NotFound
+                );
+                let mut doc = Document::placeholder(path);
+                if missing {
+                    doc.state = FileState::Missing;
+                } else {
+                    doc.error = Some(e.to_string());
+                }
+                Ok(doc)
+            }
+        }
+    }
+
+    /// An empty scene standing in for a file that has not loaded yet.
+    fn placeholder(path: &Path) -> Document {
+        let text = "<scene><camera width=\"320\" height=\"240\" eyeDistance=\"1\"/></scene>";
+        let scene = scene::parse(text, path).expect("the placeholder scene is valid");
+        let mut doc = Document::from_text(
+            Some(path.to_owned()),
+            text.to_owned(),
+            scene,
+            FileState::Watching,
+        );
+        doc.disk = None;
+        doc.placeholder = true;
+        doc
+    }
+
+    pub fn path(&self) -> Option<&Path> {
+        self.path.as_deref()
+    }
+
+    /// The scene on screen.
+    pub fn scene(&self) -> &Scene {
+        self.edited.scene()
+    }
+
+    /// A short name for the title bar.
+    pub fn title(&self) -> String {
+        match &self.path {
+            Some(p) => p.display().to_string(),
+            None => "built-in example".to_owned(),
+        }
+    }
+
+    pub fn state(&self) -> &FileState {
+        &self.state
+    }
+
+    pub fn error(&self) -> Option<&str> {
+        self.error.as_deref()
+    }
+
+    /// No scene has loaded from the file yet: nothing to edit or save.
+    pub fn is_placeholder(&self) -> bool {
+        self.placeholder
+    }
+
+    pub fn has_unsaved_edits(&self) -> bool {
+        self.dirty
+    }
+
+    pub fn conflict(&self) -> Option<&PendingMerge> {
+        self.conflict.as_ref()
+    }
+
+    /// The panel's name for object `n`: `#2 RED sphere` when a comment
+    /// directly above it in the file starts with "RED", else `#2 sphere`.
+    pub fn object_label(&self, n: usize) -> String {
+        let shape = self
+            .scene()
+            .objects
+            .get(n)
+            .map_or("object", |o| o.shape.name());
+        let words = self
+            .edited
+            .object_origin(n)
+            .and_then(|k| self.labels.get(k).cloned().flatten());
+        match words {
+            Some(w) if w.to_lowercase().ends_with(shape) => format!("#{} {w}", n + 1),
+            Some(w) => format!("#{} {w} {shape}", n + 1),
+            None => format!("#{} {shape}", n + 1),
+        }
+    }
+
+    /// The scene as the file holds it (after the last read or write).
+    pub fn file_scene(&self) -> &Scene {
+        self.saved.scene()
+    }
+
+    /// The scene with, for each element, where it came from in the text
+    /// last read from disk.
+    pub fn edited(&self) -> &Edited {
+        &self.edited
+    }
+}
