@@ -495,6 +495,24 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
     let methods = rayoflight::study::methods();
     assert_eq!(harness.state().study_window().rows().len(), methods.len());
 
+    // The chart's legend stands beside the chart, not over it: the
+    // threshold's entry and every method's name to its right.
+    let chart = harness.get_by_label("study chart").rect();
+    let threshold = harness.get_by_label("fails above 1 %").rect();
+    assert!(
+        threshold.left() >= chart.right(),
+        "legend {threshold:?} over the chart {chart:?}"
+    );
+    for m in &methods {
+        assert!(
+            harness
+                .get_all_by_label(m.name)
+                .any(|n| n.rect().left() >= chart.right()),
+            "{} is not in the legend beside the chart {chart:?}",
+            m.name
+        );
+    }
+
     // The rows offer their method for the live preview: pick draft (the
     // eleventh row; auto is "previewing", so the ninth button from the top).
     let buttons = harness.get_all_by_label("preview with it").count();

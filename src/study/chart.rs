@@ -10,10 +10,12 @@
 use super::{FAIL_BELOW, Row};
 use image::{Rgb, RgbImage};
 use plotters::coord::Shift;
-use plotters::element::{Drawable, PointCollection};
+use plotters::element::{DashedPathElement, Drawable, PointCollection};
 use plotters::prelude::*;
 use plotters::style::FontStyle;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters_backend::DrawingErrorKind;
+use std::ops::Range;
 use std::sync::Once;
 
 /// DejaVu Sans (assets/fonts/LICENSE-DejaVu.txt).
@@ -150,24 +152,47 @@ impl<C, DB: DrawingBackend> Drawable<DB> for Marker<C> {
 /// Pixel coordinates on the backend.
 type BackendCoordinate = (i32, i32);
 
+/// The width of the legend column on the right of the chart, in pixels:
+/// the legend is drawn there, beside the plotting area, never over it.
+pub const LEGEND_WIDTH: u32 = 200;
+
+/// Where [`draw`] put the plotting area and the legend box, in pixels of
+/// the picture: `(x range, y range)` each.
+#[derive(Debug, Clone, PartialEq)]
+struct Layout {
+    plot: (Range<i32>, Range<i32>),
+    legend: (Range<i32>, Range<i32>),
+}
+
 /// Draws the chart of `rows`: median time (ms, log) against the share of
 /// pixels off by more than one level (log, exact rows on the floor), one
 /// mark per scene and method, methods told apart by colour and shape, the
 /// fail threshold dashed, and the fastest accurate method of each scene
-/// circled and labelled with the scene's name.
+/// circled and labelled with the scene's name. The legend stands in a
+/// column on the right, outside the plotting area.
 pub fn chart(rows: &[Row]) -> Result<RgbImage, ChartError> {
+    render(rows).map(|(image, _)| image)
+}
+
+/// [`chart`], and where it put the plotting area and the legend.
+fn render(rows: &[Row]) -> Result<(RgbImage, Layout), ChartError> {
     register_font()?;
     let (w, h) = CHART_SIZE;
     let mut buffer = vec![0u8; w as usize * h as usize * 3];
-    {
+    let layout = {
         let root = BitMapBackend::with_buffer(&mut buffer, (w, h)).into_drawing_area();
-        draw(&root, rows)?;
+        let layout = draw(&root, rows)?;
         root.present().map_err(err)?;
-    }
-    RgbImage::from_raw(w, h, buffer).ok_or_else(|| ChartError("buffer size".into()))
+        layout
+    };
+    let image = RgbImage::from_raw(w, h, buffer).ok_or_else(|| ChartError("buffer size".into()))?;
+    Ok((image, layout))
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Result<(), ChartError> {
+fn draw<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    rows: &[Row],
+) -> Result<Layout, ChartError> {
     root.fill(&WHITE).map_err(err)?;
     let times = rows.iter().map(|r| r.time.as_secs_f64() * 1e3);
     let (lo, hi) = times.fold((f64::INFINITY, 0.0f64), |(lo, hi), t| {
@@ -178,12 +203,19 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Resu
     } else {
         (0.01, 10.0)
     };
-    let mut chart = ChartBuilder::on(root)
-        .caption(
+    // The title over the whole width, then the chart on the left and the
+    // legend's column on the right.
+    let titled = root
+        .margin(12, 12, 12, 12)
+        .titled(
             "RayOfLight study: speed against accuracy (circled: fastest method that passes, per scene)",
             ("sans-serif", 20),
         )
-        .margin(12)
+        .map_err(err)?;
+    let (width, _) = titled.dim_in_pixel();
+    let (left, right) = titled.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
+    let mut chart = ChartBuilder::on(&left)
+        .margin_top(8)
         .x_label_area_size(48)
         .y_label_area_size(90)
         .build_cartesian_2d((lo..hi).log_scale(), (ERROR_FLOOR / 1.5..1.5).log_scale())
@@ -208,16 +240,15 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Resu
 
     // The fail threshold.
     let threshold = 1.0 - FAIL_BELOW;
+    let dashed = RED.mix(0.6).stroke_width(2);
     chart
         .draw_series(DashedLineSeries::new(
             [(lo, threshold), (hi, threshold)],
             8,
             6,
-            RED.mix(0.6).stroke_width(2),
+            dashed,
         ))
-        .map_err(err)?
-        .label(format!("fails above {}%", format_number(threshold * 100.0)))
-        .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], RED.mix(0.6).stroke_width(2)));
+        .map_err(err)?;
 
     // One series per method, in the order the rows name them.
     let mut methods: Vec<&str> = Vec::new();
@@ -231,11 +262,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Resu
             .iter()
             .filter(|r| r.method == *method)
             .map(move |r| marker(i, (r.time.as_secs_f64() * 1e3, error(r))));
-        chart
-            .draw_series(points)
-            .map_err(err)?
-            .label(*method)
-            .legend(move |(x, y)| marker(i, (x + 9, y)));
+        chart.draw_series(points).map_err(err)?;
     }
 
     // The fastest accurate choice of each scene: circled and named.
@@ -265,15 +292,62 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, rows: &[Row]) -> Resu
         }))
         .map_err(err)?;
 
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .background_style(WHITE.mix(0.9))
-        .border_style(BLACK.mix(0.4))
-        .label_font(("sans-serif", 14))
-        .draw()
+    let plot = chart.plotting_area().get_pixel_range();
+    let legend = draw_legend(
+        &right,
+        &methods,
+        plot.1.start,
+        &format!("fails above {}%", format_number(threshold * 100.0)),
+    )?;
+    Ok(Layout { plot, legend })
+}
+
+/// The height of one legend entry, in pixels.
+const LEGEND_LINE: i32 = 22;
+
+/// The legend in `area` (the column right of the chart), its top at the
+/// picture's row `top`: the dashed threshold, then each method's marker
+/// (the same [`marker`] as the points) and name. Returns the box it drew,
+/// in pixels of the picture.
+fn draw_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    methods: &[&str],
+    top: i32,
+    threshold: &str,
+) -> Result<(Range<i32>, Range<i32>), ChartError> {
+    let (base_x, base_y) = area.get_base_pixel();
+    let (width, height) = area.dim_in_pixel();
+    // In the area's own pixels: a gap on the left, the box to the right edge.
+    let (x0, x1) = (12, width as i32);
+    let y0 = (top - base_y).max(0);
+    let entries = methods.len() as i32 + 1;
+    let y1 = (y0 + 8 + entries * LEGEND_LINE).min(height as i32);
+    area.draw(&Rectangle::new(
+        [(x0, y0), (x1 - 1, y1 - 1)],
+        BLACK.mix(0.4),
+    ))
+    .map_err(err)?;
+    let font = ("sans-serif", 14).into_font();
+    let text = |i: i32| (x0 + 36, y0 + 4 + i * LEGEND_LINE + LEGEND_LINE / 2);
+    let centre = |i: i32| (x0 + 18, y0 + 4 + i * LEGEND_LINE + LEGEND_LINE / 2);
+    let (cx, cy) = centre(0);
+    area.draw(&DashedPathElement::new(
+        [(cx - 12, cy), (cx + 12, cy)],
+        8,
+        6,
+        RED.mix(0.6).stroke_width(2),
+    ))
+    .map_err(err)?;
+    let style = font.color(&BLACK).pos(Pos::new(HPos::Left, VPos::Center));
+    area.draw(&Text::new(threshold.to_owned(), text(0), style.clone()))
         .map_err(err)?;
-    Ok(())
+    for (i, method) in methods.iter().enumerate() {
+        let line = i as i32 + 1;
+        area.draw(&marker(i, centre(line))).map_err(err)?;
+        area.draw(&Text::new((*method).to_owned(), text(line), style.clone()))
+            .map_err(err)?;
+    }
+    Ok((base_x + x0..base_x + x1, base_y + y0..base_y + y1))
 }
 
 /// A number for a tick label: no trailing zeros, no exponent for the
@@ -389,6 +463,45 @@ mod tests {
         assert!(dark > 1000, "{dark} dark pixels");
         // The chart of no rows still draws (empty axes).
         chart(&[]).unwrap();
+    }
+
+    #[test]
+    fn the_legend_is_beside_the_plotting_area() {
+        // Twelve methods, the slowest and worst at the top right corner,
+        // where a legend inside the plot would stand.
+        let names = [
+            "default", "auto", "f32", "textbook", "draft", "aa2", "aa4", "depth-1", "m8", "m9",
+            "m10", "m11",
+        ];
+        let rows: Vec<Row> = names
+            .iter()
+            .enumerate()
+            .map(|(i, m)| row("a", m, 1 + 30 * i as u64, 1.0 - 0.09 * i as f64))
+            .collect();
+        let (image, layout) = render(&rows).unwrap();
+        let (px, py) = &layout.plot;
+        let (lx, ly) = &layout.legend;
+        let apart =
+            lx.start >= px.end || lx.end <= px.start || ly.start >= py.end || ly.end <= py.start;
+        assert!(apart, "the legend {layout:?} overlaps the plotting area");
+        assert!(lx.end <= CHART_SIZE.0 as i32 && ly.end <= CHART_SIZE.1 as i32);
+        // The legend really is there: every method's colour in its box.
+        for i in 0..names.len() {
+            let (r, g, b) = method_colour(i);
+            let found = lx.clone().any(|x| {
+                ly.clone()
+                    .any(|y| *image.get_pixel(x as u32, y as u32) == Rgb([r, g, b]))
+            });
+            assert!(found, "no marker of method {i} in the legend {layout:?}");
+        }
+        // …and the top right point is not covered: its colour is in the
+        // plotting area's top right quarter.
+        let (r, g, b) = method_colour(names.len() - 1);
+        let (xm, ym) = ((px.start + px.end) / 2, (py.start + py.end) / 2);
+        let seen = (xm..px.end).any(|x| {
+            (py.start..ym).any(|y| *image.get_pixel(x as u32, y as u32) == Rgb([r, g, b]))
+        });
+        assert!(seen, "the slowest, worst point is hidden");
     }
 
     #[test]

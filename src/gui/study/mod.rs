@@ -1,20 +1,21 @@
 //! The Study window: the study of the current scene, run by the worker.
 //!
-//! It shows the progress (one row per method, cancellable), then the table
-//! and an interactive chart (egui_plot: time against error, both log, the
-//! same colours as `study.png`, hover for a method's figures); a failing
-//! row opens its side-by-side picture. It also holds the choice of
-//! method for the live preview: `auto` by default, any method of the study,
-//! and optionally a cheaper one while a value is being dragged (the exact
-//! one renders again on release). The window only keeps state and reports
+//! It owns the window's state (the study's progress and rows, the failure
+//! pictures), takes the worker's study events, and draws the progress, the
+//! table and the choice of method; the interactive chart and its legend are
+//! in [`plot`]. A failing row opens its side-by-side picture. It also
+//! holds the choice of method for the live preview: `auto` by default, any
+//! method of the study, and optionally a cheaper one while a value is being
+//! dragged (the exact one renders again on release). The window only keeps state and reports
 //! what the user asked for as [`Action`]s; the app talks to the worker.
+
+mod plot;
 
 use super::worker::Event;
 use crate::render::{self, Decision, RenderOptions};
 use crate::scene::Scene;
 use crate::study::{self, Method, Row};
 use egui::{Color32, RichText, TextureHandle, TextureOptions};
-use egui_plot::{HLine, Legend, LineStyle, MarkerShape, Plot, PlotPoints, Points};
 use image::RgbImage;
 use std::time::Duration;
 
@@ -272,7 +273,7 @@ impl StudyWindow {
         ui.separator();
         self.table(ui, live, actions);
         self.failure_picture(ui);
-        self.plot(ui);
+        plot::plot(ui, &self.rows);
     }
 
     fn preview_choice(
@@ -395,115 +396,6 @@ impl StudyWindow {
         let size = texture.size_vec2();
         let scale = (ui.available_width() / size.x).min(2.0);
         ui.image((texture.id(), size * scale));
-    }
-
-    /// Time against error, both log10: one mark per method, in the
-    /// colours and shapes of `study.png`; exact rows on the floor.
-    fn plot(&self, ui: &mut egui::Ui) {
-        if self.rows.is_empty() {
-            return;
-        }
-        let methods = study::methods();
-        let floor = study::chart::ERROR_FLOOR.log10();
-        let times = self
-            .rows
-            .iter()
-            .map(|r| (r.time.as_secs_f64() * 1e3).max(1e-6).log10());
-        let (lo, hi) = times.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), t| {
-            (lo.min(t), hi.max(t))
-        });
-        ui.separator();
-        Plot::new("study-plot")
-            // Room on the right for the legend, above for the worst rows.
-            .include_x(lo - 0.1)
-            .include_x(hi + 0.45 * (hi - lo).max(0.5))
-            .include_y(0.0)
-            .include_y(floor - 0.2)
-            .height(340.0)
-            // The wheel scrolls the window, not the plot (drag pans it,
-            // double-click resets it).
-            .allow_scroll(false)
-            .legend(Legend::default())
-            .x_axis_label("median render time, ms (log)")
-            .y_axis_label("pixels off by more than 1 level (log; bottom: exact)")
-            .x_axis_formatter(|mark, _| number(10f64.powf(mark.value)))
-            .y_axis_formatter(move |mark, _| {
-                if mark.value <= floor {
-                    "exact".into()
-                } else {
-                    format!("{}%", number(100.0 * 10f64.powf(mark.value)))
-                }
-            })
-            .label_formatter(|position| match position {
-                egui_plot::HoverPosition::NearDataPoint {
-                    plot_name,
-                    position,
-                    ..
-                } => Some(format!(
-                    "{plot_name}\n{} ms\n{}",
-                    number(10f64.powf(position.x)),
-                    if position.y <= floor {
-                        "exact to one level".to_owned()
-                    } else {
-                        format!("{}% off", number(100.0 * 10f64.powf(position.y)))
-                    }
-                )),
-                _ => None,
-            })
-            .show(ui, |plot| {
-                plot.hline(
-                    HLine::new("fails above 1 %", (1.0 - study::FAIL_BELOW).log10())
-                        .color(Color32::from_rgb(230, 60, 60))
-                        .style(LineStyle::dashed_loose()),
-                );
-                for (i, method) in methods.iter().enumerate() {
-                    let marks: Vec<[f64; 2]> = self
-                        .rows
-                        .iter()
-                        .filter(|r| r.method == method.name)
-                        .map(|r| {
-                            [
-                                (r.time.as_secs_f64() * 1e3).max(1e-6).log10(),
-                                study::chart::error(r).log10(),
-                            ]
-                        })
-                        .collect();
-                    if marks.is_empty() {
-                        continue;
-                    }
-                    let (r, g, b) = study::chart::method_colour(i);
-                    // Black reads badly on the dark theme: a light grey.
-                    let colour = if (r, g, b) == (0, 0, 0) {
-                        Color32::from_gray(220)
-                    } else {
-                        Color32::from_rgb(r, g, b)
-                    };
-                    let shape = match study::chart::method_shape(i) {
-                        0 => MarkerShape::Circle,
-                        1 => MarkerShape::Square,
-                        2 => MarkerShape::Up,
-                        3 => MarkerShape::Cross,
-                        _ => MarkerShape::Diamond,
-                    };
-                    plot.points(
-                        Points::new(method.name, PlotPoints::from(marks))
-                            .shape(shape)
-                            .color(colour)
-                            .filled(true)
-                            .radius(5.0),
-                    );
-                }
-            });
-    }
-}
-
-/// A plot figure: 3 significant digits, no exponent in the usual range.
-fn number(x: f64) -> String {
-    if (0.01..1e5).contains(&x) {
-        let digits = (2 - x.log10().floor() as i32).clamp(0, 4) as usize;
-        format!("{x:.digits$}")
-    } else {
-        format!("{x:.0e}")
     }
 }
 
