@@ -12,6 +12,7 @@
 //! - [`shading`]: the illumination formulas (ambient, lambert, phong, whitted).
 //! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
 //! - [`output`]: writing images atomically, format chosen by extension.
+//! - [`files`]: special files and symbolic links, for reading and writing.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
 //! - [`study`]: speed against accuracy: methods, study scenes, measures.
@@ -23,6 +24,7 @@
 #![forbid(unsafe_code)]
 
 pub mod bench;
+pub mod files;
 pub mod geometry;
 #[cfg(feature = "gui")]
 pub mod gui;

@@ -1,6 +1,7 @@
-//! Output faults, driven through the built binary: a full disk, a
-//! read-only directory, a read-only image. Each must give a clear error
-//! (exit 1), leave no partial file and keep the old file as it was.
+//! Output faults, driven through the built binary: a full disk (a small
+//! tmpfs, filled), a read-only directory, a read-only image. Each must give
+//! a clear error (exit 1), leave no partial file and keep the old file as
+//! it was.
 //!
 //! Permission checks do not apply to root, so where the tests run as root
 //! the binary is run as `nobody` (util-linux `runuser`).
@@ -55,22 +56,38 @@ fn workdir() -> tempfile::TempDir {
 }
 
 #[test]
-fn a_full_disk_is_reported_and_the_device_kept() {
-    if !Path::new("/dev/full").exists() {
-        panic!("/dev/full is missing on this machine");
-    }
+fn a_full_disk_is_reported_and_the_old_image_kept() {
+    // A full file system of its own: an 8 KiB tmpfs, filled, mounted in a
+    // private mount namespace (unshare) so that nothing else sees it.
     let dir = workdir();
-    std::os::unix::fs::symlink("/dev/full", dir.path().join("full.png")).unwrap();
-    let o = run(dir.path(), &["tiny.xml", "-out", "full.png"], false);
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
-    assert!(
-        stderr(&o).contains("No space left on device"),
-        "{}",
-        stderr(&o)
+    let full = dir.path().join("full");
+    fs::create_dir(&full).unwrap();
+    let script = format!(
+        "mount -t tmpfs -o size=8k tmpfs '{full}' && echo old > '{full}/out.png' \
+         && (dd if=/dev/zero of='{full}/filler' bs=1k count=64 2>/dev/null; true) \
+         && '{bin}' --no-gui tiny.xml -out full/out.png; status=$?; \
+         ls -A '{full}' >&2; cat '{full}/out.png' >&2; exit $status",
+        full = full.display(),
+        bin = env!("CARGO_BIN_EXE_rayoflight"),
     );
-    let meta = fs::metadata("/dev/full").unwrap();
-    assert!(!meta.is_file(), "/dev/full is still a device");
-    assert_eq!(files_in(dir.path()), ["full.png", "tiny.xml"]);
+    let mut command = Command::new("unshare");
+    if !is_root() {
+        command.arg("--map-root-user");
+    }
+    let o = command
+        .args(["--mount", "sh", "-c", &script])
+        .current_dir(dir.path())
+        .env_remove("DISPLAY")
+        .output()
+        .expect("unshare runs");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(
+        err.starts_with("full/out.png: No space left on device"),
+        "{err}"
+    );
+    // No temporary file left, the old image as it was.
+    assert!(err.ends_with("filler\nout.png\nold\n"), "{err}");
 }
 
 #[test]

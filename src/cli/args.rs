@@ -298,10 +298,11 @@ struct StudyFlags {
 // `clap_message`).
 
 fn threads(text: &str) -> Result<usize, String> {
+    let max = rayoflight::render::max_threads();
     text.parse()
         .ok()
-        .filter(|&n| n >= 1)
-        .ok_or_else(|| "expects an integer >= 1".to_owned())
+        .filter(|n| (1..=max).contains(n))
+        .ok_or_else(|| format!("expects an integer from 1 to {max} (four per core)"))
 }
 
 fn runs(text: &str) -> Result<usize, String> {
@@ -602,7 +603,10 @@ mod tests {
     fn numbers_are_checked() {
         assert_eq!(
             message(p(&["s.xml", "--threads", "0"])),
-            "--threads expects an integer >= 1, not \"0\""
+            format!(
+                "--threads expects an integer from 1 to {} (four per core), not \"0\"",
+                rayoflight::render::max_threads()
+            )
         );
         assert_eq!(
             message(p(&["s.xml", "--aa", "17"])),

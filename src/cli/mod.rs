@@ -116,6 +116,9 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     // --set: in memory only, the scene file is never written.
     edit::apply(&mut edited, &r.edits).map_err(refused(&scene_path))?;
     let scene = edited.scene();
+    // The output can take this image: a folder that exists and is
+    // writable, a format that holds its size, no special file in the way.
+    output::check_target(&out, scene.camera.width, scene.camera.height).map_err(fail)?;
     let start = Instant::now();
     // `auto`: the exact options this scene needs (the reference image),
     // unless a study method is asked for.

@@ -21,7 +21,7 @@
 //! compares what it gets with the text it last read or wrote, which the
 //! watcher cannot know.
 
-use crate::output::through_links;
+use crate::files::through_links;
 use crate::scene::{self, LoadError, Scene};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};

@@ -28,6 +28,14 @@ use crate::scene::Scene;
 use image::RgbImage;
 use rayon::prelude::*;
 
+/// The most render threads a render may ask for: four per core, at most
+/// 1024. More cannot go faster, and asking the system for a billion
+/// threads would only spend minutes failing to start them.
+pub fn max_threads() -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (4 * cores).min(1024)
+}
+
 /// Largest `--aa` factor (N×N samples per pixel).
 pub const MAX_AA: u32 = 16;
 
@@ -135,6 +143,8 @@ pub enum RenderError {
     AntiAliasing(u32),
     #[error("thread count must be at least 1")]
     NoThreads,
+    #[error("{0} render threads is more than this machine can use (at most {max})", max = max_threads())]
+    TooManyThreads(usize),
     #[error("cannot start {threads} render threads: {source}")]
     ThreadPool {
         threads: usize,
@@ -148,10 +158,11 @@ impl RenderOptions {
         if !(1..=MAX_AA).contains(&self.aa) {
             return Err(RenderError::AntiAliasing(self.aa));
         }
-        if self.threads == Some(0) {
-            return Err(RenderError::NoThreads);
+        match self.threads {
+            Some(0) => Err(RenderError::NoThreads),
+            Some(n) if n > max_threads() => Err(RenderError::TooManyThreads(n)),
+            _ => Ok(()),
         }
-        Ok(())
     }
 }
 

@@ -57,6 +57,9 @@ pub enum LoadErrorKind {
     /// The path names a directory.
     #[error("is a directory, not a scene file")]
     IsDirectory,
+    /// The path names a FIFO, a device or a socket.
+    #[error("is {kind}, not a scene file")]
+    NotAFile { kind: &'static str },
     /// The file is larger than [`MAX_FILE_BYTES`](super::MAX_FILE_BYTES).
     #[error("the file is {size} bytes, more than the limit of {limit} bytes")]
     FileTooLarge { size: u64, limit: u64 },

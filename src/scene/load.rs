@@ -54,7 +54,8 @@ const SCALE_ATTRS: &[&str] = &["factor", "x", "y", "z"];
 ///
 /// The size is checked from the file's metadata before reading (and again
 /// while reading, should the file grow): above [`MAX_FILE_BYTES`] it is
-/// refused. A directory, an unreadable file or one that is not UTF-8 gives an
+/// refused. A directory, a special file (FIFO, device, socket: refused
+/// before opening it), an unreadable file or one that is not UTF-8 gives an
 /// error without a position.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
     load_with_text(path).map(|(_, scene)| scene)
@@ -80,6 +81,10 @@ pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
     let meta = fs::metadata(path).map_err(io)?;
     if meta.is_dir() {
         return Err(fail(LoadErrorKind::IsDirectory));
+    }
+    // A FIFO would block until a writer comes, a device may never end.
+    if let Some(kind) = crate::files::special_kind(&meta) {
+        return Err(fail(LoadErrorKind::NotAFile { kind }));
     }
     if meta.len() > MAX_FILE_BYTES {
         return Err(too_large(meta.len()));

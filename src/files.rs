@@ -1,0 +1,65 @@
+//! Facts about the files the core reads and writes that the standard
+//! library leaves to each caller: what kind of special file a path is
+//! (scenes and images must be regular files: a FIFO would block, a device
+//! never ends), and where a chain of symbolic links leads.
+
+use std::fs::Metadata;
+use std::path::{Path, PathBuf};
+
+/// What a file that is neither a regular file nor a directory is, for a
+/// message ("a FIFO"); `None` for a regular file or a directory.
+pub fn special_kind(meta: &Metadata) -> Option<&'static str> {
+    if meta.is_file() || meta.is_dir() {
+        return None;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        let t = meta.file_type();
+        if t.is_fifo() {
+            return Some("a FIFO");
+        }
+        if t.is_char_device() {
+            return Some("a character device");
+        }
+        if t.is_block_device() {
+            return Some("a block device");
+        }
+        if t.is_socket() {
+            return Some("a socket");
+        }
+    }
+    Some("not a regular file")
+}
+
+/// The file `path` names once symbolic links are followed (at most 40, as
+/// the kernel does); a dangling link gives the path it points to.
+pub fn through_links(path: &Path) -> PathBuf {
+    let mut p = path.to_owned();
+    for _ in 0..40 {
+        let Ok(target) = std::fs::read_link(&p) else {
+            break;
+        };
+        p = match p.parent() {
+            Some(dir) => dir.join(target),
+            None => target,
+        };
+    }
+    p
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn special_files_are_named() {
+        let kind = |p: &str| special_kind(&std::fs::metadata(p).unwrap());
+        assert_eq!(kind("/dev/null"), Some("a character device"));
+        assert_eq!(kind("/"), None);
+        let dir = tempfile::tempdir().unwrap();
+        let file = dir.path().join("f");
+        std::fs::write(&file, "x").unwrap();
+        assert_eq!(special_kind(&std::fs::metadata(&file).unwrap()), None);
+    }
+}
