@@ -105,7 +105,7 @@ fn coarse_passes_come_first_for_large_images() {
             _ => None,
         })
         .collect();
-    assert_eq!(scales, [8, 2, 1]);
+    assert_eq!(scales, [8, 4, 1]);
 }
 
 #[test]

@@ -34,6 +34,10 @@ pub enum Dirty {
 }
 
 impl Region {
+    pub fn area(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
     /// The smallest region holding both.
     fn union(self, other: Region) -> Region {
         let x = self.x.min(other.x);
@@ -50,9 +54,10 @@ impl Region {
 }
 
 impl Dirty {
-    /// Past this many regions in one frame, the rest join the last one
-    /// (tiles come roughly in reading order: a band of rows, still far
-    /// less than the whole image).
+    /// Past this many regions in one frame, a new one joins the region it
+    /// grows least (tiles come in bands: neighbours join into a band, and
+    /// a band at the top never joins one at the bottom into the whole
+    /// image).
     const MAX_REGIONS: usize = 64;
 
     pub fn add(&mut self, region: Region) {
@@ -63,18 +68,28 @@ impl Dirty {
             Dirty::Whole => {}
             Dirty::Nothing => *self = Dirty::Regions(vec![region]),
             Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => {
-                if let Some(last) = list.last_mut() {
-                    *last = last.union(region);
+                let growth = |r: &Region| r.union(region).area() - r.area();
+                if let Some(nearest) = list.iter_mut().min_by_key(|r| growth(r)) {
+                    *nearest = nearest.union(region);
                 }
             }
             Dirty::Regions(list) => list.push(region),
         }
     }
+
+    /// Pixels to upload.
+    pub fn area(&self, whole: u64) -> u64 {
+        match self {
+            Dirty::Nothing => 0,
+            Dirty::Regions(list) => list.iter().map(Region::area).sum(),
+            Dirty::Whole => whole,
+        }
+    }
 }
 
 /// Pixels converted and uploaded per frame while the whole picture goes up
-/// band by band: about 10 ms of work on the development machine.
-pub const BAND_PIXELS: usize = 1 << 21;
+/// band by band: a few milliseconds of work on the development machine.
+pub const BAND_PIXELS: usize = 1 << 20;
 
 /// The texture of the full-size picture.
 #[derive(Default)]
@@ -97,15 +112,17 @@ impl PictureTexture {
     }
 
     /// Uploads what changed in `image` and, while the whole picture is
-    /// going up, its next band. A texture of another size is replaced by a
-    /// blank one of the image's size, filled band by band.
-    pub fn update(&mut self, ctx: &egui::Context, image: &RgbImage, dirty: Dirty) {
+    /// going up, its next band. `cleared`: the image is a new black one
+    /// (but for `dirty`), and the texture a new black one with it. A
+    /// texture of another size is otherwise replaced by a black one filled
+    /// band by band.
+    pub fn update(&mut self, ctx: &egui::Context, image: &RgbImage, cleared: bool, dirty: Dirty) {
         let (w, h) = image.dimensions();
         let size = [w as usize, h as usize];
         let handle = match &mut self.handle {
-            Some(t) if t.size() == size => t,
+            Some(t) if t.size() == size && !cleared => t,
             _ => {
-                self.next_band = Some(0);
+                self.next_band = (!cleared).then_some(0);
                 let blank = ColorImage::filled(size, Color32::BLACK);
                 self.handle
                     .insert(ctx.load_texture("render", blank, TextureOptions::NEAREST))
@@ -165,23 +182,56 @@ fn upload(texture: &mut TextureHandle, image: &RgbImage, r: Region) {
 mod tests {
     use super::*;
 
+    fn tile(x: u32, y: u32) -> Region {
+        Region {
+            x,
+            y,
+            width: 32,
+            height: 32,
+        }
+    }
+
+    #[test]
+    fn many_tiles_join_their_neighbours_not_the_whole_image() {
+        // A frame's worth of tiles of two passes, far apart: the end of
+        // one at the bottom of a 4000² image, the start of the next at
+        // the top.
+        let mut dirty = Dirty::Nothing;
+        let mut painted = 0;
+        for k in 0..100 {
+            dirty.add(tile(k * 32, 3968));
+            dirty.add(tile(k * 32, 0));
+            painted += 2 * 32 * 32;
+        }
+        let Dirty::Regions(list) = &dirty else {
+            panic!("regions")
+        };
+        assert_eq!(list.len(), 64);
+        // Not one rectangle from the top to the bottom: about what was
+        // painted.
+        assert!(dirty.area(4000 * 4000) <= 2 * painted, "{}", dirty.area(0));
+    }
+
     #[test]
     fn a_whole_picture_goes_up_in_bands() {
         let ctx = egui::Context::default();
         let mut texture = PictureTexture::default();
-        // 2048 wide: 1024 rows a band, three bands for 2500 rows.
-        let image = RgbImage::new(2048, 2500);
+        // 1024 wide: 1024 rows a band, three bands for 2500 rows.
+        let image = RgbImage::new(1024, 2500);
         let mut frames = 0;
-        texture.update(&ctx, &image, Dirty::Whole);
+        texture.update(&ctx, &image, false, Dirty::Whole);
         frames += 1;
         assert!(!texture.complete(), "one band is not the whole picture");
         while !texture.complete() {
-            texture.update(&ctx, &image, Dirty::Nothing);
+            texture.update(&ctx, &image, false, Dirty::Nothing);
             frames += 1;
         }
         assert_eq!(frames, 3);
         // A small picture goes up at once.
-        texture.update(&ctx, &RgbImage::new(100, 60), Dirty::Whole);
+        texture.update(&ctx, &RgbImage::new(100, 60), false, Dirty::Whole);
+        assert!(texture.complete());
+        // A new black picture needs no upload at all.
+        texture.update(&ctx, &RgbImage::new(4000, 4000), true, Dirty::Nothing);
         assert!(texture.complete());
     }
 }

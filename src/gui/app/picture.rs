@@ -48,8 +48,9 @@ impl Default for View {
 impl RayOfLightApp {
     pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
         egui::CentralPanel::default().show(ui, |ui| {
-            let dirty = self.preview.take_dirty();
-            self.texture.update(ui.ctx(), self.preview.image(), dirty);
+            let (cleared, dirty) = self.preview.take_dirty();
+            self.texture
+                .update(ui.ctx(), self.preview.image(), cleared, dirty);
             // A coarse pass shows at its own size, stretched, and stays on
             // screen until the finer picture is wholly uploaded.
             let coarse_dirty = self.preview.take_coarse_dirty();
