@@ -20,12 +20,12 @@ use std::path::{Path, PathBuf};
 
 pub const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
-                  [--threads N] [--aa N] [--method NAME] [--no-gui]
+                  [--threads N] [--aa N] [--method NAME] [--no-gui] [--quiet]
        rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]… [-out FILE]
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
-       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov]
-       rayoflight study [--out DIR] [--runs K] [--threads N] [scene.xml…]
+       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--quiet]
+       rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]
        rayoflight --help | --version";
 
 /// The top-level `--help`, written by hand: it shows the brief's
@@ -48,6 +48,8 @@ Options:
   --method NAME      render with a study method instead of auto (default,
                      auto, f32, textbook, draft, …; see docs/study.md)
   --no-gui           never open a window (the headless build never does)
+  -q, --quiet        no progress bar (one shows on a terminal for renders
+                     over a second: percentage, rays/s, time left)
   -h, --help         this help ('rayoflight SUBCOMMAND --help' for each one)
   -V, --version      the version
 
@@ -109,6 +111,8 @@ pub struct RenderArgs {
     pub method: Option<Method>,
     /// `--set`: values changed in memory before rendering, in order.
     pub edits: Vec<EditArg>,
+    /// `--quiet`: no progress bar.
+    pub quiet: bool,
 }
 
 /// `rayoflight edit`: what to change in a scene file, and where to write it.
@@ -196,6 +200,9 @@ struct RenderFlags {
     /// Render with this value changed, in memory only.
     #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
     set: Vec<(String, String)>,
+    /// No progress bar on stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Subcommand, Debug)]
@@ -276,6 +283,9 @@ struct BenchFlags {
     /// Do not render with POV-Ray, even where it is installed.
     #[arg(long)]
     no_pov: bool,
+    /// No progress bar on stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 #[derive(Args, Debug)]
@@ -292,6 +302,9 @@ struct StudyFlags {
     /// Scene files to study [default: the built-in study scenes]
     #[arg(value_name = "SCENE")]
     scenes: Vec<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(short, long)]
+    quiet: bool,
 }
 
 // Value parsers. Their messages complete "--flag …, not "value"" (see
@@ -387,12 +400,14 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             runs: b.runs,
             csv: b.csv,
             pov: !b.no_pov,
+            quiet: b.quiet,
         }),
         Some(Sub::Study(s)) => Command::Study(super::study::StudyArgs {
             out: s.out,
             runs: s.runs,
             threads: s.threads,
             scenes: s.scenes,
+            quiet: s.quiet,
         }),
     })
 }
@@ -416,6 +431,7 @@ fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
         aa: r.aa,
         method: r.method,
         edits,
+        quiet: r.quiet,
     })
 }
 

@@ -2,6 +2,7 @@
 //! when it is installed, thread scaling, cost against object count and
 //! peak memory. Prints a table on stdout and optionally writes a CSV.
 
+use super::progress::Steps;
 use rayoflight::render::{self, RenderOptions, RenderStats};
 use rayoflight::scene::{self, Scene};
 use rayoflight::{bench, output, pov};
@@ -16,6 +17,8 @@ pub struct BenchArgs {
     pub runs: usize,
     pub csv: Option<PathBuf>,
     pub pov: bool,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
 /// One measured configuration: a CSV row.
@@ -38,8 +41,15 @@ struct PovRun {
     max_diff: u8,
 }
 
-/// Runs the whole bench; `out` receives the report as it goes.
-pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
+/// Runs the whole bench; the report goes to stdout as it comes, a progress
+/// bar (`steps`) to stderr.
+pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
+    let out = |text: &str| steps.print(text);
+    let mut done = 0;
+    let mut step = |name: &str| {
+        steps.step(done, name);
+        done += 1;
+    };
     let mut rows = Vec::new();
     let pov_version = if args.pov { povray_version() } else { None };
     out(&format!(
@@ -64,7 +74,11 @@ pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
     for s in &bench::SCENES {
         sets.push((s.name.into(), s.scene().map_err(|e| e.to_string())?));
     }
+    let counts = [1, 2, 4, 8, 16];
+    let sizes = [10, 100, 1_000, 10_000, 100_000];
+    steps.set_total((sets.len() + (sets.len() - 1) * counts.len() + sizes.len() + 1) as u64);
     for (name, scene) in &sets {
+        step(name);
         let (median, stats, image) = time_render(scene, args.threads, args.runs)?;
         let pov = match pov_version {
             Some(_) => Some(pov_render(scene, args.threads, args.runs, &image)?),
@@ -87,7 +101,6 @@ pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
     }
 
     out("\nThread scaling (ms, and speed-up over 1 thread)\n");
-    let counts = [1, 2, 4, 8, 16];
     out(&format!("{:<14}", "scene"));
     for t in counts {
         out(&format!(
@@ -100,6 +113,7 @@ pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         out(&format!("{name:<14}"));
         let mut one = None;
         for t in counts {
+            step(&format!("{name}, {t} threads"));
             let (median, stats, _) = time_render(scene, t, args.runs)?;
             let base = *one.get_or_insert(median);
             out(&format!(
@@ -132,7 +146,8 @@ pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
         "spheres", "ms", "x n=10", "ms / log2(n)"
     ));
     let mut first = None;
-    for n in [10, 100, 1_000, 10_000, 100_000] {
+    for n in sizes {
+        step(&format!("{n} spheres"));
         let text = bench::spheres_on_floor(n, 800, 600);
         let scene = scene::parse(&text, Path::new("generated.xml")).map_err(|e| e.to_string())?;
         let (median, stats, _) = time_render(&scene, args.threads, args.runs)?;
@@ -159,6 +174,7 @@ pub fn run(args: &BenchArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
     }
 
     out("\nPeak memory, 100 000 spheres at 1600x1200 (XML text, parse, prepare, render)\n");
+    step("peak memory");
     match peak_memory(100_000, 1600, 1200, args.threads)? {
         Some((beyond, image_mb)) => {
             out(&format!(

@@ -6,6 +6,7 @@
 mod args;
 mod bench;
 mod edit;
+mod progress;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
@@ -76,16 +77,14 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             }
             Ok(())
         }
-        Command::Bench(args) => bench::run(&args, &mut |text| {
-            let _ = write!(std::io::stdout(), "{text}");
-            let _ = std::io::stdout().flush();
-        })
-        .map_err(Failure::Error),
-        Command::Study(args) => study::run(&args, &mut |text| {
-            let _ = write!(std::io::stdout(), "{text}");
-            let _ = std::io::stdout().flush();
-        })
-        .map_err(Failure::Error),
+        Command::Bench(args) => {
+            let steps = progress::Steps::new(0, progress::wanted(args.quiet));
+            bench::run(&args, &steps).map_err(Failure::Error)
+        }
+        Command::Study(args) => {
+            let steps = progress::Steps::new(0, progress::wanted(args.quiet));
+            study::run(&args, &steps).map_err(Failure::Error)
+        }
         Command::Render(r) => render_scene(r),
     }
 }
@@ -131,8 +130,14 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
         aa: r.aa.unwrap_or(options.aa),
         ..options
     };
-    let image = render::render(scene, &options).map_err(fail)?;
+    let counted = render::Progress::default();
+    let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
+        render::render_watched(scene, &options, &render::Cancel::never(), &counted)
+    });
     let elapsed = start.elapsed();
+    let (image, _) = rendered
+        .map_err(fail)?
+        .ok_or_else(|| Failure::Error("the render was cancelled".to_owned()))?;
     output::save(&image, &out).map_err(fail)?;
     if r.time {
         print_line(&format!("render: {} ns", elapsed.as_nanos()));

@@ -4,6 +4,7 @@
 //! and, for each failing case, DIR/fail-<scene>-<method>.png (method |
 //! reference | difference ×8).
 
+use super::progress::Steps;
 use rayoflight::study::chart;
 use rayoflight::{output, study};
 use std::path::PathBuf;
@@ -18,10 +19,14 @@ pub struct StudyArgs {
     pub threads: Option<usize>,
     /// User scenes; empty means the built-in ones.
     pub scenes: Vec<PathBuf>,
+    /// No progress bar.
+    pub quiet: bool,
 }
 
-/// Runs the study; `out` receives the report as it goes.
-pub fn run(args: &StudyArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
+/// Runs the study; the report goes to stdout as it comes, a progress bar
+/// (`steps`: one step per scene and method) to stderr.
+pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
+    let out = |text: &str| steps.print(text);
     let scenes = if args.scenes.is_empty() {
         study::builtin_scenes()
     } else {
@@ -46,6 +51,8 @@ pub fn run(args: &StudyArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
     ));
     let start = Instant::now();
     let mut picture_error = None;
+    steps.set_total((scenes.len() * methods.len()) as u64);
+    let mut done = 0;
     let rows = study::run(
         &scenes,
         &methods,
@@ -70,6 +77,8 @@ pub fn run(args: &StudyArgs, out: &mut dyn FnMut(&str)) -> Result<(), String> {
                 r.within1,
                 if r.failed { "FAILED" } else { "" }
             ));
+            done += 1;
+            steps.step(done, &format!("{} {}", r.scene, r.method));
         },
     )
     .map_err(|e| e.to_string())?;

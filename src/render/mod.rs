@@ -247,8 +247,9 @@ fn render_all(
                     width: TILE_SIZE.min(width - x),
                     height: band_height,
                 };
-                rays += prepared.render_tile_into(&tile, cancel, &mut pixels)?;
-                progress.add(u64::from(tile.width) * u64::from(tile.height));
+                let traced = prepared.render_tile_into(&tile, cancel, &mut pixels)?;
+                rays += traced;
+                progress.add(u64::from(tile.width) * u64::from(tile.height), traced);
                 let tile_row = tile.width as usize * 3;
                 for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
                     let start = r * row_bytes + x as usize * 3;

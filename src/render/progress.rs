@@ -1,7 +1,7 @@
 //! How far a render is, for whoever shows it while it runs (the app's
 //! status bar during an export, a progress bar on a terminal): pixels done
-//! out of the image's, counted once per tile with one relaxed atomic add,
-//! and the time left estimated from the pace so far.
+//! out of the image's and rays traced, counted once per tile with relaxed
+//! atomic adds, and the time left estimated from the pace so far.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Duration;
@@ -11,18 +11,28 @@ use std::time::Duration;
 pub struct Progress {
     done: AtomicU64,
     total: AtomicU64,
+    /// Rays traced so far.
+    rays: AtomicU64,
 }
 
 impl Progress {
     /// Starts counting a render of `total` pixels.
     pub(crate) fn start(&self, total: u64) {
         self.done.store(0, Ordering::Relaxed);
+        self.rays.store(0, Ordering::Relaxed);
         self.total.store(total, Ordering::Relaxed);
     }
 
-    /// `pixels` more are done.
-    pub(crate) fn add(&self, pixels: u64) {
+    /// `pixels` more are done, tracing `rays`.
+    pub(crate) fn add(&self, pixels: u64, rays: u64) {
         self.done.fetch_add(pixels, Ordering::Relaxed);
+        self.rays.fetch_add(rays, Ordering::Relaxed);
+    }
+
+    /// Rays traced so far (as [`RenderStats::rays`](super::RenderStats)
+    /// counts them).
+    pub fn rays(&self) -> u64 {
+        self.rays.load(Ordering::Relaxed)
     }
 
     /// Pixels done and in all (0 in all before the render starts).
@@ -73,7 +83,8 @@ mod tests {
         let p = Progress::default();
         assert_eq!(p.fraction(), 0.0);
         p.start(8);
-        p.add(2);
+        p.add(2, 5);
+        assert_eq!(p.rays(), 5);
         assert_eq!(p.fraction(), 0.25);
         assert_eq!(p.left(Duration::from_secs(1)), Some(Duration::from_secs(3)));
     }
