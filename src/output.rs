@@ -327,6 +327,28 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         && !meta.is_file()
         && !meta.is_dir()
     {
+        // A FIFO nobody reads would block the open forever: probe it
+        // without blocking first. The probe stays open until the bytes are
+        // written, so that the reader does not see the end of the data
+        // when it closes.
+        #[cfg(unix)]
+        let _probe = if std::os::unix::fs::FileTypeExt::is_fifo(&meta.file_type()) {
+            use std::os::unix::fs::OpenOptionsExt;
+            Some(
+                std::fs::OpenOptions::new()
+                    .write(true)
+                    .custom_flags(libc::O_NONBLOCK)
+                    .open(path)
+                    .map_err(|e| match e.raw_os_error() {
+                        Some(libc::ENXIO) => {
+                            io_error(std::io::Error::other("a FIFO that no program is reading"))
+                        }
+                        _ => io_error(e),
+                    })?,
+            )
+        } else {
+            None
+        };
         let mut file = std::fs::OpenOptions::new()
             .write(true)
             .open(path)
@@ -514,6 +536,36 @@ mod tests {
         let err = write_atomic(&path, b"c").unwrap_err().to_string();
         assert!(err.contains("read-only"), "{err}");
         assert_eq!(std::fs::read(&path).unwrap(), b"b");
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_fifo_nobody_reads_is_refused_at_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let fifo = dir.path().join("pipe");
+        assert!(
+            std::process::Command::new("mkfifo")
+                .arg(&fifo)
+                .status()
+                .unwrap()
+                .success()
+        );
+        let err = write_atomic(&fifo, b"x").unwrap_err().to_string();
+        assert!(err.ends_with("a FIFO that no program is reading"), "{err}");
+        // With a reader, the bytes go through.
+        let reader = std::thread::spawn({
+            let fifo = fifo.clone();
+            move || std::fs::read(fifo).unwrap()
+        });
+        let start = std::time::Instant::now();
+        loop {
+            match write_atomic(&fifo, b"hello") {
+                Ok(()) => break,
+                Err(_) if start.elapsed().as_secs() < 5 => std::thread::yield_now(),
+                Err(e) => panic!("{e}"),
+            }
+        }
+        assert_eq!(reader.join().unwrap(), b"hello");
     }
 
     #[cfg(unix)]

@@ -19,8 +19,14 @@ use std::time::{Duration, Instant};
 /// Runs the binary headless in `dir`; fails the test if it has not ended
 /// within `limit` (it is killed: a hang must not hang the suite).
 fn run_within(dir: &Path, args: &[&OsStr], limit: Duration) -> Output {
+    // Renders never open a window; subcommands never do anyway.
+    let headless: &[&str] = if args.first().is_some_and(|a| *a == "edit") {
+        &[]
+    } else {
+        &["--no-gui"]
+    };
     let mut child = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
-        .arg("--no-gui")
+        .args(headless)
         .args(args)
         .current_dir(dir)
         .env_remove("DISPLAY")
@@ -107,6 +113,21 @@ fn fifos_and_devices_are_refused_before_opening_them() {
         1,
         "pipe.png: is a FIFO, not an image file",
     );
+    // The edited text to a FIFO nobody reads: refused, not blocked on.
+    let o = run_within(
+        dir.path(),
+        &args(&[
+            "edit",
+            "tiny.xml",
+            "--set",
+            "model.depth=3",
+            "-out",
+            "pipe.png",
+        ]),
+        Duration::from_secs(5),
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(stderr(&o), "pipe.png: a FIFO that no program is reading\n");
     // /dev/zero never ends: refused from its metadata, not read.
     refused(
         dir.path(),

@@ -76,7 +76,10 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     }
     let counts = [1, 2, 4, 8, 16];
     let sizes = [10, 100, 1_000, 10_000, 100_000];
-    steps.set_total((sets.len() + (sets.len() - 1) * counts.len() + sizes.len() + 1) as u64);
+    let formats = ["png", "gif", "jpg", "webp"];
+    steps.set_total(
+        (sets.len() + (sets.len() - 1) * counts.len() + sizes.len() + 1 + formats.len()) as u64,
+    );
     for (name, scene) in &sets {
         step(name);
         let (median, stats, image) = time_render(scene, args.threads, args.runs)?;
@@ -196,6 +199,40 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         None => out("not measurable here (needs Linux /proc)\n"),
     }
 
+    out("\nEncoding a 4096x4096 render of the example (ms, and against PNG)\n");
+    let mut example = sets[0].1.clone();
+    (example.camera.width, example.camera.height) = (4096, 4096);
+    let (_, _, image) = time_render(&example, args.threads, 1)?;
+    let mut png = None;
+    for ext in formats {
+        step(&format!("encode {ext}"));
+        let format =
+            output::format_for(Path::new(&format!("x.{ext}"))).map_err(|e| e.to_string())?;
+        let median = median_of(args.runs, || {
+            let start = Instant::now();
+            output::encode(&image, format).map_err(|e| e.to_string())?;
+            Ok(start.elapsed())
+        })?;
+        let base = *png.get_or_insert(median);
+        out(&format!(
+            "{ext:<6} {:>10.1} {:>8.2}x\n",
+            ms(median),
+            median.as_secs_f64() / base.as_secs_f64()
+        ));
+        rows.push(Row {
+            section: "encode",
+            scene: format!("example-4096.{ext}"),
+            width: 4096,
+            height: 4096,
+            threads: 1,
+            objects: example.objects.len(),
+            median,
+            stats: RenderStats::default(),
+            pov: None,
+            peak_mb: None,
+        });
+    }
+
     if let Some(path) = &args.csv {
         output::write_atomic(path, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
         out(&format!("\nCSV written to {}\n", path.display()));
@@ -294,9 +331,8 @@ fn time_render(
         .num_threads(threads)
         .build()
         .map_err(|e| e.to_string())?;
-    let mut times = Vec::with_capacity(runs);
     let mut last = None;
-    for _ in 0..runs.max(1) {
+    let median = median_of(runs, || {
         let start = Instant::now();
         let result = pool.install(|| {
             render::render_with_stats(
@@ -307,12 +343,24 @@ fn time_render(
                 },
             )
         });
-        times.push(start.elapsed());
+        let elapsed = start.elapsed();
         last = Some(result.map_err(|e| e.to_string())?);
-    }
-    times.sort();
+        Ok(elapsed)
+    })?;
     let (image, stats) = last.ok_or("no run")?;
-    Ok((times[times.len() / 2], stats, image))
+    Ok((median, stats, image))
+}
+
+/// The median of `runs` (at least one) timings by `run`.
+fn median_of(
+    runs: usize,
+    mut run: impl FnMut() -> Result<Duration, String>,
+) -> Result<Duration, String> {
+    let mut times = (0..runs.max(1))
+        .map(|_| run())
+        .collect::<Result<Vec<_>, _>>()?;
+    times.sort();
+    Ok(times[times.len() / 2])
 }
 
 fn povray_version() -> Option<String> {
