@@ -7,11 +7,11 @@
 use rayoflight::render::{self, RenderOptions};
 use rayoflight::scene;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 mod common;
-use common::Rng;
+use common::{Rng, env_or};
 
 const NUMBERS: &[&str] = &[
     "1e308",
@@ -65,13 +65,7 @@ const SNIPPETS: &[&str] = &[
 ];
 
 fn corpus() -> Vec<Vec<u8>> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("fuzz/corpus exists")
-        .map(|e| e.unwrap().path())
-        .collect();
-    files.sort();
-    let inputs: Vec<Vec<u8>> = files.iter().map(|f| std::fs::read(f).unwrap()).collect();
+    let inputs = common::fuzz_corpus();
     assert!(inputs.len() >= 50, "the corpus is there");
     inputs
 }
@@ -160,13 +154,6 @@ fn exercise(data: &[u8]) {
         );
         let _ = scene::splice::to_xml(&s);
     }
-}
-
-fn env_or(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
 }
 
 #[test]

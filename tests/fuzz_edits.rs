@@ -9,11 +9,11 @@
 
 mod common;
 
-use common::{Rng, files_in};
+use common::{Rng, env_or, files_in};
 use rayoflight::scene::edit::{Edit, Edited, Field, Item, NewElement};
 use rayoflight::scene::{self, splice};
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 const VALUES: &[&str] = &[
@@ -188,27 +188,15 @@ fn exercise(text: &str, args: &[Arg]) -> bool {
     true
 }
 
+/// The corpus scenes that load, as text.
 fn corpus() -> Vec<String> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
-        .expect("fuzz/corpus exists")
-        .map(|e| e.unwrap().path())
-        .collect();
-    files.sort();
-    let texts: Vec<String> = files
-        .iter()
-        .filter_map(|f| std::fs::read_to_string(f).ok())
+    let texts: Vec<String> = common::fuzz_corpus()
+        .into_iter()
+        .filter_map(|bytes| String::from_utf8(bytes).ok())
         .filter(|t| scene::parse(t, Path::new("c.xml")).is_ok())
         .collect();
     assert!(texts.len() >= 20, "the corpus has scenes that load");
     texts
-}
-
-fn env_or(name: &str, default: u64) -> u64 {
-    std::env::var(name)
-        .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(default)
 }
 
 fn describe(args: &[Arg]) -> String {

@@ -76,3 +76,23 @@ pub fn files_in(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
+
+/// The fuzz corpus (`fuzz/corpus/`), in file-name order: each file's bytes.
+pub fn fuzz_corpus() -> Vec<Vec<u8>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus");
+    let mut files: Vec<std::path::PathBuf> = fs::read_dir(&dir)
+        .expect("fuzz/corpus exists")
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files.iter().map(|f| fs::read(f).unwrap()).collect()
+}
+
+/// A number from the environment (the fuzzers' seconds and seed), or
+/// `default`.
+pub fn env_or(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
