@@ -55,6 +55,21 @@ fn app(path: &Path) -> Harness<'static, RayOfLightApp> {
     harness
 }
 
+/// The app on `path` once its first full picture is on screen: a click
+/// or a drag before it would land on the blank placeholder (a loaded CI
+/// machine takes longer than a few frames to render even a tiny scene).
+fn ready(path: &Path) -> Harness<'static, RayOfLightApp> {
+    let mut harness = app(path);
+    let start = Instant::now();
+    while !matches!(harness.state().preview().state(), RenderState::Done { .. }) {
+        assert!(start.elapsed() < Duration::from_secs(20), "no picture");
+        harness.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    harness.run_steps(2);
+    harness
+}
+
 fn file() -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("scene.xml");
@@ -117,7 +132,7 @@ fn close(a: DVec3, b: DVec3) -> bool {
 #[test]
 fn a_drag_orbits_the_camera_by_the_expected_angle_and_undoes_exactly() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     let original = harness.state().document().scene().clone();
     drag(
         &mut harness,
@@ -143,7 +158,7 @@ fn a_drag_orbits_the_camera_by_the_expected_angle_and_undoes_exactly() {
 #[test]
 fn shift_drag_pans_and_the_wheel_dollies_as_one_step() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     let start = pose(&harness);
     drag(
         &mut harness,
@@ -184,7 +199,7 @@ fn shift_drag_pans_and_the_wheel_dollies_as_one_step() {
 #[test]
 fn a_click_without_a_drag_still_selects() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     assert!(harness.query_by_label("Remove object").is_none());
     harness.event(Event::PointerMoved(MIDDLE));
     harness.run_steps(1);
@@ -198,7 +213,7 @@ fn a_click_without_a_drag_still_selects() {
 #[test]
 fn the_saved_view_renders_on_the_command_line_as_on_screen_and_home_returns() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     drag(
         &mut harness,
         MIDDLE,
@@ -320,7 +335,7 @@ fn an_export_shows_its_progress_and_time_left_and_can_be_cancelled() {
 #[test]
 fn dragging_a_light_marker_moves_the_light_in_the_view_plane() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     let start = harness.state().document().scene().lights[0].position;
     // Markers are placed on the picture, which takes its size from the
     // first render: wait for it (a busy machine may be slower than the
@@ -363,7 +378,7 @@ fn dragging_a_light_marker_moves_the_light_in_the_view_plane() {
 #[test]
 fn the_selected_object_is_outlined() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     assert_eq!(harness.state().outline_pixels(), None);
     // The middle of the picture is the green sphere.
     harness.state_mut().pick(16.0, 12.0);
@@ -389,7 +404,7 @@ fn the_selected_object_is_outlined() {
 #[test]
 fn g_moves_the_selected_object_in_the_view_plane_and_esc_puts_it_back() {
     let (_dir, path) = file();
-    let mut harness = app(&path);
+    let mut harness = ready(&path);
     let original = harness.state().document().scene().clone();
     harness.state_mut().pick(16.0, 12.0);
     harness.event(Event::PointerMoved(MIDDLE));
