@@ -89,7 +89,7 @@ impl Preview {
         &self.state
     }
 
-    /// Duration and primary rays of the last complete render.
+    /// Duration and rays traced (primary and reflected) of the last complete render.
     pub fn last_render(&self) -> Option<(Duration, u64)> {
         self.last_render
     }

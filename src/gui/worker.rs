@@ -54,7 +54,7 @@ pub enum Event {
         elapsed: Duration,
         /// Time since the worker took the request (all passes so far).
         since_start: Duration,
-        /// Primary rays traced in this pass.
+        /// Rays traced in this pass, primary and reflected (as `RenderStats`).
         rays: u64,
     },
     /// The render could not run (bad options).
@@ -309,37 +309,26 @@ impl WorkerThread {
                 ..options.clone()
             };
             let prepared = render::prepare(&pass_scene, &pass_options);
-            let tiles = render::tiles(
-                pass_scene.camera.width,
-                pass_scene.camera.height,
-                render::TILE_SIZE,
-            );
             // Tiles are sent from the render threads as they finish.
             let (events, wake) = (&self.events, &self.wake);
-            let render_one = |tile: &Tile| {
-                if let Some(pixels) = render::render_tile(&prepared, tile, cancel) {
-                    let _ = events.send(Event::Tile {
-                        generation,
-                        scale,
-                        tile: *tile,
-                        pixels,
-                    });
-                    wake();
-                }
+            let send_tile = |tile: &Tile, pixels: &[u8]| {
+                let _ = events.send(Event::Tile {
+                    generation,
+                    scale,
+                    tile: *tile,
+                    pixels: pixels.to_vec(),
+                });
+                wake();
             };
-            match &self.pool {
-                Some(pool) => pool.install(|| {
-                    use rayon::prelude::*;
-                    tiles.par_iter().for_each(render_one)
-                }),
-                None => tiles.iter().for_each(render_one),
-            }
-            if cancel.is_cancelled() {
+            let progress = render::Progress::default();
+            let trace = || render::trace_tiles(&prepared, cancel, &progress, None, send_tile);
+            let traced = match &self.pool {
+                Some(pool) => pool.install(trace),
+                None => trace(),
+            };
+            let Some(rays) = traced else {
                 return;
-            }
-            let rays = u64::from(pass_scene.camera.width)
-                * u64::from(pass_scene.camera.height)
-                * u64::from(pass_options.aa).pow(2);
+            };
             self.send(Event::PassFinished {
                 generation,
                 scale,

@@ -2,8 +2,9 @@
 //!
 //! [`prepare`] turns the scene into a [`Prepared`] scene (what tracing needs
 //! and nothing more); [`render_tile`] traces one rectangle of pixels, checking
-//! a [`Cancel`] token once per pixel; [`render`] does the whole image on a
-//! rayon pool ([`render_watched`] counting its [`Progress`]).
+//! a [`Cancel`] token once per pixel; [`trace_tiles`] is the one tile loop
+//! (bands over the rayon pool, counting [`Progress`]) that [`render`] and
+//! the app's worker share.
 //! [`RenderOptions`] holds every method choice; its default is the
 //! contract's reference image. [`navigate`] moves the camera as a
 //! viewport does (orbit, pan, dolly); [`object_ids`] says which object each
@@ -226,18 +227,46 @@ fn render_all(
     progress: &Progress,
 ) -> Option<(RgbImage, RenderStats)> {
     let prepared = prepare(scene, options);
+    let mut image = RgbImage::new(prepared.width(), prepared.height());
+    let rays = trace_tiles(&prepared, cancel, progress, Some(&mut image), |_, _| {})?;
+    Some((image, RenderStats { rays }))
+}
+
+/// The tile loop every front end shares (the CLI's render, the study, the
+/// app's worker): bands of [`TILE_SIZE`] rows spread over the current
+/// rayon pool, each traced tile by tile (so each tile culls once). Each
+/// finished tile is copied into `image` when one is given (its rows in
+/// place, no lock) and handed to `finished` (on a render thread), and
+/// counted in `progress`. Returns the rays traced, or `None` once `cancel`
+/// is set.
+pub fn trace_tiles(
+    prepared: &Prepared,
+    cancel: &Cancel,
+    progress: &Progress,
+    image: Option<&mut RgbImage>,
+    finished: impl Fn(&Tile, &[u8]) + Sync,
+) -> Option<u64> {
+    use rayon::iter::Either;
     let (width, height) = (prepared.width(), prepared.height());
     progress.start(u64::from(width) * u64::from(height));
-    // Bands of TILE_SIZE rows spread over the pool by rayon; each band is
-    // traced tile by tile (so each tile culls once) and copied in place.
-    let mut image = RgbImage::new(width, height);
     let row_bytes = width as usize * 3;
-    let rays = image
-        .par_chunks_mut(row_bytes * TILE_SIZE as usize)
+    let bands = match image {
+        Some(image) => Either::Left(
+            image
+                .par_chunks_mut(row_bytes * TILE_SIZE as usize)
+                .map(Some),
+        ),
+        None => Either::Right(
+            (0..height.div_ceil(TILE_SIZE))
+                .into_par_iter()
+                .map(|_| None),
+        ),
+    };
+    bands
         .enumerate()
-        .map(|(band, rows)| {
+        .map(|(band, mut rows): (usize, Option<&mut [u8]>)| {
             let y = band as u32 * TILE_SIZE;
-            let band_height = (rows.len() / row_bytes) as u32;
+            let band_height = TILE_SIZE.min(height - y);
             let mut pixels = Vec::new();
             let mut rays = 0;
             for x in (0..width).step_by(TILE_SIZE as usize) {
@@ -250,16 +279,18 @@ fn render_all(
                 let traced = prepared.render_tile_into(&tile, cancel, &mut pixels)?;
                 rays += traced;
                 progress.add(u64::from(tile.width) * u64::from(tile.height), traced);
-                let tile_row = tile.width as usize * 3;
-                for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
-                    let start = r * row_bytes + x as usize * 3;
-                    rows[start..start + tile_row].copy_from_slice(src);
+                if let Some(rows) = rows.as_deref_mut() {
+                    let tile_row = tile.width as usize * 3;
+                    for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
+                        let start = r * row_bytes + x as usize * 3;
+                        rows[start..start + tile_row].copy_from_slice(src);
+                    }
                 }
+                finished(&tile, &pixels);
             }
             Some(rays)
         })
-        .sum::<Option<u64>>()?;
-    Some((image, RenderStats { rays }))
+        .sum::<Option<u64>>()
 }
 
 /// Clamps a channel to [0, 1] and rounds it to 8 bits: floor(c·255 + 0.5).
