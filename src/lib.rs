@@ -11,6 +11,8 @@
 //! - [`geometry`]: rays and the ray/sphere and ray/plane intersections.
 //! - [`shading`]: the illumination formulas (ambient, lambert, phong, whitted).
 //! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
+//! - [`request`]: what a front end asks for (method, anti-aliasing,
+//!   threads) resolved into render options, with one precedence.
 //! - [`output`]: writing images atomically, format chosen by extension.
 //! - [`files`]: special files and symbolic links, for reading and writing.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
@@ -32,6 +34,7 @@ pub mod math;
 pub mod output;
 pub mod pov;
 pub mod render;
+pub mod request;
 pub mod scene;
 pub mod shading;
 pub mod study;

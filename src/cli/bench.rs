@@ -4,6 +4,7 @@
 
 use super::progress::Steps;
 use rayoflight::render::{self, RenderOptions, RenderStats};
+use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
 use rayoflight::{bench, output, pov};
 use std::fmt::Write as _;
@@ -322,10 +323,11 @@ fn time_render(
     runs: usize,
 ) -> Result<(Duration, RenderStats, image::RgbImage), String> {
     // What the CLI renders: the options `auto` plans for the scene.
-    let options = RenderOptions {
+    let options = RenderRequest {
         threads: Some(threads),
-        ..render::auto(scene).options
-    };
+        ..RenderRequest::default()
+    }
+    .options(scene);
     // The pool is built once, outside the timing.
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)

@@ -10,6 +10,7 @@ mod progress;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
+use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
 use rayoflight::{output, pov, render, scene};
@@ -119,17 +120,12 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     // writable, a format that holds its size, no special file in the way.
     output::check_target(&out, scene.camera.width, scene.camera.height).map_err(fail)?;
     let start = Instant::now();
-    // `auto`: the exact options this scene needs (the reference image),
-    // unless a study method is asked for.
-    let options = match &r.method {
-        Some(method) => method.options_for(scene),
-        None => render::auto(scene).options,
-    };
-    let options = render::RenderOptions {
+    let options = RenderRequest {
+        method: r.method.clone(),
+        aa: r.aa,
         threads: r.threads,
-        aa: r.aa.unwrap_or(options.aa),
-        ..options
-    };
+    }
+    .options(scene);
     let counted = render::Progress::default();
     let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
         render::render_watched(scene, &options, &render::Cancel::never(), &counted)

@@ -115,12 +115,14 @@ impl RayOfLightApp {
             return;
         }
         let scene = self.doc.scene().clone();
-        // Exports are exact whatever the preview uses: auto's options.
-        let options = RenderOptions {
+        // Exports are exact whatever the preview uses: auto's options, at
+        // the chosen anti-aliasing.
+        let options = crate::request::RenderRequest {
+            method: None,
+            aa: Some(self.aa),
             threads: Some(Worker::default_threads()),
-            aa: self.aa,
-            ..render::auto(&scene).options
-        };
+        }
+        .options(&scene);
         let export = Export {
             path: path.clone(),
             progress: Arc::new(render::Progress::default()),

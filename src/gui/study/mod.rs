@@ -13,6 +13,7 @@ mod plot;
 
 use super::worker::Event;
 use crate::render::{self, Decision, RenderOptions};
+use crate::request::RenderRequest;
 use crate::scene::Scene;
 use crate::study::{self, Method, Row};
 use egui::{Color32, RichText, TextureHandle, TextureOptions};
@@ -58,22 +59,20 @@ impl Default for PreviewMethods {
 }
 
 impl PreviewMethods {
-    /// The options to render `scene` with, `dragging` or not; the preview's
-    /// anti-aliasing `aa` applies where the method does not supersample.
+    /// The options to render `scene` with, `dragging` or not, at the
+    /// preview's anti-aliasing `aa` (View › Anti-aliasing: above 1×1 it is
+    /// asked for and wins over the method's, see [`crate::request`]).
     pub fn options(&self, scene: &Scene, dragging: bool, aa: u32) -> RenderOptions {
         let method = match (&self.dragging, dragging) {
             (Some(fast), true) => fast,
             _ => &self.preview,
         };
-        let options = method.options_for(scene);
-        RenderOptions {
-            aa: if method.supersamples() {
-                options.aa
-            } else {
-                aa
-            },
-            ..options
+        RenderRequest {
+            method: Some(method.clone()),
+            aa: (aa > 1).then_some(aa),
+            threads: None,
         }
+        .options(scene)
     }
 }
 
