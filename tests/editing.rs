@@ -528,11 +528,17 @@ fn defect_11_a_picked_object_opens_once_and_then_folds() {
     harness.state_mut().pick(8.0, 6.0);
     harness.run_steps(3);
     assert!(harness.query_by_label("Remove object").is_some(), "opened");
-    harness.get_by_label("#2 GREEN sphere").click();
+    harness.get_by_label("Edit #2 GREEN sphere").click();
     harness.run_steps(3);
     assert!(
         harness.query_by_label("Remove object").is_none(),
         "the header folds when clicked"
+    );
+    harness.get_by_label("#2 GREEN sphere").click();
+    harness.run_steps(3);
+    assert!(
+        harness.query_by_label("Remove object").is_none(),
+        "a click on the row selects and does not open it again"
     );
 }
 
@@ -711,6 +717,20 @@ fn object_labels_come_from_the_comment_above() {
     doc.apply(Edit::add(doc.scene(), NewElement::Sphere))
         .unwrap();
     assert_eq!(doc.object_label(2), "#3 sphere");
+}
+
+#[test]
+fn the_object_search_finds_by_number_and_by_label() {
+    let (_dir, path) = file_with(SCENE);
+    let doc = Document::open(&path).unwrap();
+    assert_eq!(doc.find_objects("2"), [1]);
+    assert_eq!(doc.find_objects("#3"), [2]);
+    assert_eq!(doc.find_objects("green"), [1]);
+    assert_eq!(doc.find_objects("Sphere"), [0, 1, 2]);
+    assert_eq!(doc.find_objects("#1 red"), [0]);
+    assert_eq!(doc.find_objects("#1 blue"), Vec::<usize>::new());
+    assert_eq!(doc.find_objects("4"), Vec::<usize>::new());
+    assert_eq!(doc.find_objects(""), [0, 1, 2]);
 }
 
 // ----- the property -----

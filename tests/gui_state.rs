@@ -568,3 +568,65 @@ fn the_dragging_method_applies_only_while_dragging() {
     };
     assert_eq!(aa4.options(&scene, true, 1).aa, 4);
 }
+
+/// The object list of a scene of 100 000 spheres: only the rows on screen
+/// are laid out, the search finds an object by its number and by the words
+/// of its label, and a click on a row selects it.
+#[test]
+fn the_object_list_of_a_big_scene_lays_out_only_the_rows_on_screen() {
+    use egui::accesskit::Role;
+    let mut text = String::from("<scene>\n");
+    for i in 1..=100_000 {
+        if i == 76_543 {
+            text.push_str("  <!-- Golden ball, the one to find -->\n");
+        }
+        text.push_str(&format!(
+            "  <sphere><transformation><translate x=\"{i}\" z=\"5\"/></transformation></sphere>\n"
+        ));
+    }
+    text.push_str("  <light x=\"0\" y=\"-3\" z=\"-3\"/>\n");
+    text.push_str("  <camera width=\"16\" height=\"16\" eyeDistance=\"2\"/>\n</scene>\n");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("big.xml");
+    std::fs::write(&path, &text).unwrap();
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(&path).unwrap(),
+        Persisted::in_memory(),
+    );
+    let mut harness = egui_kittest::Harness::builder()
+        .with_size(egui::vec2(1200.0, 800.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    harness.run_steps(2);
+    // The rows laid out this frame: one accessibility node each.
+    let rows = |harness: &egui_kittest::Harness<'_, RayOfLightApp>| {
+        harness
+            .query_all_by(|node| node.label().is_some_and(|l| l.starts_with('#')))
+            .count()
+    };
+    let shown = rows(&harness);
+    assert!(
+        (5..=30).contains(&shown),
+        "{shown} object rows laid out of 100 000"
+    );
+    harness.get_by_label("#1 sphere");
+    assert!(harness.query_by_label("#100000 sphere").is_none());
+
+    // By number (as typed, or with its '#'), then by the words of its label.
+    let label = "#76543 Golden ball sphere";
+    for query in ["76543", "#76543", "golden BALL"] {
+        let field = harness.get_by_role(Role::TextInput);
+        field.focus();
+        harness.run_steps(1);
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+        harness.get_by_role(Role::TextInput).type_text(query);
+        harness.run_steps(2);
+        assert_eq!(rows(&harness), 1, "{query:?} finds one object");
+        harness.get_by_label(label);
+    }
+    harness.get_by_label(label).click();
+    harness.run_steps(2);
+    assert_eq!(harness.state().selected_object(), Some(76_542));
+    harness.get_by_label(&format!("Edit {label}"));
+    assert!(harness.query_by_label("Remove object").is_some());
+}

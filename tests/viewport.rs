@@ -306,8 +306,11 @@ fn an_export_shows_its_progress_and_time_left_and_can_be_cancelled() {
     let mut harness = app(&path);
     harness.state_mut().run(Command::ExportPath);
     harness.run_steps(2);
+    // The dialog's field (the panel's search field is the other one).
     harness
-        .get_by_role(egui::accesskit::Role::TextInput)
+        .get_all_by_role(egui::accesskit::Role::TextInput)
+        .last()
+        .unwrap()
         .type_text(out.to_str().unwrap());
     harness.run_steps(1);
     harness.key_press(egui::Key::Enter);

@@ -893,6 +893,28 @@ impl Undo {
 }
 
 impl Edited {
+    /// Whether this is `scene` as just loaded (`*self ==
+    /// Edited::new(scene.clone())`, without the copy).
+    pub fn is_as_loaded(&self, scene: &Scene) -> bool {
+        let own = |origins: &[Option<usize>], len: usize| {
+            origins.len() == len && origins.iter().enumerate().all(|(k, o)| *o == Some(k))
+        };
+        self.scene == *scene
+            && self.objects.len() == scene.objects.len()
+            && self
+                .objects
+                .iter()
+                .zip(&scene.objects)
+                .enumerate()
+                .all(|(index, (o, object))| {
+                    o.as_ref().is_some_and(|o| {
+                        o.index == index && own(&o.steps, object.transform.steps().len())
+                    })
+                })
+            && own(&self.lights, scene.lights.len())
+            && own(&self.camera_steps, scene.camera.transform.steps().len())
+    }
+
     /// A scene just loaded from a text: every element is its own origin.
     pub fn new(scene: Scene) -> Edited {
         let objects = scene

@@ -47,17 +47,22 @@ fn internal(message: impl Into<String>) -> EditError {
 /// The result parses to `edited`'s scene; every part of `text` that did not
 /// need to change is kept byte for byte.
 pub fn save(text: &str, path: &Path, edited: &Edited) -> Result<String, EditError> {
-    let original = parse(text, path).map_err(|e| EditError::Parse(Box::new(e)))?;
-    if *edited == Edited::new(original.clone()) {
-        return Ok(text.to_owned());
-    }
-    let doc = Doc::scan(text)?;
-    let mut editor = Editor {
-        doc: &doc,
-        splices: Vec::new(),
+    // The scanned text and its scene are dropped before the new text is
+    // built and parsed: on a big file each is as large as the text or more.
+    let splices = {
+        let original = parse(text, path).map_err(|e| EditError::Parse(Box::new(e)))?;
+        if edited.is_as_loaded(&original) {
+            return Ok(text.to_owned());
+        }
+        let doc = Doc::scan(text, usize::MAX)?;
+        let mut editor = Editor {
+            doc: &doc,
+            splices: Vec::new(),
+        };
+        editor.scene(&original, edited)?;
+        editor.splices
     };
-    editor.scene(&original, edited)?;
-    let out = apply(text, editor.splices)?;
+    let out = apply(text, splices)?;
     match parse(&out, path) {
         Ok(scene) if &scene == edited.scene() => Ok(out),
         Ok(_) => Err(internal(
@@ -107,7 +112,9 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
 /// any punctuation ("RED sphere" for `<!-- RED sphere, left -->`). `None`
 /// where no comment touches the object.
 pub fn object_labels(text: &str) -> Vec<Option<String>> {
-    let Ok(doc) = Doc::scan(text) else {
+    // The root and its children are all it needs: the objects' own
+    // elements are not kept (a million objects hold five million).
+    let Ok(doc) = Doc::scan(text, 1) else {
         return Vec::new();
     };
     doc.children_named(doc.root, &["sphere", "plane"])
@@ -302,14 +309,14 @@ fn wrap(name: &str, attrs: &str, inner: Lines) -> Lines {
 
 /// One attribute: its name and the byte range of its raw value, between the
 /// quotes.
-struct AttrSpan {
-    name: String,
+struct AttrSpan<'t> {
+    name: &'t str,
     value: Range<usize>,
 }
 
 /// One element of the text, with byte offsets into the whole text.
-struct Node {
-    name: String,
+struct Node<'t> {
+    name: &'t str,
     /// Offset of the `<` of the start tag.
     start: usize,
     /// Offset just past the `>` of the start tag.
@@ -318,11 +325,11 @@ struct Node {
     empty: bool,
     /// The end tag `</x>`; `tag_end..tag_end` for an empty element.
     end: Range<usize>,
-    attrs: Vec<AttrSpan>,
+    attrs: Vec<AttrSpan<'t>>,
     children: Vec<usize>,
 }
 
-impl Node {
+impl Node<'_> {
     /// Offset just past the whole element.
     fn elem_end(&self) -> usize {
         if self.empty {
@@ -341,14 +348,16 @@ struct Doc<'t> {
     nl: &'static str,
     /// One level of indentation, as the file writes it.
     unit: String,
-    nodes: Vec<Node>,
+    nodes: Vec<Node<'t>>,
     root: usize,
     /// Every comment, `<!--` to `-->`, in text order.
     comments: Vec<Range<usize>>,
 }
 
 impl<'t> Doc<'t> {
-    fn scan(text: &'t str) -> Result<Doc<'t>, EditError> {
+    /// Scans `text`, keeping the elements down to `depth` levels below the
+    /// root (the root alone at 0); deeper ones are only checked.
+    fn scan(text: &'t str, depth: usize) -> Result<Doc<'t>, EditError> {
         let body = text.strip_prefix('\u{feff}').unwrap_or(text);
         let base = text.len() - body.len();
         let offset = |slice: &[u8]| -> Result<usize, EditError> {
@@ -365,8 +374,9 @@ impl<'t> Doc<'t> {
         config.expand_empty_elements = false;
         config.trim_text(false);
 
-        let mut nodes: Vec<Node> = Vec::new();
-        let mut stack: Vec<usize> = Vec::new();
+        let mut nodes: Vec<Node<'t>> = Vec::new();
+        // The open elements, `None` for those too deep to keep.
+        let mut stack: Vec<Option<usize>> = Vec::new();
         let mut root = None;
         let mut comments = Vec::new();
         loop {
@@ -385,7 +395,9 @@ impl<'t> Doc<'t> {
                         .and_then(|before| before.rfind('<'))
                         .ok_or_else(|| internal("end tag without '<'"))?;
                     let id = stack.pop().ok_or_else(|| internal("unbalanced end tag"))?;
-                    nodes[id].end = at..position;
+                    if let Some(id) = id {
+                        nodes[id].end = at..position;
+                    }
                     continue;
                 }
                 Event::Eof => break,
@@ -396,15 +408,22 @@ impl<'t> Doc<'t> {
                 }
                 _ => continue,
             };
+            if stack.len() > depth {
+                if !empty {
+                    stack.push(None);
+                }
+                continue;
+            }
             let id = nodes.len();
-            nodes.push(element(&start, empty, position, &offset)?);
+            nodes.push(element(text, &start, empty, position, &offset)?);
             match stack.last() {
-                Some(&parent) => nodes[parent].children.push(id),
+                Some(&Some(parent)) => nodes[parent].children.push(id),
+                Some(None) => return Err(internal("an element inside one not kept")),
                 None if root.is_none() => root = Some(id),
                 None => return Err(internal("a second root element")),
             }
             if !empty {
-                stack.push(id);
+                stack.push(Some(id));
             }
         }
         let root = match (root, stack.is_empty()) {
@@ -513,7 +532,7 @@ impl<'t> Doc<'t> {
         Some(self.line_start(first))
     }
 
-    fn node(&self, id: usize) -> &Node {
+    fn node(&self, id: usize) -> &Node<'t> {
         &self.nodes[id]
     }
 
@@ -531,19 +550,27 @@ impl<'t> Doc<'t> {
             .children
             .iter()
             .copied()
-            .filter(|&c| names.contains(&self.node(c).name.as_str()))
+            .filter(|&c| names.contains(&self.node(c).name))
             .collect()
     }
 }
 
 /// A node for a start tag read at `tag_end` (the offset past its `>`).
-fn element(
+fn element<'t>(
+    text: &'t str,
     start: &BytesStart<'_>,
     empty: bool,
     tag_end: usize,
     offset: &impl Fn(&[u8]) -> Result<usize, EditError>,
-) -> Result<Node, EditError> {
+) -> Result<Node<'t>, EditError> {
+    // Names as slices of the text: no allocation per element.
+    let slice = |bytes: &[u8]| -> Result<&'t str, EditError> {
+        let from = offset(bytes)?;
+        text.get(from..from + bytes.len())
+            .ok_or_else(|| internal("a name outside the text"))
+    };
     let name = start.name();
+    let name_text = slice(name.as_ref())?;
     let at = offset(name.as_ref())?
         .checked_sub(1)
         .ok_or_else(|| internal("start tag without '<'"))?;
@@ -557,12 +584,12 @@ fn element(
         };
         let from = offset(value)?;
         attrs.push(AttrSpan {
-            name: String::from_utf8_lossy(attr.key.as_ref()).into_owned(),
+            name: slice(attr.key.as_ref())?,
             value: from..from + value.len(),
         });
     }
     Ok(Node {
-        name: String::from_utf8_lossy(name.as_ref()).into_owned(),
+        name: name_text,
         start: at,
         tag_end,
         empty,
@@ -740,7 +767,7 @@ impl Editor<'_, '_> {
                 self.remove(node);
             }
         }
-        let name = doc.node(parent).name.clone();
+        let name = doc.node(parent).name;
         let mut i = 0;
         while i < origins.len() {
             if origins[i].is_some() {
@@ -756,7 +783,7 @@ impl Editor<'_, '_> {
                 Some(k) => self.insert_before(nodes[k], &items),
                 None => match nodes.last() {
                     Some(&node) => self.insert_after(node, &items),
-                    None => self.insert(parent, &name, None, &items)?,
+                    None => self.insert(parent, name, None, &items)?,
                 },
             }
             i = run_end;
@@ -963,7 +990,7 @@ impl Editor<'_, '_> {
         let start = n.start + 1..n.start + 1 + old;
         let end = (!n.empty).then(|| n.end.start + 2..n.end.start + 2 + old);
         for range in std::iter::once(start).chain(end) {
-            if self.doc.text.get(range.clone()) != Some(n.name.as_str()) {
+            if self.doc.text.get(range.clone()) != Some(n.name) {
                 return Err(internal("a tag name not where expected"));
             }
             self.splice(range, name);
@@ -1142,7 +1169,7 @@ mod tests {
             "\u{feff}<scene><!-- x --><camera width='2' height=\"3\" eyeDistance=\"1.0\"/></scene>",
         ] {
             let s = scene(text);
-            let doc = Doc::scan(text).unwrap();
+            let doc = Doc::scan(text, usize::MAX).unwrap();
             let mut editor = Editor {
                 doc: &doc,
                 splices: Vec::new(),
@@ -1183,11 +1210,14 @@ mod tests {
 
     #[test]
     fn indentation_unit_is_detected() {
-        assert_eq!(Doc::scan(crate::EXAMPLE_SCENE).unwrap().unit, " ");
+        assert_eq!(
+            Doc::scan(crate::EXAMPLE_SCENE, usize::MAX).unwrap().unit,
+            " "
+        );
         let tabs = "<scene>\n\t<camera width=\"1\" height=\"1\" eyeDistance=\"1\"/>\n</scene>\n";
-        assert_eq!(Doc::scan(tabs).unwrap().unit, "\t");
+        assert_eq!(Doc::scan(tabs, usize::MAX).unwrap().unit, "\t");
         let flat = "<scene><camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>";
-        assert_eq!(Doc::scan(flat).unwrap().unit, "  ");
+        assert_eq!(Doc::scan(flat, usize::MAX).unwrap().unit, "  ");
     }
 
     #[test]

@@ -260,6 +260,11 @@ impl RayOfLightApp {
         &self.doc
     }
 
+    /// The object selected in the picture or the panel.
+    pub fn selected_object(&self) -> Option<usize> {
+        self.selection.object
+    }
+
     pub fn preview(&self) -> &Preview {
         &self.preview
     }

@@ -236,6 +236,8 @@ impl Document {
         let text = splice::save(&self.source, path, &self.edited)?;
         crate::output::write_atomic(path, text.as_bytes())?;
         self.disk = Some(fingerprint(text.as_bytes()));
+        // Gone before the scene is copied: on a big file both are large.
+        drop(text);
         self.saved = self.edited.clone();
         self.log.clear();
         self.dirty = false;

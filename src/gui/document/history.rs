@@ -184,7 +184,9 @@ impl Document {
         }
     }
 
+    /// After every change of the scene on screen (and of the labels).
     pub(super) fn update_dirty(&mut self) {
+        self.generation = super::next_generation();
         self.dirty = self.scene() != self.saved.scene();
         if !self.dirty {
             // Back to what the file holds: nothing to replay onto it.

@@ -33,6 +33,7 @@ use history::Step;
 use std::collections::BTreeMap;
 use std::hash::{Hash, Hasher};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::scene::edit::{Edit, EditError, Edited, Field, Owner, Undo};
 use crate::scene::merge::{self, Choice, Conflict};
@@ -78,6 +79,16 @@ pub struct Document {
     conflict: Option<PendingMerge>,
     /// The first words of the comment above each object of `source`.
     labels: Vec<Option<String>>,
+    /// Changes with every change of the scene on screen or of `labels`
+    /// (see [`Document::generation`]).
+    generation: u64,
+}
+
+/// A fresh value for [`Document::generation`], never given before in this
+/// process: two documents never share one.
+fn next_generation() -> u64 {
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
 }
 
 impl Document {
@@ -97,6 +108,7 @@ impl Document {
             error: None,
             placeholder: false,
             conflict: None,
+            generation: next_generation(),
         }
     }
 
@@ -194,20 +206,68 @@ impl Document {
     /// The panel's name for object `n`: `#2 RED sphere` when a comment
     /// directly above it in the file starts with "RED", else `#2 sphere`.
     pub fn object_label(&self, n: usize) -> String {
-        let shape = self
-            .scene()
-            .objects
-            .get(n)
-            .map_or("object", |o| o.shape.name());
-        let words = self
-            .edited
-            .object_origin(n)
-            .and_then(|k| self.labels.get(k).cloned().flatten());
-        match words {
+        let shape = self.object_shape(n);
+        match self.comment_words(n) {
             Some(w) if w.to_lowercase().ends_with(shape) => format!("#{} {w}", n + 1),
             Some(w) => format!("#{} {w} {shape}", n + 1),
             None => format!("#{} {shape}", n + 1),
         }
+    }
+
+    fn object_shape(&self, n: usize) -> &'static str {
+        self.scene()
+            .objects
+            .get(n)
+            .map_or("object", |o| o.shape.name())
+    }
+
+    /// The first words of the comment above object `n` in the file.
+    fn comment_words(&self, n: usize) -> Option<&str> {
+        let k = self.edited.object_origin(n)?;
+        self.labels.get(k)?.as_deref()
+    }
+
+    /// The objects (in order) that `query` finds: each of its words, case
+    /// aside, is either a number, `12` or `#12`, that is the object's
+    /// number or a word of its label, or a part of its label
+    /// ([`Document::object_label`]'s words after the number). An empty
+    /// query finds every object.
+    pub fn find_objects(&self, query: &str) -> Vec<usize> {
+        let words: Vec<(String, Option<usize>)> = query
+            .split_whitespace()
+            .map(|w| {
+                let number = w.strip_prefix('#').unwrap_or(w);
+                let number = number
+                    .bytes()
+                    .all(|b| b.is_ascii_digit())
+                    .then(|| number.parse::<usize>().ok())
+                    .flatten();
+                (w.to_lowercase(), number)
+            })
+            .collect();
+        (0..self.scene().objects.len())
+            .filter(|&n| {
+                let shape = self.object_shape(n);
+                let comment = self.comment_words(n).map(str::to_lowercase);
+                let comment = comment.as_deref().unwrap_or_default();
+                words.iter().all(|(word, number)| match number {
+                    Some(k) => {
+                        *k == n + 1
+                            || comment
+                                .split_whitespace()
+                                .any(|c| c == word.trim_start_matches('#'))
+                    }
+                    None => comment.contains(word.as_str()) || shape.contains(word.as_str()),
+                })
+            })
+            .collect()
+    }
+
+    /// A number that changes whenever the scene on screen or the objects'
+    /// labels change, and that no other document has: what is computed
+    /// from them (the panel's search) is good while it stays the same.
+    pub fn generation(&self) -> u64 {
+        self.generation
     }
 
     /// The scene as the file holds it (after the last read or write).

@@ -9,8 +9,15 @@
 //! pressing Enter in a field without typing changes nothing. The widgets
 //! for one value, and the rule that only a real change is an edit, are in
 //! `form`; this file lays out the scene's sections.
+//!
+//! A scene may hold a million objects, so the objects are a list of
+//! one-line rows of which only those on screen are laid out each frame,
+//! with a search field above it (by number or by the words of the label,
+//! computed again only when the query or the scene changes), and the
+//! selected object's values below it.
 
 use std::ops::RangeInclusive;
+use std::sync::Arc;
 
 use super::document::Document;
 use crate::math::{TransformStep, Vec3};
@@ -112,6 +119,43 @@ fn camera_editor(ui: &mut Ui, form: &mut Form<'_>) {
     transform_editor(ui, form, Owner::Camera, "camera-transform");
 }
 
+/// Rows of the object list shown at once; the rest scroll.
+const LIST_ROWS: f32 = 12.0;
+
+/// The object list's search field and what it last found, kept in egui's
+/// memory between frames: finding is a pass over every object, done again
+/// only when the query or the document's generation changes.
+#[derive(Clone, Default)]
+struct Search {
+    query: String,
+    /// The query and generation `found` was computed for, and the objects
+    /// it found (`None` for an empty query: every object).
+    found: Option<(String, u64, Arc<Vec<usize>>)>,
+}
+
+impl Search {
+    /// The objects the query finds, from the cache when still good.
+    fn found(&mut self, doc: &Document) -> Option<Arc<Vec<usize>>> {
+        let query = self.query.trim();
+        if query.is_empty() {
+            self.found = None;
+            return None;
+        }
+        let fresh = self
+            .found
+            .as_ref()
+            .is_some_and(|(q, g, _)| q == query && *g == doc.generation());
+        if !fresh {
+            let found = Arc::new(doc.find_objects(query));
+            self.found = Some((query.to_owned(), doc.generation(), found));
+        }
+        self.found.as_ref().map(|(_, _, f)| f.clone())
+    }
+}
+
+/// The objects as a list of one-line rows, of which only those on screen
+/// are laid out (a scene may hold a million), a search field above it, and
+/// below it the selected object's values.
 fn objects_editor(ui: &mut Ui, form: &mut Form<'_>, doc: &Document, selection: &mut Selection) {
     let scene = form.scene;
     ui.horizontal(|ui| {
@@ -123,36 +167,85 @@ fn objects_editor(ui: &mut Ui, form: &mut Form<'_>, doc: &Document, selection: &
             form.edit(Edit::add(scene, NewElement::Plane));
         }
     });
-    for object in 0..scene.objects.len() {
-        let is_selected = selection.object == Some(object);
-        let title = egui::RichText::new(doc.object_label(object));
-        let mut header = CollapsingHeader::new(if is_selected { title.strong() } else { title })
-            .id_salt(("object", object));
-        // A pick in the picture opens the object once; after that the
-        // header folds and the panel scrolls as the user likes.
-        let reveal = is_selected && selection.reveal;
-        if reveal {
-            header = header.open(Some(true));
+    let id = ui.make_persistent_id("object-search");
+    let mut search: Search = ui.data_mut(|d| d.get_temp(id)).unwrap_or_default();
+    ui.horizontal(|ui| {
+        let label = ui.label("Find");
+        ui.add(
+            egui::TextEdit::singleline(&mut search.query)
+                .hint_text("#12 or words of the label")
+                .desired_width(f32::INFINITY),
+        )
+        .labelled_by(label.id);
+    });
+    let found = search.found(doc);
+    ui.data_mut(|d| d.insert_temp(id, search));
+    let rows = found.as_ref().map_or(scene.objects.len(), |f| f.len());
+    let object_at = |row: usize| found.as_ref().map_or(Some(row), |f| f.get(row).copied());
+
+    let row_height = ui.spacing().interact_size.y;
+    let mut list = egui::ScrollArea::vertical()
+        .id_salt("object-list")
+        .max_height((row_height + ui.spacing().item_spacing.y) * LIST_ROWS)
+        .auto_shrink([false, true]);
+    // A pick in the picture scrolls its row into view once.
+    let picked = selection.object.filter(|_| selection.reveal);
+    if let Some(object) = picked {
+        let row = found
+            .as_ref()
+            .map_or(Some(object), |f| f.binary_search(&object).ok());
+        if let Some(row) = row {
+            let spaced = row_height + ui.spacing().item_spacing.y;
+            let top = (row as f32 - (LIST_ROWS / 2.0).floor()).max(0.0) * spaced;
+            list = list.vertical_scroll_offset(top);
         }
-        let response = header.show(ui, |ui| {
-            color_editor(ui, form, |channel| Field::Color { object, channel });
-            material_editor(ui, form, object);
-            transform_editor(
-                ui,
-                form,
-                Owner::Object(object),
-                ("object-transform", object),
-            );
-            if ui.small_button("Remove object").clicked() {
-                form.edit(Edit::Remove(Item::Object(object)));
+    }
+    list.show_rows(ui, row_height, rows, |ui, range| {
+        for row in range {
+            let Some(object) = object_at(row) else {
+                continue;
+            };
+            let is_selected = selection.object == Some(object);
+            let button = egui::Button::selectable(is_selected, doc.object_label(object));
+            if ui
+                .add_sized([ui.available_width(), row_height], button)
+                .clicked()
+            {
+                selection.object = Some(object);
             }
-        });
-        if response.header_response.clicked() {
-            selection.object = Some(object);
         }
-        if reveal {
-            response.header_response.scroll_to_me(None);
+    });
+    if found.as_ref().is_some_and(|f| f.is_empty()) {
+        ui.weak("No object found");
+    }
+
+    let Some(object) = selection.object.filter(|&o| o < scene.objects.len()) else {
+        return;
+    };
+    let title = egui::RichText::new(format!("Edit {}", doc.object_label(object))).strong();
+    let mut header = CollapsingHeader::new(title)
+        .id_salt(("object", object))
+        .default_open(true);
+    // A pick in the picture opens the object once; after that the header
+    // folds as the user likes.
+    if selection.reveal {
+        header = header.open(Some(true));
+    }
+    let response = header.show(ui, |ui| {
+        color_editor(ui, form, |channel| Field::Color { object, channel });
+        material_editor(ui, form, object);
+        transform_editor(
+            ui,
+            form,
+            Owner::Object(object),
+            ("object-transform", object),
+        );
+        if ui.small_button("Remove object").clicked() {
+            form.edit(Edit::Remove(Item::Object(object)));
         }
+    });
+    if selection.reveal {
+        response.header_response.scroll_to_me(None);
     }
 }
 
