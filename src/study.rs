@@ -349,10 +349,13 @@ pub fn measure_image(
     let mut result = None;
     for _ in 0..runs.max(1) {
         let start = Instant::now();
-        let options = RenderOptions {
+        // As the command line renders with --method (planning included).
+        let options = crate::request::RenderRequest {
+            method: Some(method.clone()),
+            aa: None,
             threads,
-            ..method.options_for(&scene.scene)
-        };
+        }
+        .options(&scene.scene);
         let (image, stats) = render_or_stop(&scene.scene, &options, cancel)?;
         times.push(start.elapsed());
         result.get_or_insert((image, stats));
