@@ -110,11 +110,14 @@ impl RayOfLightApp {
             ));
             return;
         }
-        if let Err(e) = crate::output::format_for(&path) {
+        let scene = self.doc.scene().clone();
+        // The same checks as the command line's, before any rendering: the
+        // folder, the format and whether it holds the image's size.
+        if let Err(e) = crate::output::check_target(&path, scene.camera.width, scene.camera.height)
+        {
             self.notify(e.to_string());
             return;
         }
-        let scene = self.doc.scene().clone();
         // Exports are exact whatever the preview uses: auto's options, at
         // the chosen anti-aliasing.
         let options = crate::request::RenderRequest {
