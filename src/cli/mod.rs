@@ -79,11 +79,11 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             Ok(())
         }
         Command::Bench(args) => {
-            let steps = progress::Steps::new(0, progress::wanted(args.quiet));
+            let steps = progress::Steps::new(progress::wanted(args.quiet));
             bench::run(&args, &steps).map_err(Failure::Error)
         }
         Command::Study(args) => {
-            let steps = progress::Steps::new(0, progress::wanted(args.quiet));
+            let steps = progress::Steps::new(progress::wanted(args.quiet));
             study::run(&args, &steps).map_err(Failure::Error)
         }
         Command::Render(r) => render_scene(r),

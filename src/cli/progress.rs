@@ -85,8 +85,9 @@ pub struct Steps {
 }
 
 impl Steps {
-    pub fn new(total: u64, show: bool) -> Steps {
-        let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::hidden())
+    /// A bar for steps not yet counted ([`Steps::set_total`]).
+    pub fn new(show: bool) -> Steps {
+        let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::hidden())
             .with_style(style("{bar:30} {pos}/{len} {msg}"));
         Steps {
             bar,
