@@ -332,7 +332,10 @@ mod tests {
                     material: Material::default(),
                     transform: Transform::default(),
                 },
-            ],
+            ]
+            .into_iter()
+            .map(std::sync::Arc::new)
+            .collect(),
             lights: vec![Light {
                 position: DVec3::new(1.0, -4.0, -2.0),
                 color: DVec3::new(2.0, 1.0, 0.5),

@@ -17,6 +17,7 @@ fn moved(transform: &Transform, offset: DVec3) -> Transform {
 fn translate_scene(scene: &Scene, offset: DVec3) -> Scene {
     let mut s = scene.clone();
     for o in &mut s.objects {
+        let o = std::sync::Arc::make_mut(o);
         o.transform = moved(&o.transform, offset);
     }
     for l in &mut s.lights {

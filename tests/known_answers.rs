@@ -62,7 +62,7 @@ fn back_plane() -> Object {
 
 fn scene(objects: Vec<Object>, illumination: Illumination, depth: u32) -> Scene {
     Scene {
-        objects,
+        objects: objects.into_iter().map(std::sync::Arc::new).collect(),
         lights: vec![Light {
             position: DVec3::new(0.0, -3.0, 1.0),
             color: DVec3::ONE,

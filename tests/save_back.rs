@@ -131,9 +131,9 @@ fn unchanged_scenes_are_kept_byte_for_byte() {
 #[test]
 fn an_edit_undone_restores_the_values_and_the_rest() {
     let mut s = parse(ODD);
-    s.objects[0].color.x = 0.25;
+    std::sync::Arc::make_mut(&mut s.objects[0]).color.x = 0.25;
     let out = save(ODD, &s);
-    s.objects[0].color.x = 1.0;
+    std::sync::Arc::make_mut(&mut s.objects[0]).color.x = 1.0;
     let back = save(&out, &s);
     // The value comes back as Rust writes it; everything else is identical.
     assert_diff(
@@ -149,8 +149,8 @@ fn an_edit_undone_restores_the_values_and_the_rest() {
 #[test]
 fn material_value() {
     let mut s = parse(EXAMPLE);
-    s.objects[1].material.kd = 0.75;
-    s.objects[1].material.m = 1.0; // unchanged: the text keeps "1"
+    std::sync::Arc::make_mut(&mut s.objects[1]).material.kd = 0.75;
+    std::sync::Arc::make_mut(&mut s.objects[1]).material.m = 1.0; // unchanged: the text keeps "1"
     let out = save(EXAMPLE, &s);
     assert_diff(
         EXAMPLE,
@@ -163,7 +163,7 @@ fn material_value() {
 #[test]
 fn colour_keeps_the_spelling_of_the_other_components() {
     let mut s = parse(EXAMPLE);
-    s.objects[1].color.y = 0.125;
+    std::sync::Arc::make_mut(&mut s.objects[1]).color.y = 0.125;
     let out = save(EXAMPLE, &s);
     assert_diff(
         EXAMPLE,
@@ -176,7 +176,7 @@ fn colour_keeps_the_spelling_of_the_other_components() {
 #[test]
 fn colour_in_single_quotes_and_odd_order() {
     let mut s = parse(ODD);
-    s.objects[0].color = Vec3::new(1.0, 0.3, 0.0);
+    std::sync::Arc::make_mut(&mut s.objects[0]).color = Vec3::new(1.0, 0.3, 0.0);
     let out = save(ODD, &s);
     assert_diff(
         ODD,
@@ -298,7 +298,8 @@ fn model_depth_added_as_an_attribute() {
 #[test]
 fn transformation_values_edited_in_place() {
     let mut s = parse(EXAMPLE);
-    s.objects[0].transform = transform(vec![TransformStep::Translate(Vec3::new(2.0, 1.5, -2.0))]);
+    std::sync::Arc::make_mut(&mut s.objects[0]).transform =
+        transform(vec![TransformStep::Translate(Vec3::new(2.0, 1.5, -2.0))]);
     let out = save(EXAMPLE, &s);
     assert_diff(
         EXAMPLE,
@@ -321,7 +322,7 @@ fn transformation_values_edited_in_place() {
 #[test]
 fn transformation_steps_rewritten() {
     let mut s = parse(EXAMPLE);
-    s.objects[1].transform = transform(vec![
+    std::sync::Arc::make_mut(&mut s.objects[1]).transform = transform(vec![
         TransformStep::RotateZ(0.25),
         TransformStep::Scale(Vec3::new(1.0, 2.0, 0.5)),
         TransformStep::Translate(Vec3::new(-2.0, 0.0, -2.0)),
@@ -352,7 +353,7 @@ fn steps_removed_when_emptied_and_transformation_added_when_missing() {
     // Removing every step removes the steps, not the <transformation>
     // element the user did not remove (nor the comments it may hold).
     let mut s = parse(EXAMPLE);
-    s.objects[0].transform = Transform::default();
+    std::sync::Arc::make_mut(&mut s.objects[0]).transform = Transform::default();
     let out = save(EXAMPLE, &s);
     assert_diff(
         EXAMPLE,
@@ -363,7 +364,8 @@ fn steps_removed_when_emptied_and_transformation_added_when_missing() {
     assert!(out.contains(" <transformation>\n </transformation>\n</sphere>"));
 
     let mut s = parse(ODD);
-    s.objects[2].transform = transform(vec![TransformStep::RotateX(1.5)]);
+    std::sync::Arc::make_mut(&mut s.objects[2]).transform =
+        transform(vec![TransformStep::RotateX(1.5)]);
     let out = save(ODD, &s);
     assert_diff(
         ODD,
@@ -384,14 +386,14 @@ fn missing_material_and_colour_are_inserted_in_order() {
     // material: the material goes before the first sibling that ranks after
     // it (color < material < transformation), here the transformation.
     let mut s = parse(ODD);
-    s.objects[0].material.ks = 0.5;
+    std::sync::Arc::make_mut(&mut s.objects[0]).material.ks = 0.5;
     let out = save(ODD, &s);
     assert_diff(ODD, &out, &[], &["\t\t<material ks=\"0.5\"/>"]);
     assert!(out.contains("<!-- red ball -->\n\t\t<material ks=\"0.5\"/>\n\t\t<transformation>"));
 
     // The plane has a material and no colour: the colour goes before it.
     let mut s = parse(ODD);
-    s.objects[2].color = Vec3::new(0.5, 0.5, 0.5);
+    std::sync::Arc::make_mut(&mut s.objects[2]).color = Vec3::new(0.5, 0.5, 0.5);
     let out = save(ODD, &s);
     assert_diff(
         ODD,
@@ -407,7 +409,7 @@ fn missing_material_and_colour_are_inserted_in_order() {
 #[test]
 fn material_attribute_added_to_an_existing_material() {
     let mut s = parse(ODD);
-    s.objects[2].material.kd = 0.9;
+    std::sync::Arc::make_mut(&mut s.objects[2]).material.kd = 0.9;
     let out = save(ODD, &s);
     assert_diff(
         ODD,
@@ -420,8 +422,8 @@ fn material_attribute_added_to_an_existing_material() {
 #[test]
 fn empty_element_opened_for_children() {
     let mut s = parse(ODD);
-    s.objects[1].color = Vec3::new(0.0, 0.0, 1.0);
-    s.objects[1].material.ka = 0.5;
+    std::sync::Arc::make_mut(&mut s.objects[1]).color = Vec3::new(0.0, 0.0, 1.0);
+    std::sync::Arc::make_mut(&mut s.objects[1]).material.ka = 0.5;
     let out = save(ODD, &s);
     assert_diff(
         ODD,
@@ -462,15 +464,16 @@ fn empty_element_opened_for_children() {
 #[test]
 fn shape_change_renames_both_tags() {
     let mut s = parse(EXAMPLE);
-    s.objects[0].shape = Shape::Plane;
+    std::sync::Arc::make_mut(&mut s.objects[0]).shape = Shape::Plane;
     let out = save(EXAMPLE, &s);
     let (removed, added) = diff(EXAMPLE, &out);
     assert_eq!(removed, ["<sphere>", "</sphere>"]);
     assert_eq!(added, ["<plane>", "</plane>"]);
     // An empty element, renamed and opened at once.
     let mut s = parse(ODD);
-    s.objects[1].shape = Shape::Plane;
-    s.objects[1].transform = transform(vec![TransformStep::RotateX(1.0)]);
+    std::sync::Arc::make_mut(&mut s.objects[1]).shape = Shape::Plane;
+    std::sync::Arc::make_mut(&mut s.objects[1]).transform =
+        transform(vec![TransformStep::RotateX(1.0)]);
     let out = save(ODD, &s);
     assert_diff(
         ODD,
@@ -489,21 +492,27 @@ fn shape_change_renames_both_tags() {
 #[test]
 fn objects_and_lights_added_after_the_last_of_their_kind() {
     let mut s = parse(EXAMPLE);
-    s.objects.push(Object {
-        shape: Shape::Plane,
-        color: Vec3::ONE,
-        material: Material::default(),
-        transform: Transform::default(),
-    });
-    s.objects.push(Object {
-        shape: Shape::Sphere,
-        color: Vec3::new(0.5, 0.25, 1.0),
-        material: Material {
-            m: 30.0,
-            ..Material::default()
-        },
-        transform: transform(vec![TransformStep::UniformScale(0.5)]),
-    });
+    s.objects.push(
+        Object {
+            shape: Shape::Plane,
+            color: Vec3::ONE,
+            material: Material::default(),
+            transform: Transform::default(),
+        }
+        .into(),
+    );
+    s.objects.push(
+        Object {
+            shape: Shape::Sphere,
+            color: Vec3::new(0.5, 0.25, 1.0),
+            material: Material {
+                m: 30.0,
+                ..Material::default()
+            },
+            transform: transform(vec![TransformStep::UniformScale(0.5)]),
+        }
+        .into(),
+    );
     s.lights.push(Light {
         position: Vec3::new(0.0, -10.0, 0.0),
         color: Vec3::ONE,
@@ -578,8 +587,8 @@ fn trailing_objects_and_lights_removed_with_their_lines() {
 #[test]
 fn one_line_files_stay_on_one_line() {
     let mut s = parse(FLAT);
-    s.objects[0].material.ka = 0.5;
-    s.objects[1].color = Vec3::new(0.0, 1.0, 0.0);
+    std::sync::Arc::make_mut(&mut s.objects[0]).material.ka = 0.5;
+    std::sync::Arc::make_mut(&mut s.objects[1]).color = Vec3::new(0.0, 1.0, 0.0);
     s.lights[0].color = Vec3::new(0.5, 0.5, 0.5);
     let out = save(FLAT, &s);
     assert_eq!(
@@ -599,7 +608,7 @@ fn one_line_files_stay_on_one_line() {
 #[test]
 fn crlf_and_byte_order_mark_are_kept() {
     let mut s = parse(CRLF);
-    s.objects[0].color = Vec3::new(0.0, 0.5, 0.0);
+    std::sync::Arc::make_mut(&mut s.objects[0]).color = Vec3::new(0.0, 0.5, 0.0);
     s.lights.push(Light {
         position: Vec3::ONE,
         color: Vec3::ONE,
@@ -623,8 +632,8 @@ fn crlf_and_byte_order_mark_are_kept() {
 #[test]
 fn numbers_are_written_to_read_back_exactly() {
     let mut s = parse(EXAMPLE);
-    s.objects[0].material.ka = 0.1 + 0.2;
-    s.objects[0].color.x = 1e-9;
+    std::sync::Arc::make_mut(&mut s.objects[0]).material.ka = 0.1 + 0.2;
+    std::sync::Arc::make_mut(&mut s.objects[0]).color.x = 1e-9;
     s.lights[0].position.x = -1e25;
     s.camera.eye_distance = 1.0 / 3.0;
     save(EXAMPLE, &s);
@@ -642,7 +651,7 @@ fn a_text_that_does_not_load_is_an_error() {
 #[test]
 fn invalid_edited_values_are_an_error() {
     let mut s = parse(EXAMPLE);
-    s.objects[0].material.ka = -1.0;
+    std::sync::Arc::make_mut(&mut s.objects[0]).material.ka = -1.0;
     assert!(matches!(
         rewrite(EXAMPLE, path(), &s),
         Err(EditError::Invalid(_))
@@ -780,7 +789,7 @@ impl Rng {
         match self.below(12) {
             0 if !s.objects.is_empty() => {
                 let i = self.below(s.objects.len());
-                let o = &mut s.objects[i];
+                let o = std::sync::Arc::make_mut(&mut s.objects[i]);
                 match self.below(4) {
                     0 => o.material.ka = self.positive(),
                     1 => o.material.kd = self.positive(),
@@ -790,16 +799,16 @@ impl Rng {
             }
             1 if !s.objects.is_empty() => {
                 let i = self.below(s.objects.len());
-                s.objects[i].color = self.vec(Rng::positive);
+                std::sync::Arc::make_mut(&mut s.objects[i]).color = self.vec(Rng::positive);
             }
             2 if !s.objects.is_empty() => {
                 let i = self.below(s.objects.len());
                 let t = self.transform(&s.objects[i].transform);
-                s.objects[i].transform = t;
+                std::sync::Arc::make_mut(&mut s.objects[i]).transform = t;
             }
             3 if !s.objects.is_empty() => {
                 let i = self.below(s.objects.len());
-                let o = &mut s.objects[i];
+                let o = std::sync::Arc::make_mut(&mut s.objects[i]);
                 o.shape = match o.shape {
                     Shape::Sphere => Shape::Plane,
                     Shape::Plane => Shape::Sphere,
@@ -807,7 +816,7 @@ impl Rng {
             }
             4 => {
                 let o = self.object();
-                s.objects.push(o);
+                s.objects.push(o.into());
             }
             5 => {
                 let n = self.below(s.objects.len() + 1);
@@ -853,7 +862,7 @@ impl Rng {
 
     fn scene(&mut self) -> Scene {
         Scene {
-            objects: (0..self.below(5)).map(|_| self.object()).collect(),
+            objects: (0..self.below(5)).map(|_| self.object().into()).collect(),
             lights: (0..self.below(3)).map(|_| self.light()).collect(),
             camera: Camera {
                 width: 1 + self.below(1000) as u32,
@@ -917,10 +926,18 @@ fn random_edits_touch_only_what_they_change() {
     for _ in 0..200 {
         let mut s = parse(EXAMPLE);
         match rng.below(4) {
-            0 => s.objects[rng.below(2)].material.kd = rng.positive() + 0.01,
+            0 => {
+                std::sync::Arc::make_mut(&mut s.objects[rng.below(2)])
+                    .material
+                    .kd = rng.positive() + 0.01
+            }
             1 => s.lights[0].position.x = rng.signed() + 1e-3,
             2 => s.camera.height = 1 + rng.below(599) as u32,
-            _ => s.objects[rng.below(2)].color.z = rng.positive() + 1e-3,
+            _ => {
+                std::sync::Arc::make_mut(&mut s.objects[rng.below(2)])
+                    .color
+                    .z = rng.positive() + 1e-3
+            }
         }
         let out = save(EXAMPLE, &s);
         let (removed, added) = diff(EXAMPLE, &out);
@@ -938,7 +955,7 @@ fn to_xml_round_trips_the_example() {
     assert!(text.starts_with("<?xml version=\"1.0\"?>\n<scene>\n  <sphere>\n    <color "));
     // And the fresh file is itself a good source for save-back.
     let mut edited = s.clone();
-    edited.objects[0].color.x = 0.9;
+    std::sync::Arc::make_mut(&mut edited.objects[0]).color.x = 0.9;
     save(&text, &edited);
 }
 

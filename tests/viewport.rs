@@ -396,7 +396,11 @@ fn the_selected_object_is_outlined() {
     assert!((4..32 * 24 / 2).contains(&pixels), "{pixels}");
     // The same outline the core's id buffer gives.
     let scene = harness.state().document().scene().clone();
-    let ids = render::object_ids(&scene, 1);
+    let ids = render::object_ids(
+        &render::prepare(&scene, &Default::default()),
+        &scene.camera,
+        1,
+    );
     let expected = (0..ids.height)
         .flat_map(|y| (0..ids.width).map(move |x| (x, y)))
         .filter(|&(x, y)| ids.is_outline(x, y, 0))

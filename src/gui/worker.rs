@@ -14,13 +14,13 @@
 //! (by a newer request or [`Worker::cancel`]), reporting each row as it is
 //! measured.
 
-use crate::render::{self, Cancel, RenderOptions, Tile};
+use crate::render::{self, Cancel, Prepared, RenderOptions, Tile};
 use crate::scene::Scene;
 use crate::study::{self, Row, StudyError, StudyScene, chart};
 use image::RgbImage;
-use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::mpsc::{self, Receiver, Sender};
+use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
@@ -105,9 +105,14 @@ enum Message {
     Quit,
 }
 
+/// The scene the worker prepared last, with its prepared form at full
+/// size: the app picks objects in it rather than preparing the scene again.
+type Latest = Arc<Mutex<Option<(Arc<Scene>, Prepared)>>>;
+
 /// Handle to the worker thread. Dropping it stops the worker promptly.
 pub struct Worker {
     newest: Arc<AtomicU64>,
+    latest: Latest,
     to_worker: Sender<Message>,
     events: Receiver<Event>,
     thread: Option<JoinHandle<()>>,
@@ -118,10 +123,12 @@ impl Worker {
     /// whenever an event is ready (the app passes `request_repaint`).
     pub fn spawn(threads: usize, wake: impl Fn() + Send + Sync + 'static) -> Worker {
         let newest = Arc::new(AtomicU64::new(0));
+        let latest = Latest::default();
         let (to_worker, inbox) = mpsc::channel();
         let (events_tx, events) = mpsc::channel();
         let state = WorkerThread {
             newest: newest.clone(),
+            latest: latest.clone(),
             inbox,
             events: events_tx,
             wake: Arc::new(wake),
@@ -137,6 +144,7 @@ impl Worker {
             .ok();
         Worker {
             newest,
+            latest,
             to_worker,
             events,
             thread,
@@ -196,6 +204,15 @@ impl Worker {
         self.newest.fetch_add(1, Ordering::Relaxed);
     }
 
+    /// `scene` prepared at full size (with the preview's method), if the
+    /// worker prepared it last: the app picks objects in it, as preparing a
+    /// million objects takes a second.
+    pub fn prepared(&self, scene: &Scene) -> Option<Prepared> {
+        let latest = self.latest.lock().ok()?;
+        let (prepared_scene, prepared) = latest.as_ref()?;
+        (**prepared_scene == *scene).then(|| prepared.clone())
+    }
+
     /// The newest generation requested.
     pub fn newest(&self) -> u64 {
         self.newest.load(Ordering::Relaxed)
@@ -226,6 +243,7 @@ impl Drop for Worker {
 
 struct WorkerThread {
     newest: Arc<AtomicU64>,
+    latest: Latest,
     inbox: Receiver<Message>,
     events: Sender<Event>,
     wake: Arc<dyn Fn() + Send + Sync>,
@@ -274,7 +292,7 @@ impl WorkerThread {
     fn render(
         &self,
         generation: u64,
-        scene: &Scene,
+        scene: &Arc<Scene>,
         options: &RenderOptions,
         passes: &[u32],
         cancel: &Cancel,
@@ -288,6 +306,11 @@ impl WorkerThread {
         }
         let (width, height) = (scene.camera.width, scene.camera.height);
         let render_start = Instant::now();
+        // The scene is prepared once; each pass is a view of it.
+        let prepared = render::prepare(scene, options);
+        if let Ok(mut latest) = self.latest.lock() {
+            *latest = Some((Arc::clone(scene), prepared.with_view(&scene.camera, 1)));
+        }
         for &scale in passes {
             let scale = scale.max(1);
             if cancel.is_cancelled() {
@@ -300,15 +323,12 @@ impl WorkerThread {
                 height,
             });
             let start = Instant::now();
-            let mut pass_scene = scene.clone();
-            pass_scene.camera.width = width.div_ceil(scale);
-            pass_scene.camera.height = height.div_ceil(scale);
-            let pass_options = RenderOptions {
-                // Coarse passes are previews: one ray per pixel.
-                aa: if scale == 1 { options.aa } else { 1 },
-                ..options.clone()
-            };
-            let prepared = render::prepare(&pass_scene, &pass_options);
+            let mut camera = scene.camera.clone();
+            camera.width = width.div_ceil(scale);
+            camera.height = height.div_ceil(scale);
+            // Coarse passes are previews: one ray per pixel.
+            let aa = if scale == 1 { options.aa } else { 1 };
+            let prepared = prepared.with_view(&camera, aa);
             // Tiles are sent from the render threads as they finish.
             let (events, wake) = (&self.events, &self.wake);
             let send_tile = |tile: &Tile, pixels: &[u8]| {

@@ -4,8 +4,8 @@
 
 use rayon::prelude::*;
 
-use super::{Prepared, RenderOptions, prepare};
-use crate::scene::Scene;
+use super::Prepared;
+use crate::scene::Camera;
 
 /// The object seen at each pixel of a `width` × `height` picture, row by
 /// row: its index in the scene's object list, or `None` where the ray hits
@@ -46,15 +46,16 @@ impl ObjectIds {
     }
 }
 
-/// The object-id buffer of `scene` at 1/`scale` of its size on each side
-/// (the same view; 1 is full size), computed on rayon's pool.
-pub fn object_ids(scene: &Scene, scale: u32) -> ObjectIds {
+/// The object-id buffer of a prepared scene seen through `camera`, at
+/// 1/`scale` of its size on each side (the same view; 1 is full size),
+/// computed on rayon's pool.
+pub fn object_ids(prepared: &Prepared, camera: &Camera, scale: u32) -> ObjectIds {
     let scale = scale.max(1);
-    let mut small = scene.clone();
-    small.camera.width = scene.camera.width.div_ceil(scale);
-    small.camera.height = scene.camera.height.div_ceil(scale);
-    let prepared: Prepared = prepare(&small, &RenderOptions::default());
-    let (width, height) = (small.camera.width, small.camera.height);
+    let mut small = camera.clone();
+    small.width = camera.width.div_ceil(scale);
+    small.height = camera.height.div_ceil(scale);
+    let prepared = prepared.with_view(&small, 1);
+    let (width, height) = (small.width, small.height);
     let ids = (0..u64::from(width) * u64::from(height))
         .into_par_iter()
         .map(|i| {
@@ -69,13 +70,18 @@ pub fn object_ids(scene: &Scene, scale: u32) -> ObjectIds {
 
 #[cfg(test)]
 mod tests {
+    use super::super::{RenderOptions, prepare};
     use super::*;
     use std::path::Path;
 
     #[test]
     fn each_pixel_holds_the_object_a_click_there_picks() {
         let scene = crate::scene::parse(crate::EXAMPLE_SCENE, Path::new("e.xml")).unwrap();
-        let ids = object_ids(&scene, 4);
+        let ids = object_ids(
+            &prepare(&scene, &RenderOptions::default()),
+            &scene.camera,
+            4,
+        );
         assert_eq!((ids.width, ids.height), (150, 150));
         let mut small = scene.clone();
         small.camera.width = 150;

@@ -14,9 +14,10 @@
 
 use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
 use crate::geometry::{Aabb, Bvh, Primitive, Primitive32, Ray, Ray32};
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color, reflect};
 use glam::DVec3;
+use std::sync::Arc;
 
 /// With fewer bounded primitives than this, a linear scan beats the BVH.
 pub(super) const BVH_THRESHOLD: usize = 8;
@@ -51,9 +52,20 @@ enum PrimitiveRef {
     Plane(usize),
 }
 
-/// What rendering needs, computed once per render.
+/// What rendering needs, computed once per render: the scene's part
+/// ([`World`]), shared by every view of it (the passes of a preview, the
+/// app's picks and outline), and the view (camera rays and rays per pixel).
 #[derive(Debug, Clone)]
 pub struct Prepared {
+    world: Arc<World>,
+    camera: CameraRays,
+    /// Rays per pixel on each side.
+    aa: u32,
+}
+
+/// The part of a prepared scene that does not depend on the view.
+#[derive(Debug)]
+struct World {
     /// Spheres, in the BVH's order when there is one.
     bounded: Vec<Primitive>,
     /// Scene object index of each bounded primitive.
@@ -76,8 +88,6 @@ pub struct Prepared {
     /// Bounding sphere (centre, radius) of each bounded primitive, for the
     /// tile frustum test; empty when there are too many to cull.
     cull_spheres: Vec<(DVec3, f64)>,
-    camera: CameraRays,
-    aa: u32,
     early_stop: bool,
     /// Primary rays of a tile test only what its frustum reaches.
     cull: bool,
@@ -105,7 +115,7 @@ enum Candidates<'a> {
 macro_rules! with_kernel {
     ($p:expr, |$k:ident| $body:expr) => {{
         let p: &Prepared = $p;
-        match (p.precision, p.sphere, p.offset) {
+        match (p.world.precision, p.world.sphere, p.world.offset) {
             (Precision::F64, SphereTest::Stable, Offset::Contract) => {
                 let $k = &Exact::<false, OFFSET_CONTRACT> { fixed: 0.0 };
                 $body
@@ -176,7 +186,7 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
     #[inline]
     fn nearest(&self, p: &Prepared, ray: &Ray, among: Candidates) -> Option<Hit> {
         if TEXTBOOK {
-            p.nearest_with(ray, among, &p.bounded, &p.planes, |q| {
+            p.nearest_with(ray, among, &p.world.bounded, &p.world.planes, |q| {
                 q.intersect_textbook(ray)
             })
         } else {
@@ -225,9 +235,13 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
 
     #[inline]
     fn nearest(&self, p: &Prepared, ray: &Ray32, among: Candidates) -> Option<Hit> {
-        p.nearest_with(&ray.to_f64(), among, &p.bounded32, &p.planes32, |q| {
-            q.intersect::<TEXTBOOK>(ray).map(f64::from)
-        })
+        p.nearest_with(
+            &ray.to_f64(),
+            among,
+            &p.world.bounded32,
+            &p.world.planes32,
+            |q| q.intersect::<TEXTBOOK>(ray).map(f64::from),
+        )
     }
 
     #[inline]
@@ -236,8 +250,8 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
         let t = hit.t as f32;
         let m = ray.at(t);
         let mut n = match hit.primitive {
-            PrimitiveRef::Bounded(k) => p.bounded32[k].normal_at(ray, t),
-            PrimitiveRef::Plane(k) => p.planes32[k].normal_at(ray, t),
+            PrimitiveRef::Bounded(k) => p.world.bounded32[k].normal_at(ray, t),
+            PrimitiveRef::Plane(k) => p.world.planes32[k].normal_at(ray, t),
         };
         if n.dot(ray.dir) > 0.0 {
             n = -n;
@@ -372,7 +386,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         ),
     };
 
-    Prepared {
+    let world = World {
         bounded32,
         planes32,
         precision: options.precision,
@@ -391,14 +405,28 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         depth,
         max_local,
         tail,
-        camera: CameraRays::new(&scene.camera),
-        aa: options.aa.max(1),
         early_stop: options.early_stop,
         cull: options.accelerate,
+    };
+    Prepared {
+        world: Arc::new(world),
+        camera: CameraRays::new(&scene.camera),
+        aa: options.aa.max(1),
     }
 }
 
 impl Prepared {
+    /// The same scene seen through `camera` (its size may differ from the
+    /// scene's: the coarse passes of a preview) with `aa` × `aa` rays per
+    /// pixel. Nothing of the scene is prepared again or copied.
+    pub fn with_view(&self, camera: &Camera, aa: u32) -> Prepared {
+        Prepared {
+            world: Arc::clone(&self.world),
+            camera: CameraRays::new(camera),
+            aa: aa.max(1),
+        }
+    }
+
     pub fn width(&self) -> u32 {
         self.camera.width()
     }
@@ -418,9 +446,13 @@ impl Prepared {
     }
 
     fn nearest_hit_among(&self, ray: &Ray, candidates: Candidates) -> Option<Hit> {
-        self.nearest_with(ray, candidates, &self.bounded, &self.planes, |p| {
-            p.intersect(ray)
-        })
+        self.nearest_with(
+            ray,
+            candidates,
+            &self.world.bounded,
+            &self.world.planes,
+            |p| p.intersect(ray),
+        )
     }
 
     /// The nearest hit among `bounded` and `planes` (the f64 primitives or
@@ -447,17 +479,22 @@ impl Prepared {
         };
         for (k, plane) in planes.iter().enumerate() {
             if let Some(t) = intersect(plane) {
-                consider(&mut best, t, self.plane_objects[k], PrimitiveRef::Plane(k));
+                consider(
+                    &mut best,
+                    t,
+                    self.world.plane_objects[k],
+                    PrimitiveRef::Plane(k),
+                );
             }
         }
-        match (&self.bvh, candidates) {
+        match (&self.world.bvh, candidates) {
             (_, Candidates::Only(list)) => {
                 for &k in list {
                     if let Some(t) = intersect(&bounded[k]) {
                         consider(
                             &mut best,
                             t,
-                            self.bounded_objects[k],
+                            self.world.bounded_objects[k],
                             PrimitiveRef::Bounded(k),
                         );
                     }
@@ -467,12 +504,12 @@ impl Prepared {
                 let t_max = best.map_or(f64::INFINITY, |b| b.t);
                 // Ties between spheres go to the object listed first, as
                 // in a plain scan; a tie with a plane is settled below.
-                let rank = |k: usize| self.bounded_objects[k];
+                let rank = |k: usize| self.world.bounded_objects[k];
                 if let Some((t, k)) = bvh.nearest(ray, t_max, |k| intersect(&bounded[k]), rank) {
                     consider(
                         &mut best,
                         t,
-                        self.bounded_objects[k],
+                        self.world.bounded_objects[k],
                         PrimitiveRef::Bounded(k),
                     );
                 }
@@ -483,7 +520,7 @@ impl Prepared {
                         consider(
                             &mut best,
                             t,
-                            self.bounded_objects[k],
+                            self.world.bounded_objects[k],
                             PrimitiveRef::Bounded(k),
                         );
                     }
@@ -496,8 +533,8 @@ impl Prepared {
     /// The unit geometric normal at a hit.
     fn normal(&self, ray: &Ray, hit: &Hit) -> DVec3 {
         match hit.primitive {
-            PrimitiveRef::Bounded(k) => self.bounded[k].normal_at(ray, hit.t),
-            PrimitiveRef::Plane(k) => self.planes[k].normal_at(ray, hit.t),
+            PrimitiveRef::Bounded(k) => self.world.bounded[k].normal_at(ray, hit.t),
+            PrimitiveRef::Plane(k) => self.world.planes[k].normal_at(ray, hit.t),
         }
     }
 
@@ -517,7 +554,7 @@ impl Prepared {
         // Product of the ks of the surfaces met so far.
         let mut weight = 1.0;
         let mut ray = kernel.primary(primary);
-        for bounce in 0..=self.depth {
+        for bounce in 0..=self.world.depth {
             let among = if bounce == 0 {
                 candidates
             } else {
@@ -527,21 +564,21 @@ impl Prepared {
             let Some(hit) = kernel.nearest(self, &ray, among) else {
                 break; // a miss is black
             };
-            let surface = &self.surfaces[hit.object];
+            let surface = &self.world.surfaces[hit.object];
             let point = kernel.surface(self, &ray, &hit);
             let local = local_color(
-                self.illumination,
+                self.world.illumination,
                 surface.color,
                 &surface.material,
-                &self.lights,
+                &self.world.lights,
                 &point,
             );
             color += weight * local;
             weight *= surface.material.ks;
-            if bounce == self.depth || weight == 0.0 {
+            if bounce == self.world.depth || weight == 0.0 {
                 break;
             }
-            if exact_stop && self.rest_is_invisible(color, weight, self.depth - bounce) {
+            if exact_stop && self.rest_is_invisible(color, weight, self.world.depth - bounce) {
                 break;
             }
             ray = kernel.reflected(&point);
@@ -554,11 +591,11 @@ impl Prepared {
     /// where it is. Every term is ≥ 0, so the final colour lies between
     /// `color` and `color + bound`; equal rounding at both ends settles it.
     fn rest_is_invisible(&self, color: Color, weight: f64, levels: u32) -> bool {
-        let Some(&series) = self.tail.get(levels as usize) else {
+        let Some(&series) = self.world.tail.get(levels as usize) else {
             return false;
         };
         // A hair of margin covers the rounding of the sums themselves.
-        let bound = weight * series * self.max_local * (1.0 + 1e-9) + DVec3::splat(1e-12);
+        let bound = weight * series * self.world.max_local * (1.0 + 1e-9) + DVec3::splat(1e-12);
         let high = color + bound;
         (0..3).all(|c| to_8bit(color[c]) == to_8bit(high[c]))
     }
@@ -580,7 +617,7 @@ impl Prepared {
         let (x, y) = (f64::from(i), f64::from(j));
         if self.aa == 1 {
             let ray = self.camera.ray(x + 0.5, y + 0.5);
-            let c = self.trace(kernel, ray, candidates, self.early_stop, rays);
+            let c = self.trace(kernel, ray, candidates, self.world.early_stop, rays);
             return [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
         }
         // Supersampled: a sample's own rounding says nothing about the
@@ -619,7 +656,7 @@ impl Prepared {
         let candidates = self.tile_candidates(tile);
         let candidates = match &candidates {
             Some(list) => {
-                if list.is_empty() && self.planes.is_empty() {
+                if list.is_empty() && self.world.planes.is_empty() {
                     // Nothing can be hit from this tile: every ray misses.
                     out.resize(tile.width as usize * tile.height as usize * 3, 0);
                     return (!cancel.is_cancelled()).then_some(0);
@@ -629,7 +666,7 @@ impl Prepared {
             None => Candidates::All,
         };
         let mut rays = 0;
-        if self.draft {
+        if self.world.draft {
             // One pixel in four: the top-left of each 2×2 block of the
             // tile is traced, the other three copy it.
             for j in tile.y..tile.y + tile.height {
@@ -667,7 +704,7 @@ impl Prepared {
     /// edges), or `None` when the scene has too many to cull or culling
     /// is off.
     fn tile_candidates(&self, tile: &Tile) -> Option<Vec<usize>> {
-        if !self.cull {
+        if !self.world.cull {
             return None;
         }
         let (x0, y0) = (f64::from(tile.x), f64::from(tile.y));
@@ -701,8 +738,8 @@ impl Prepared {
             if n.dot(centre) < 0.0 { -n } else { n }
         });
         let relative = 1e-9 + 1e-13 / sin_min;
-        if let Some(bvh) = &self.bvh
-            && self.cull_spheres.is_empty()
+        if let Some(bvh) = &self.world.bvh
+            && self.world.cull_spheres.is_empty()
         {
             let mut found = Vec::new();
             return bvh
@@ -715,7 +752,8 @@ impl Prepared {
             planes.iter().all(|n| n.dot(to) >= -slack)
         };
         Some(
-            self.cull_spheres
+            self.world
+                .cull_spheres
                 .iter()
                 .enumerate()
                 .filter(|(_, s)| inside(s))

@@ -17,6 +17,7 @@
 //! never by matching elements up again.
 
 use std::fmt;
+use std::sync::Arc;
 
 use super::load::{MAX_SIDE, NumberError, parse_integer, parse_number};
 use super::{Camera, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, Object, Scene, Shape};
@@ -749,7 +750,7 @@ impl NewElement {
 // ----- lookups -----
 
 fn object_of(scene: &Scene, n: usize) -> Result<&Object, EditError> {
-    scene.objects.get(n).ok_or_else(|| {
+    scene.objects.get(n).map(AsRef::as_ref).ok_or_else(|| {
         path_error(
             Item::Object(n),
             count_message(scene.objects.len(), "object"),
@@ -1153,7 +1154,9 @@ impl Edited {
                     Restore::Object(origin) => origin,
                     _ => None,
                 };
-                self.scene.objects.insert(n, object.as_ref().clone());
+                self.scene
+                    .objects
+                    .insert(n, Arc::new(object.as_ref().clone()));
                 self.objects.insert(
                     n,
                     origin.filter(|o| o.steps.len() == object.transform.steps().len()),
@@ -1210,7 +1213,10 @@ impl Edited {
                 object_of(&self.scene, n)?;
                 let object = self.scene.objects.remove(n);
                 let origin = take(&mut self.objects, n);
-                (Element::Object(Box::new(object)), Restore::Object(origin))
+                (
+                    Element::Object(Box::new(Arc::unwrap_or_clone(object))),
+                    Restore::Object(origin),
+                )
             }
             Item::Light(n) => {
                 light_of(&self.scene, n)?;
@@ -1259,6 +1265,7 @@ fn object_mut(scene: &mut Scene, n: usize) -> Result<&mut Object, EditError> {
     scene
         .objects
         .get_mut(n)
+        .map(Arc::make_mut)
         .ok_or_else(|| path_error(Item::Object(n), "no such object"))
 }
 

@@ -199,7 +199,7 @@ impl<'b> Attrs<'b> {
 /// Everything a `<scene>` gathers before it is checked for completeness.
 #[derive(Default)]
 struct Gathered {
-    objects: Vec<Object>,
+    objects: Vec<std::sync::Arc<Object>>,
     lights: Vec<Light>,
     camera: Option<Camera>,
     model: Option<Model>,
@@ -696,7 +696,7 @@ impl<'a> Parser<'a> {
                     Shape::Plane
                 };
                 let object = self.object(e, shape)?;
-                scene.objects.push(object);
+                scene.objects.push(std::sync::Arc::new(object));
             }
             "light" => {
                 if scene.lights.len() >= self.max_lights {

@@ -315,7 +315,7 @@ pub fn edits_between(from: &Scene, to: &Scene) -> Vec<Edit> {
             edits.push(Edit::Remove(Item::Object(n)));
             edits.push(Edit::Insert(
                 Item::Object(n),
-                Element::Object(Box::new(b.clone())),
+                Element::Object(Box::new(b.as_ref().clone())),
             ));
             continue;
         }
@@ -353,7 +353,7 @@ pub fn edits_between(from: &Scene, to: &Scene) -> Vec<Edit> {
     for (n, object) in to.objects.iter().enumerate().skip(common) {
         edits.push(Edit::Insert(
             Item::Object(n),
-            Element::Object(Box::new(object.clone())),
+            Element::Object(Box::new(object.as_ref().clone())),
         ));
     }
 
@@ -394,7 +394,7 @@ mod tests {
     fn edits_on_values_the_file_did_not_change_apply_silently() {
         let base = example();
         let mut theirs = base.clone();
-        theirs.objects[0].material.kd = 0.9;
+        std::sync::Arc::make_mut(&mut theirs.objects[0]).material.kd = 0.9;
         theirs.lights[0].position.x = 7.0;
         let edits = vec![
             Edit::Set(ka(0), Value::Number(0.5)),
@@ -414,7 +414,7 @@ mod tests {
     fn the_same_value_changed_on_both_sides_is_asked() {
         let base = example();
         let mut theirs = base.clone();
-        theirs.objects[0].material.ka = 0.7;
+        std::sync::Arc::make_mut(&mut theirs.objects[0]).material.ka = 0.7;
         let edits = vec![Edit::Set(ka(0), Value::Number(0.5))];
         let m = merge(&base, &theirs, &edits, &BTreeMap::new());
         assert_eq!(m.conflicts.len(), 1);
@@ -429,7 +429,7 @@ mod tests {
         assert!(m.conflicts.is_empty());
         assert_eq!(m.edited.scene().objects[0].material.ka, 0.5);
         // Both sides set the same value: no conflict.
-        theirs.objects[0].material.ka = 0.5;
+        std::sync::Arc::make_mut(&mut theirs.objects[0]).material.ka = 0.5;
         assert!(
             merge(&base, &theirs, &edits, &BTreeMap::new())
                 .conflicts
@@ -470,7 +470,7 @@ mod tests {
     fn edits_between_turn_one_scene_into_the_other() {
         let a = example();
         let mut b = a.clone();
-        b.objects[1].material.ka = 0.9;
+        std::sync::Arc::make_mut(&mut b.objects[1]).material.ka = 0.9;
         b.objects.push(a.objects[0].clone());
         b.lights.clear();
         b.camera.width = 33;

@@ -23,6 +23,7 @@ pub use load::{MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_w
 
 use crate::math::Transform;
 pub use crate::shading::{Color, Illumination, Light, Material, Model};
+use std::sync::Arc;
 
 /// What an object is in its own space.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -65,10 +66,31 @@ pub struct Camera {
 }
 
 /// A whole validated scene.
-#[derive(Debug, Clone, PartialEq)]
+///
+/// Objects are shared ([`Arc`]): a copy of a scene shares every object it
+/// does not change (the app holds the file's scene, the edited one and the
+/// one being rendered; with a million objects each would be 400 MB), and
+/// two scenes compare object by object, equal at once where they share it
+/// ([`Scene::same_objects`]). Change one with [`Arc::make_mut`].
+#[derive(Debug, Clone)]
 pub struct Scene {
-    pub objects: Vec<Object>,
+    pub objects: Vec<Arc<Object>>,
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub model: Model,
+}
+
+impl PartialEq for Scene {
+    fn eq(&self, other: &Scene) -> bool {
+        // A shared object is equal to itself without a look at its values.
+        self.objects.len() == other.objects.len()
+            && self
+                .objects
+                .iter()
+                .zip(&other.objects)
+                .all(|(a, b)| Arc::ptr_eq(a, b) || a == b)
+            && self.lights == other.lights
+            && self.camera == other.camera
+            && self.model == other.model
+    }
 }

@@ -128,7 +128,7 @@ impl RayOfLightApp {
     fn pivot_at(&self, pose: &Pose, at: (f64, f64)) -> (DVec3, f64) {
         let scene = self.doc.scene();
         let eye = pose.eye(scene.camera.eye_distance);
-        let prepared = render::prepare(scene, &RenderOptions::default());
+        let prepared = self.prepared();
         let ray = render::CameraRays::new(&scene.camera).ray(at.0, at.1);
         if let Some(hit) = prepared.nearest_hit(&ray) {
             return (ray.at(hit.t), hit.t);

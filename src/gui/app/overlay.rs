@@ -55,13 +55,14 @@ impl RayOfLightApp {
             return;
         }
         self.outline_wanted = Some(key);
-        let scene = self.doc.scene().clone();
-        let longest = scene.camera.width.max(scene.camera.height);
+        let prepared = self.prepared();
+        let camera = self.doc.scene().camera.clone();
+        let longest = camera.width.max(camera.height);
         let scale = longest.div_ceil(OUTLINE_SIDE).max(1);
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
         std::thread::spawn(move || {
-            let ids = render::object_ids(&scene, scale);
+            let ids = render::object_ids(&prepared, &camera, scale);
             let _ = tx.send(Background::Ids(key, ids));
             ctx.request_repaint();
         });

@@ -222,10 +222,19 @@ impl RayOfLightApp {
         }
     }
 
+    /// The scene on screen prepared for picking: the worker's when it
+    /// prepared this scene last, else prepared here.
+    pub(super) fn prepared(&self) -> render::Prepared {
+        let scene = self.doc.scene();
+        self.worker
+            .prepared(scene)
+            .unwrap_or_else(|| render::prepare(scene, &RenderOptions::default()))
+    }
+
     /// Selects the object seen at image position (`x`, `y`) and opens it
     /// in the panel, once (a click in the picture).
     pub fn pick(&mut self, x: f64, y: f64) {
-        let prepared = render::prepare(self.doc.scene(), &RenderOptions::default());
+        let prepared = self.prepared();
         self.selection = Selection {
             object: prepared.pick(x, y),
             reveal: true,
