@@ -315,6 +315,19 @@ fn encode_gif(image: &RgbImage) -> Result<Vec<u8>, image::ImageError> {
 /// `/dev/full`) is written directly: renaming over it would replace the
 /// device or pipe itself.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    write_atomic_with(path, |w| w.write_all(bytes), |_| Ok(()))
+}
+
+/// [`write_atomic`] of what `write` streams, without the bytes in memory
+/// at once. Before the new file replaces the old one, `check` is given its
+/// temporary path to read it back, and may refuse it: the temporary file
+/// is removed and the old file left as it was. A path that is not a
+/// regular file is written directly and not checked.
+pub fn write_atomic_with<E: From<OutputError>>(
+    path: &Path,
+    write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+    check: impl FnOnce(&Path) -> Result<(), E>,
+) -> Result<(), E> {
     let io_error = |source| OutputError::Io {
         path: path.to_owned(),
         source,
@@ -353,26 +366,26 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
             .write(true)
             .open(path)
             .map_err(io_error)?;
-        file.write_all(bytes).map_err(io_error)?;
-        return file.flush().map_err(io_error);
+        write(&mut file).map_err(io_error)?;
+        return Ok(file.flush().map_err(io_error)?);
     }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
     if path.is_dir() {
-        return Err(io_error(std::io::Error::new(
+        return Err(E::from(io_error(std::io::Error::new(
             std::io::ErrorKind::IsADirectory,
             "is a directory",
-        )));
+        ))));
     }
     // Renaming over a file ignores the file's own permissions: refuse a
     // read-only file here, as writing into it would fail.
     if std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly()) {
-        return Err(io_error(std::io::Error::new(
+        return Err(E::from(io_error(std::io::Error::new(
             std::io::ErrorKind::PermissionDenied,
             "the file is read-only",
-        )));
+        ))));
     }
     let mut builder = tempfile::Builder::new();
     builder.prefix(".rayoflight-").suffix(".tmp");
@@ -396,10 +409,11 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     }
     {
         let mut w = BufWriter::new(file.as_file_mut());
-        w.write_all(bytes).map_err(io_error)?;
+        write(&mut w).map_err(io_error)?;
         w.flush().map_err(io_error)?;
     }
     file.as_file().sync_all().map_err(io_error)?;
+    check(file.path())?;
     file.persist(path).map_err(|e| io_error(e.error))?;
     Ok(())
 }

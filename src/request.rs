@@ -42,6 +42,20 @@ impl RenderRequest {
     }
 }
 
+impl From<RenderOptions> for RenderRequest {
+    /// A request for exactly `options`, whatever the scene (tests, tools).
+    fn from(options: RenderOptions) -> RenderRequest {
+        RenderRequest {
+            threads: options.threads,
+            method: Some(Method {
+                name: "given",
+                options: crate::study::Options::Fixed(options),
+            }),
+            aa: None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -556,17 +556,17 @@ fn the_dragging_method_applies_only_while_dragging() {
         dragging: method("f32"),
     };
     let auto = render::auto(&scene).options;
-    assert_eq!(methods.options(&scene, false, 1), auto);
-    let fast = methods.options(&scene, true, 1);
+    assert_eq!(methods.request(false, 1).options(&scene), auto);
+    let fast = methods.request(true, 1).options(&scene);
     assert_eq!(fast.precision, render::Precision::F32);
     // The preview's anti-aliasing applies to a method that does not
     // supersample.
-    assert_eq!(methods.options(&scene, false, 3).aa, 3);
+    assert_eq!(methods.request(false, 3).options(&scene).aa, 3);
     let aa4 = PreviewMethods {
         preview: method("aa4").unwrap(),
         dragging: None,
     };
-    assert_eq!(aa4.options(&scene, true, 1).aa, 4);
+    assert_eq!(aa4.request(true, 1).options(&scene).aa, 4);
 }
 
 /// The object list of a scene of 100 000 spheres: only the rows on screen

@@ -22,7 +22,7 @@
 //! watcher cannot know.
 
 use crate::files::through_links;
-use crate::scene::{self, LoadError, Scene};
+use crate::scene::{self, LoadError, Object, Scene};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
 use std::path::{Path, PathBuf};
@@ -53,6 +53,8 @@ type Watcher = Debouncer<notify::RecommendedWatcher, RecommendedCache>;
 pub struct SceneWatcher {
     path: PathBuf,
     stop: Arc<AtomicBool>,
+    /// The objects the next read shares where equal.
+    known: Arc<Mutex<Vec<Arc<Object>>>>,
 }
 
 impl Drop for SceneWatcher {
@@ -186,13 +188,22 @@ impl SceneWatcher {
         // to a content reported before has a new stamp and is reported.
         let seen: Arc<Mutex<(Option<Stamp>, Option<u64>)>> =
             Arc::new(Mutex::new((stamp(&path), None)));
+        // The objects last read or shown: the next read shares those it
+        // still has.
+        let known = Arc::new(Mutex::new(Vec::new()));
+        let last = known.clone();
         let report = {
             let on_event = on_event.clone();
             let target = path.clone();
             let seen = seen.clone();
             move || {
                 let now = stamp(&target);
-                let event = read(&target);
+                let Ok(mut last) = last.lock() else { return };
+                let event = read(&target, &last);
+                if let FileEvent::Loaded(_, scene) = &event {
+                    last.clone_from(&scene.objects);
+                }
+                drop(last);
                 let key = match &event {
                     FileEvent::Loaded(text, _) => hash(&("loaded", text)),
                     FileEvent::Broken(e) => hash(&("broken", e.to_string())),
@@ -244,7 +255,16 @@ impl SceneWatcher {
             .name("scene-watcher-poll".to_owned())
             .spawn(move || poll(&poll_path, &watched, &seen, &poll_stop, report))
             .map_err(|e| error(notify::Error::io(e)))?;
-        Ok(SceneWatcher { path, stop })
+        Ok(SceneWatcher { path, stop, known })
+    }
+
+    /// The next read of the file shares with `objects` those equal to
+    /// them (the app passes the scene it shows: a file saved with one
+    /// change is read back as one new object, not a million).
+    pub fn share(&self, objects: &[Arc<Object>]) {
+        if let Ok(mut known) = self.known.lock() {
+            *known = objects.to_vec();
+        }
     }
 
     pub fn path(&self) -> &Path {
@@ -284,12 +304,13 @@ fn poll(
     }
 }
 
-/// Reads and parses the file as it is now.
-pub fn read(path: &Path) -> FileEvent {
+/// Reads and parses the file as it is now, sharing the objects that are
+/// the same as in `like` (the objects last read).
+pub fn read(path: &Path, like: &[Arc<Object>]) -> FileEvent {
     if !path.exists() {
         return FileEvent::Missing;
     }
-    match scene::load_with_text(path) {
+    match scene::load_sharing(path, like) {
         Ok((text, scene)) => FileEvent::Loaded(text, Box::new(scene)),
         Err(e) => FileEvent::Broken(e),
     }

@@ -15,6 +15,7 @@
 //! measured.
 
 use crate::render::{self, Cancel, Prepared, RenderOptions, Tile};
+use crate::request::RenderRequest;
 use crate::scene::Scene;
 use crate::study::{self, Row, StudyError, StudyScene, chart};
 use image::RgbImage;
@@ -93,7 +94,8 @@ enum Message {
     Render {
         generation: u64,
         scene: Arc<Scene>,
-        options: RenderOptions,
+        /// Resolved here, off the UI thread: `auto` looks at every object.
+        request: RenderRequest,
         /// The passes, coarsest first, as 1/scale of each side.
         passes: Vec<u32>,
     },
@@ -105,9 +107,11 @@ enum Message {
     Quit,
 }
 
-/// The scene the worker prepared last, with its prepared form at full
-/// size: the app picks objects in it rather than preparing the scene again.
-type Latest = Arc<Mutex<Option<(Arc<Scene>, Prepared)>>>;
+/// The scene the worker prepared last, the options it was prepared with,
+/// and the prepared scene. The next request reuses it when only the camera
+/// or the anti-aliasing changed (orbiting a million spheres prepares them
+/// once), and the app picks objects in it rather than preparing again.
+type Latest = Arc<Mutex<Option<(Arc<Scene>, RenderOptions, Prepared)>>>;
 
 /// Handle to the worker thread. Dropping it stops the worker promptly.
 pub struct Worker {
@@ -162,9 +166,9 @@ impl Worker {
 
     /// Asks for a render, coarse to fine ([`passes`]); cancels any older
     /// one. Returns its generation.
-    pub fn request(&self, scene: Arc<Scene>, options: RenderOptions) -> u64 {
+    pub fn request(&self, scene: Arc<Scene>, request: impl Into<RenderRequest>) -> u64 {
         let passes = passes(scene.camera.width, scene.camera.height);
-        self.request_passes(scene, options, passes)
+        self.request_passes(scene, request.into(), passes)
     }
 
     /// Asks for a render in the given passes (1/scale of each side,
@@ -174,14 +178,14 @@ impl Worker {
     pub fn request_passes(
         &self,
         scene: Arc<Scene>,
-        options: RenderOptions,
+        request: RenderRequest,
         passes: Vec<u32>,
     ) -> u64 {
         let generation = self.newest.fetch_add(1, Ordering::Relaxed) + 1;
         let _ = self.to_worker.send(Message::Render {
             generation,
             scene,
-            options,
+            request,
             passes,
         });
         generation
@@ -204,13 +208,15 @@ impl Worker {
         self.newest.fetch_add(1, Ordering::Relaxed);
     }
 
-    /// `scene` prepared at full size (with the preview's method), if the
-    /// worker prepared it last: the app picks objects in it, as preparing a
-    /// million objects takes a second.
+    /// `scene` prepared (with the preview's method), if the worker last
+    /// prepared it or the same scene seen from another camera: the app
+    /// picks objects in it, as preparing a million objects takes a second.
     pub fn prepared(&self, scene: &Scene) -> Option<Prepared> {
         let latest = self.latest.lock().ok()?;
-        let (prepared_scene, prepared) = latest.as_ref()?;
-        (**prepared_scene == *scene).then(|| prepared.clone())
+        let (prepared_scene, _, prepared) = latest.as_ref()?;
+        prepared_scene
+            .same_but_camera(scene)
+            .then(|| prepared.with_view(&scene.camera, 1))
     }
 
     /// The newest generation requested.
@@ -262,11 +268,12 @@ impl WorkerThread {
                 Message::Render {
                     generation,
                     scene,
-                    options,
+                    request,
                     passes,
                 } => {
                     let cancel = Cancel::new(self.newest.clone(), generation);
                     if !cancel.is_cancelled() {
+                        let options = request.options(&scene);
                         self.render(generation, &scene, &options, &passes, &cancel);
                     }
                 }
@@ -306,11 +313,27 @@ impl WorkerThread {
         }
         let (width, height) = (scene.camera.width, scene.camera.height);
         let render_start = Instant::now();
-        // The scene is prepared once; each pass is a view of it.
-        let prepared = render::prepare(scene, options);
-        if let Ok(mut latest) = self.latest.lock() {
-            *latest = Some((Arc::clone(scene), prepared.with_view(&scene.camera, 1)));
-        }
+        // The scene is prepared once (or was, for the last request, if only
+        // the camera or the anti-aliasing changed); each pass is a view.
+        let reused = self.latest.lock().ok().and_then(|latest| {
+            let (last, last_options, prepared) = latest.as_ref()?;
+            let same_options = RenderOptions {
+                aa: options.aa,
+                ..last_options.clone()
+            } == *options;
+            (same_options && last.same_but_camera(scene)).then(|| prepared.clone())
+        });
+        let prepared = reused.unwrap_or_else(|| {
+            // The last one goes first: both may be large.
+            if let Ok(mut latest) = self.latest.lock() {
+                *latest = None;
+            }
+            let prepared = render::prepare(scene, options);
+            if let Ok(mut latest) = self.latest.lock() {
+                *latest = Some((Arc::clone(scene), options.clone(), prepared.clone()));
+            }
+            prepared
+        });
         for &scale in passes {
             let scale = scale.max(1);
             if cancel.is_cancelled() {

@@ -427,6 +427,11 @@ impl Prepared {
         }
     }
 
+    /// Both are views of one prepared scene (neither was prepared again).
+    pub fn same_world(&self, other: &Prepared) -> bool {
+        Arc::ptr_eq(&self.world, &other.world)
+    }
+
     pub fn width(&self) -> u32 {
         self.camera.width()
     }

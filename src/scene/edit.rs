@@ -846,7 +846,9 @@ pub(crate) struct ObjectOrigin {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Edited {
     scene: Scene,
-    pub(crate) objects: Vec<Option<ObjectOrigin>>,
+    /// Shared between copies until one changes them (a million objects
+    /// have a million origins; changing a value changes none).
+    pub(crate) objects: Arc<Vec<Option<ObjectOrigin>>>,
     pub(crate) lights: Vec<Option<usize>>,
     pub(crate) camera_steps: Vec<Option<usize>>,
 }
@@ -935,7 +937,7 @@ impl Edited {
             .collect();
         Edited {
             scene,
-            objects,
+            objects: Arc::new(objects),
             lights,
             camera_steps,
         }
@@ -1157,7 +1159,7 @@ impl Edited {
                 self.scene
                     .objects
                     .insert(n, Arc::new(object.as_ref().clone()));
-                self.objects.insert(
+                Arc::make_mut(&mut self.objects).insert(
                     n,
                     origin.filter(|o| o.steps.len() == object.transform.steps().len()),
                 );
@@ -1212,7 +1214,7 @@ impl Edited {
             Item::Object(n) => {
                 object_of(&self.scene, n)?;
                 let object = self.scene.objects.remove(n);
-                let origin = take(&mut self.objects, n);
+                let origin = take(Arc::make_mut(&mut self.objects), n);
                 (
                     Element::Object(Box::new(Arc::unwrap_or_clone(object))),
                     Restore::Object(origin),
@@ -1245,7 +1247,7 @@ impl Edited {
     fn step_origins_mut(&mut self, owner: Owner) -> Option<&mut Vec<Option<usize>>> {
         match owner {
             Owner::Camera => Some(&mut self.camera_steps),
-            Owner::Object(n) => match self.objects.get_mut(n)? {
+            Owner::Object(n) => match Arc::make_mut(&mut self.objects).get_mut(n)? {
                 Some(origin) => Some(&mut origin.steps),
                 None => None,
             },

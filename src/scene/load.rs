@@ -15,6 +15,7 @@ use std::borrow::Cow;
 use std::fs;
 use std::io::Read;
 use std::path::Path;
+use std::sync::Arc;
 
 use quick_xml::Reader;
 use quick_xml::escape::EscapeError;
@@ -64,6 +65,12 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 /// Like [`load`], and also returns the file's text (the app keeps it to
 /// write edits back into it).
 pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
+    load_sharing(path, &[])
+}
+
+/// [`load_with_text`], sharing objects with `like` as [`parse_sharing`]
+/// does (the app reading its file again after a change).
+pub fn load_sharing(path: &Path, like: &[Arc<Object>]) -> Result<(String, Scene), LoadError> {
     let fail = |kind| LoadError::new(path, None, kind);
     let io = |e: std::io::Error| {
         fail(LoadErrorKind::Io {
@@ -105,7 +112,7 @@ pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
             offset: e.utf8_error().valid_up_to(),
         })
     })?;
-    let scene = parse(&text, path)?;
+    let scene = parse_sharing(&text, path, like)?;
     Ok((text, scene))
 }
 
@@ -113,8 +120,17 @@ pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
 ///
 /// A leading byte-order mark is skipped (and not counted in columns).
 pub fn parse(text: &str, path: &Path) -> Result<Scene, LoadError> {
+    parse_sharing(text, path, &[])
+}
+
+/// [`parse`], sharing with `like` each object equal to the one at the same
+/// place in it: a file read again after a change of one value holds one
+/// new object, not a million (and compares equal to `like` at once).
+pub fn parse_sharing(text: &str, path: &Path, like: &[Arc<Object>]) -> Result<Scene, LoadError> {
     let body = text.strip_prefix('\u{feff}').unwrap_or(text);
-    Parser::new(body, path).document()
+    let mut parser = Parser::new(body, path);
+    parser.like = like;
+    parser.document()
 }
 
 /// Why a number attribute was refused.
@@ -199,7 +215,7 @@ impl<'b> Attrs<'b> {
 /// Everything a `<scene>` gathers before it is checked for completeness.
 #[derive(Default)]
 struct Gathered {
-    objects: Vec<std::sync::Arc<Object>>,
+    objects: Vec<Arc<Object>>,
     lights: Vec<Light>,
     camera: Option<Camera>,
     model: Option<Model>,
@@ -216,6 +232,8 @@ struct Parser<'a> {
     /// [`MAX_OBJECTS`] and [`MAX_LIGHTS`], lowered by unit tests.
     max_objects: usize,
     max_lights: usize,
+    /// Objects to share where equal ([`parse_sharing`]).
+    like: &'a [Arc<Object>],
 }
 
 impl<'a> Parser<'a> {
@@ -234,6 +252,7 @@ impl<'a> Parser<'a> {
             after_root: false,
             max_objects: MAX_OBJECTS,
             max_lights: MAX_LIGHTS,
+            like: &[],
         }
     }
 
@@ -696,7 +715,11 @@ impl<'a> Parser<'a> {
                     Shape::Plane
                 };
                 let object = self.object(e, shape)?;
-                scene.objects.push(std::sync::Arc::new(object));
+                let object = match self.like.get(scene.objects.len()) {
+                    Some(same) if **same == object => Arc::clone(same),
+                    _ => Arc::new(object),
+                };
+                scene.objects.push(object);
             }
             "light" => {
                 if scene.lights.len() >= self.max_lights {

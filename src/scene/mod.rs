@@ -19,7 +19,10 @@ pub mod merge;
 pub mod splice;
 
 pub use error::{LoadError, LoadErrorKind, Position};
-pub use load::{MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_with_text, parse};
+pub use load::{
+    MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_sharing, load_with_text, parse,
+    parse_sharing,
+};
 
 use crate::math::Transform;
 pub use crate::shading::{Color, Illumination, Light, Material, Model};
@@ -82,6 +85,14 @@ pub struct Scene {
 
 impl PartialEq for Scene {
     fn eq(&self, other: &Scene) -> bool {
+        self.same_but_camera(other) && self.camera == other.camera
+    }
+}
+
+impl Scene {
+    /// Equal but for the camera: what a render prepares of the scene
+    /// ([`crate::render::prepare`]) is the same for both.
+    pub fn same_but_camera(&self, other: &Scene) -> bool {
         // A shared object is equal to itself without a look at its values.
         self.objects.len() == other.objects.len()
             && self
@@ -90,7 +101,6 @@ impl PartialEq for Scene {
                 .zip(&other.objects)
                 .all(|(a, b)| Arc::ptr_eq(a, b) || a == b)
             && self.lights == other.lights
-            && self.camera == other.camera
             && self.model == other.model
     }
 }

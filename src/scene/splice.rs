@@ -47,29 +47,140 @@ fn internal(message: impl Into<String>) -> EditError {
 /// The result parses to `edited`'s scene; every part of `text` that did not
 /// need to change is kept byte for byte.
 pub fn save(text: &str, path: &Path, edited: &Edited) -> Result<String, EditError> {
-    // The scanned text and its scene are dropped before the new text is
-    // built and parsed: on a big file each is as large as the text or more.
-    let splices = {
+    let rewrite = {
         let original = parse(text, path).map_err(|e| EditError::Parse(Box::new(e)))?;
-        if edited.is_as_loaded(&original) {
-            return Ok(text.to_owned());
-        }
-        let doc = Doc::scan(text, usize::MAX)?;
-        let mut editor = Editor {
-            doc: &doc,
-            splices: Vec::new(),
-        };
-        editor.scene(&original, edited)?;
-        editor.splices
+        plan(text, &original, edited)?
     };
-    let out = apply(text, splices)?;
-    match parse(&out, path) {
-        Ok(scene) if &scene == edited.scene() => Ok(out),
+    let mut out = Vec::with_capacity(rewrite.len());
+    rewrite
+        .write_to(&mut out)
+        .map_err(|e| internal(e.to_string()))?;
+    let out = String::from_utf8(out).map_err(|_| internal("the rewritten text is not UTF-8"))?;
+    check(&out, path, edited)?;
+    Ok(out)
+}
+
+/// The splices that write `edited` into `text`, whose scene is `original`
+/// (the scene `text` loads to, sharing its objects with `edited` where
+/// they were not changed: the app keeps it rather than parse the text
+/// again).
+///
+/// Only the elements of the objects that changed are scanned in full: on
+/// a file of a million objects the others cost one node each.
+pub fn plan<'t>(
+    text: &'t str,
+    original: &Scene,
+    edited: &Edited,
+) -> Result<Rewrite<'t>, EditError> {
+    if edited.is_as_loaded(original) {
+        return Ok(Rewrite {
+            text,
+            splices: Vec::new(),
+        });
+    }
+    let changed = changed_objects(original, edited);
+    let doc = Doc::scan(text, Keep::Objects(&changed))?;
+    let mut editor = Editor {
+        doc: &doc,
+        splices: Vec::new(),
+    };
+    editor.scene(original, edited)?;
+    Rewrite::new(text, editor.splices)
+}
+
+/// Checks that `out`, a text written by a [`Rewrite`], loads as `edited`'s
+/// scene: nothing is saved that would load differently.
+pub fn check(out: &str, path: &Path, edited: &Edited) -> Result<(), EditError> {
+    let scene = edited.scene();
+    match super::parse_sharing(out, path, &scene.objects) {
+        Ok(back) if &back == scene => Ok(()),
         Ok(_) => Err(internal(
             "the rewritten text does not load as the edited scene",
         )),
         Err(e) => Err(EditError::Invalid(Box::new(e))),
     }
+}
+
+/// A scene file's text with splices to apply: [`Rewrite::write_to`]
+/// streams the new text without building it.
+#[derive(Debug)]
+pub struct Rewrite<'t> {
+    text: &'t str,
+    /// Sorted, not overlapping, inside the text ([`plan`] checked).
+    splices: Vec<Splice>,
+}
+
+impl<'t> Rewrite<'t> {
+    /// Orders the splices: insertions at one offset keep the order they
+    /// were made in and come before a replacement starting there.
+    /// Overlapping splices, or one outside the text, are an error.
+    fn new(text: &'t str, mut splices: Vec<Splice>) -> Result<Rewrite<'t>, EditError> {
+        splices.sort_by_key(|s| (s.range.start, !s.range.is_empty()));
+        let mut cursor = 0;
+        for splice in &splices {
+            let Range { start, end } = splice.range;
+            if start < cursor || end < start {
+                return Err(internal("overlapping edits"));
+            }
+            if text.get(start..end).is_none() {
+                return Err(internal("an edit outside the text"));
+            }
+            cursor = end;
+        }
+        Ok(Rewrite { text, splices })
+    }
+
+    /// Nothing to change: the new text is the old one.
+    pub fn is_empty(&self) -> bool {
+        self.splices.is_empty()
+    }
+
+    /// The new text's length in bytes.
+    pub fn len(&self) -> usize {
+        self.splices.iter().fold(self.text.len(), |n, s| {
+            n - (s.range.end - s.range.start) + s.text.len()
+        })
+    }
+
+    /// Writes the new text: the kept bytes and the splices in order.
+    pub fn write_to(&self, w: &mut (impl std::io::Write + ?Sized)) -> std::io::Result<()> {
+        let mut cursor = 0;
+        for splice in &self.splices {
+            w.write_all(&self.text.as_bytes()[cursor..splice.range.start])?;
+            w.write_all(splice.text.as_bytes())?;
+            cursor = splice.range.end;
+        }
+        w.write_all(&self.text.as_bytes()[cursor..])
+    }
+}
+
+/// The objects of `original` (by index) that `edited` changes: only these
+/// need their elements found in the text. An object kept as it was, with
+/// its transformation steps where they were, needs nothing.
+fn changed_objects(original: &Scene, edited: &Edited) -> std::collections::HashSet<usize> {
+    edited
+        .objects
+        .iter()
+        .zip(&edited.scene().objects)
+        .filter_map(|(origin, object)| {
+            let origin = origin.as_ref()?;
+            let unchanged = original
+                .objects
+                .get(origin.index)
+                .is_some_and(|o| unchanged(o, object, &origin.steps));
+            (!unchanged).then_some(origin.index)
+        })
+        .collect()
+}
+
+/// `e`, whose steps came from `step_origins` of `o`'s, is `o` as it was.
+fn unchanged(o: &Object, e: &Object, step_origins: &[Option<usize>]) -> bool {
+    step_origins.len() == o.transform.steps().len()
+        && step_origins
+            .iter()
+            .enumerate()
+            .all(|(k, origin)| *origin == Some(k))
+        && (std::ptr::eq(o, e) || o == e)
 }
 
 /// Writes `edited` into `text`, pairing the text's objects, lights and
@@ -91,7 +202,10 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
             .collect()
     };
     let mut by_index = Edited::new(edited.clone());
-    for (i, origin) in by_index.objects.iter_mut().enumerate() {
+    for (i, origin) in std::sync::Arc::make_mut(&mut by_index.objects)
+        .iter_mut()
+        .enumerate()
+    {
         *origin = original.objects.get(i).map(|o| ObjectOrigin {
             index: i,
             steps: steps(o.transform.steps(), edited.objects[i].transform.steps()),
@@ -114,7 +228,7 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
 pub fn object_labels(text: &str) -> Vec<Option<String>> {
     // The root and its children are all it needs: the objects' own
     // elements are not kept (a million objects hold five million).
-    let Ok(doc) = Doc::scan(text, 1) else {
+    let Ok(doc) = Doc::scan(text, Keep::TopLevel) else {
         return Vec::new();
     };
     doc.children_named(doc.root, &["sphere", "plane"])
@@ -354,10 +468,21 @@ struct Doc<'t> {
     comments: Vec<Range<usize>>,
 }
 
+/// Which elements [`Doc::scan`] keeps; the others are only checked.
+#[derive(Clone, Copy)]
+enum Keep<'a> {
+    #[cfg(test)]
+    All,
+    /// The root and its children.
+    TopLevel,
+    /// Every element but those inside the objects (spheres and planes,
+    /// numbered in text order) not in the set.
+    Objects(&'a std::collections::HashSet<usize>),
+}
+
 impl<'t> Doc<'t> {
-    /// Scans `text`, keeping the elements down to `depth` levels below the
-    /// root (the root alone at 0); deeper ones are only checked.
-    fn scan(text: &'t str, depth: usize) -> Result<Doc<'t>, EditError> {
+    /// Scans `text`, keeping the elements `keep` asks for.
+    fn scan(text: &'t str, keep: Keep) -> Result<Doc<'t>, EditError> {
         let body = text.strip_prefix('\u{feff}').unwrap_or(text);
         let base = text.len() - body.len();
         let offset = |slice: &[u8]| -> Result<usize, EditError> {
@@ -375,8 +500,12 @@ impl<'t> Doc<'t> {
         config.trim_text(false);
 
         let mut nodes: Vec<Node<'t>> = Vec::new();
-        // The open elements, `None` for those too deep to keep.
+        // The open elements, `None` for those not kept.
         let mut stack: Vec<Option<usize>> = Vec::new();
+        // While inside an object whose elements are not kept: the depth of
+        // the stack at its start.
+        let mut skip_below: Option<usize> = None;
+        let mut objects = 0;
         let mut root = None;
         let mut comments = Vec::new();
         loop {
@@ -398,6 +527,9 @@ impl<'t> Doc<'t> {
                     if let Some(id) = id {
                         nodes[id].end = at..position;
                     }
+                    if skip_below.is_some_and(|d| stack.len() <= d) {
+                        skip_below = None;
+                    }
                     continue;
                 }
                 Event::Eof => break,
@@ -408,7 +540,13 @@ impl<'t> Doc<'t> {
                 }
                 _ => continue,
             };
-            if stack.len() > depth {
+            let kept = match keep {
+                #[cfg(test)]
+                Keep::All => true,
+                Keep::TopLevel => stack.len() <= 1,
+                Keep::Objects(_) => skip_below.is_none_or(|d| stack.len() <= d),
+            };
+            if !kept {
                 if !empty {
                     stack.push(None);
                 }
@@ -416,6 +554,15 @@ impl<'t> Doc<'t> {
             }
             let id = nodes.len();
             nodes.push(element(text, &start, empty, position, &offset)?);
+            if stack.len() == 1 && matches!(nodes[id].name, "sphere" | "plane") {
+                if let Keep::Objects(deep) = keep
+                    && !deep.contains(&objects)
+                    && !empty
+                {
+                    skip_below = Some(stack.len());
+                }
+                objects += 1;
+            }
             match stack.last() {
                 Some(&Some(parent)) => nodes[parent].children.push(id),
                 Some(None) => return Err(internal("an element inside one not kept")),
@@ -621,34 +768,10 @@ fn inline(items: &[Lines]) -> String {
 }
 
 /// Replace `range` of the text with `text` (an insertion when empty).
+#[derive(Debug)]
 struct Splice {
     range: Range<usize>,
     text: String,
-}
-
-/// Applies the splices; insertions at one offset keep the order they were
-/// made in and come before a replacement starting there.
-fn apply(text: &str, mut splices: Vec<Splice>) -> Result<String, EditError> {
-    splices.sort_by_key(|s| (s.range.start, !s.range.is_empty()));
-    let mut out =
-        String::with_capacity(text.len() + splices.iter().map(|s| s.text.len()).sum::<usize>());
-    let mut cursor = 0;
-    for splice in splices {
-        let Range { start, end } = splice.range;
-        if start < cursor || end < start {
-            return Err(internal("overlapping edits"));
-        }
-        let kept = text
-            .get(cursor..start)
-            .ok_or_else(|| internal("an edit outside the text"))?;
-        text.get(start..end)
-            .ok_or_else(|| internal("an edit outside the text"))?;
-        out.push_str(kept);
-        out.push_str(&splice.text);
-        cursor = end;
-    }
-    out.push_str(text.get(cursor..).unwrap_or_default());
-    Ok(out)
 }
 
 /// Ranks of an object's children: where a new one goes among its siblings.
@@ -699,6 +822,10 @@ impl Editor<'_, '_> {
                 let steps = edited.objects[i]
                     .as_ref()
                     .map_or(&[][..], |o| o.steps.as_slice());
+                // Its elements were not scanned (see `changed_objects`).
+                if unchanged(&original.objects[k], &scene.objects[i], steps) {
+                    return Ok(());
+                }
                 editor.object(objects[k], &original.objects[k], &scene.objects[i], steps)
             },
         )?;
@@ -1169,7 +1296,7 @@ mod tests {
             "\u{feff}<scene><!-- x --><camera width='2' height=\"3\" eyeDistance=\"1.0\"/></scene>",
         ] {
             let s = scene(text);
-            let doc = Doc::scan(text, usize::MAX).unwrap();
+            let doc = Doc::scan(text, Keep::All).unwrap();
             let mut editor = Editor {
                 doc: &doc,
                 splices: Vec::new(),
@@ -1211,13 +1338,13 @@ mod tests {
     #[test]
     fn indentation_unit_is_detected() {
         assert_eq!(
-            Doc::scan(crate::EXAMPLE_SCENE, usize::MAX).unwrap().unit,
+            Doc::scan(crate::EXAMPLE_SCENE, Keep::All).unwrap().unit,
             " "
         );
         let tabs = "<scene>\n\t<camera width=\"1\" height=\"1\" eyeDistance=\"1\"/>\n</scene>\n";
-        assert_eq!(Doc::scan(tabs, usize::MAX).unwrap().unit, "\t");
+        assert_eq!(Doc::scan(tabs, Keep::All).unwrap().unit, "\t");
         let flat = "<scene><camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>";
-        assert_eq!(Doc::scan(flat, usize::MAX).unwrap().unit, "  ");
+        assert_eq!(Doc::scan(flat, Keep::All).unwrap().unit, "  ");
     }
 
     #[test]
@@ -1233,8 +1360,40 @@ mod tests {
             },
         ];
         assert!(matches!(
-            apply("abcdef", splices),
+            Rewrite::new("abcdef", splices),
             Err(EditError::Internal(_))
         ));
+    }
+
+    #[test]
+    fn a_save_scans_only_the_objects_it_changes() {
+        let text = "<scene>\n  <sphere><color red=\"1\" green=\"0\" blue=\"0\"/></sphere>\n  \
+                    <sphere><color red=\"0\" green=\"1\" blue=\"0\"/></sphere>\n  \
+                    <plane><color red=\"0\" green=\"0\" blue=\"1\"/></plane>\n  \
+                    <camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>\n</scene>\n";
+        fn count(text: &str, keep: Keep) -> usize {
+            Doc::scan(text, keep).unwrap().nodes.len()
+        }
+        let (second, ends) = ([1].into(), [0, 2].into());
+        // The root, three objects and the camera; then a colour each.
+        assert_eq!(count(text, Keep::TopLevel), 5);
+        assert_eq!(count(text, Keep::All), 8);
+        assert_eq!(count(text, Keep::Objects(&second)), 6);
+        assert_eq!(count(text, Keep::Objects(&ends)), 7);
+
+        let original = scene(text);
+        let mut edited = Edited::new(original.clone());
+        edited
+            .apply(&crate::scene::edit::Edit::Set(
+                crate::scene::edit::Field::parse("object[2].color.blue").unwrap(),
+                crate::scene::edit::Value::Number(0.5),
+            ))
+            .unwrap();
+        assert_eq!(changed_objects(&original, &edited), [1].into());
+        let saved = save(text, Path::new("t.xml"), &edited).unwrap();
+        assert_eq!(
+            saved,
+            text.replacen("green=\"1\" blue=\"0\"", "green=\"1\" blue=\"0.5\"", 1)
+        );
     }
 }

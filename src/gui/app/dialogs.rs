@@ -68,6 +68,10 @@ impl RayOfLightApp {
     }
 
     pub(super) fn save(&mut self) {
+        // The watcher reads the saved file back: it shares what is shown.
+        if let Some(watcher) = &self.watcher {
+            watcher.share(&self.doc.scene().objects);
+        }
         match self.doc.save() {
             Ok(Reload::Merged) => {
                 self.notify("merged the file's changes and saved".into());

@@ -31,7 +31,7 @@ impl RayOfLightApp {
         }
         self.render_pending = false;
         let dragging = self.methods.dragging.is_some() && interacting;
-        let options = self.methods.options(self.doc.scene(), dragging, self.aa);
+        let request = self.methods.request(dragging, self.aa);
         self.rendered_dragging = dragging;
         let camera = &self.doc.scene().camera;
         let passes = if interacting {
@@ -45,7 +45,7 @@ impl RayOfLightApp {
         };
         let generation =
             self.worker
-                .request_passes(Arc::new(self.doc.scene().clone()), options, passes);
+                .request_passes(Arc::new(self.doc.scene().clone()), request, passes);
         self.in_flight = interacting.then(|| (generation, Instant::now()));
         self.study.superseded(generation);
         if self.study.open {

@@ -233,7 +233,10 @@ impl RayOfLightApp {
             let _ = tx.send(Background::File(generation, event));
             ctx.request_repaint();
         }) {
-            Ok(w) => self.watcher = Some(w),
+            Ok(w) => {
+                w.share(&self.doc.scene().objects);
+                self.watcher = Some(w);
+            }
             Err(e) => self.notify(format!("{e}; saves from other editors will not show")),
         }
         self.recent.push(&path);

@@ -59,10 +59,44 @@ impl PendingMerge {
 
 /// A fingerprint of the file's bytes.
 pub(super) fn fingerprint(bytes: &[u8]) -> u64 {
-    let mut h = std::hash::DefaultHasher::new();
-    bytes.len().hash(&mut h);
-    bytes.hash(&mut h);
-    h.finish()
+    let mut f = Fingerprint::default();
+    f.add(bytes);
+    f.finish()
+}
+
+/// The [`fingerprint`] of the file at `path`, read in pieces (not into
+/// memory at once: the file may be a gigabyte).
+pub(super) fn fingerprint_file(path: &Path) -> std::io::Result<u64> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(path)?;
+    let mut buffer = vec![0; 1 << 16];
+    let mut f = Fingerprint::default();
+    loop {
+        match file.read(&mut buffer)? {
+            0 => return Ok(f.finish()),
+            n => f.add(&buffer[..n]),
+        }
+    }
+}
+
+/// A fingerprint made piece by piece: the same however the bytes are cut
+/// (SipHash reads what it is given as one stream).
+#[derive(Default)]
+struct Fingerprint {
+    hasher: std::hash::DefaultHasher,
+    len: u64,
+}
+
+impl Fingerprint {
+    fn add(&mut self, piece: &[u8]) {
+        self.hasher.write(piece);
+        self.len += piece.len() as u64;
+    }
+
+    fn finish(mut self) -> u64 {
+        self.hasher.write_u64(self.len);
+        self.hasher.finish()
+    }
 }
 
 impl Document {
@@ -82,7 +116,7 @@ impl Document {
             // Undoing the reload brings back the scene before it.
             let back = merge::edits_between(&parsed, self.scene());
             let undos = back.into_iter().rev().map(Undo::from_edit).collect();
-            self.rebase(text, parsed.clone(), Edited::new(parsed), Vec::new());
+            self.rebase(text, parsed, None, Vec::new());
             self.undo.push(Step {
                 label: "reload from disk".to_owned(),
                 undos,
@@ -114,19 +148,20 @@ impl Document {
             return Reload::Conflict;
         }
         self.conflict = None;
-        self.rebase(text, theirs, merged.edited, merged.applied);
+        self.rebase(text, theirs, Some(merged.edited), merged.applied);
         Reload::Merged
     }
 
     /// The file's `text` (loading to `theirs`) becomes the source; the
     /// scene on screen becomes `edited`, whose origins point into it, with
-    /// `log` its unsaved edits.
-    fn rebase(&mut self, text: String, theirs: Scene, edited: Edited, log: Vec<Edit>) {
+    /// `log` its unsaved edits (`None`: the file's scene itself).
+    fn rebase(&mut self, text: String, theirs: Scene, edited: Option<Edited>, log: Vec<Edit>) {
         self.disk = Some(fingerprint(text.as_bytes()));
         self.labels = splice::object_labels(&text);
         self.source = text;
+        self.source_scene = theirs.clone();
         self.saved = Edited::new(theirs);
-        self.edited = edited;
+        self.edited = edited.unwrap_or_else(|| self.saved.clone());
         self.log = log;
         // The origins the stacks would restore point into the old text.
         for step in self.undo.iter_mut().chain(self.redo.iter_mut()) {
@@ -182,15 +217,15 @@ impl Document {
         if self.placeholder {
             return Err(SaveError::NothingLoaded);
         }
-        let reload = match std::fs::read(&path) {
+        let reload = match fingerprint_file(&path) {
             // Nothing unsaved and the file as we know it: nothing to do.
-            Ok(bytes) if Some(fingerprint(&bytes)) == self.disk && !self.dirty => {
+            Ok(seen) if Some(seen) == self.disk && !self.dirty => {
                 return Ok(Reload::Unchanged);
             }
-            Ok(bytes) if Some(fingerprint(&bytes)) == self.disk => Reload::Unchanged,
+            Ok(seen) if Some(seen) == self.disk => Reload::Unchanged,
             Ok(_) => {
-                let (text, theirs) =
-                    scene::load_with_text(&path).map_err(|e| SaveError::DiskBroken(Box::new(e)))?;
+                let (text, theirs) = scene::load_sharing(&path, &self.scene().objects)
+                    .map_err(|e| SaveError::DiskBroken(Box::new(e)))?;
                 if !self.dirty && self.log.is_empty() {
                     // Nothing of ours to write: take the file's version.
                     return Ok(self.file_loaded(text, theirs));
@@ -232,12 +267,29 @@ impl Document {
         Ok(())
     }
 
+    /// Streams the edits spliced into the source to `path`; the new file
+    /// is read back and must load as the edited scene before it replaces
+    /// the old one. No copy of the text is built: on a file of a million
+    /// objects the text is 170 MB.
     fn write(&mut self, path: &Path) -> Result<(), SaveError> {
-        let text = splice::save(&self.source, path, &self.edited)?;
-        crate::output::write_atomic(path, text.as_bytes())?;
-        self.disk = Some(fingerprint(text.as_bytes()));
-        // Gone before the scene is copied: on a big file both are large.
-        drop(text);
+        let rewrite = splice::plan(&self.source, &self.source_scene, &self.edited)?;
+        let mut written = None;
+        crate::output::write_atomic_with(
+            path,
+            |w| rewrite.write_to(w),
+            |new: &Path| -> Result<(), SaveError> {
+                let text = std::fs::read_to_string(new).map_err(|source| {
+                    crate::output::OutputError::Io {
+                        path: path.to_owned(),
+                        source,
+                    }
+                })?;
+                splice::check(&text, path, &self.edited)?;
+                written = Some(fingerprint(text.as_bytes()));
+                Ok(())
+            },
+        )?;
+        self.disk = written;
         self.saved = self.edited.clone();
         self.log.clear();
         self.dirty = false;
@@ -245,5 +297,24 @@ impl Document {
             self.state = FileState::Watching;
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_file_read_in_pieces_has_the_fingerprint_of_its_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("f");
+        // Longer than the 64 KiB pieces, not a multiple of them.
+        let bytes: Vec<u8> = (0..200_001u32).map(|i| (i * 7 % 251) as u8).collect();
+        std::fs::write(&path, &bytes).unwrap();
+        assert_eq!(fingerprint_file(&path).unwrap(), fingerprint(&bytes));
+        let mut other = bytes.clone();
+        other[150_000] ^= 1;
+        assert_ne!(fingerprint(&other), fingerprint(&bytes));
+        assert_ne!(fingerprint(&bytes[1..]), fingerprint(&bytes));
     }
 }

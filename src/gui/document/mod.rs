@@ -31,7 +31,7 @@ pub use disk::{PendingMerge, Reload, SaveError};
 use history::Step;
 
 use std::collections::BTreeMap;
-use std::hash::{Hash, Hasher};
+use std::hash::Hasher;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -55,6 +55,10 @@ pub struct Document {
     /// The text last read from the file, which the elements' origins point
     /// into; saves splice the edits into it.
     source: String,
+    /// The scene `source` loads to (sharing its objects with `saved` and
+    /// `edited` where they are the same): saves compare with it rather
+    /// than parse the text again.
+    source_scene: Scene,
     /// The file's bytes as last read or written, or `None` when unknown
     /// (never read, or missing).
     disk: Option<u64>,
@@ -93,13 +97,15 @@ fn next_generation() -> u64 {
 
 impl Document {
     fn from_text(path: Option<PathBuf>, text: String, scene: Scene, state: FileState) -> Document {
+        let saved = Edited::new(scene.clone());
         Document {
             path,
             disk: Some(fingerprint(text.as_bytes())),
             labels: splice::object_labels(&text),
             source: text,
-            saved: Edited::new(scene.clone()),
-            edited: Edited::new(scene),
+            source_scene: scene.clone(),
+            edited: saved.clone(),
+            saved,
             dirty: false,
             log: Vec::new(),
             undo: Vec::new(),

@@ -12,7 +12,7 @@
 mod plot;
 
 use super::worker::Event;
-use crate::render::{self, Decision, RenderOptions};
+use crate::render::{self, Decision};
 use crate::request::RenderRequest;
 use crate::scene::Scene;
 use crate::study::{self, Method, Row};
@@ -59,10 +59,10 @@ impl Default for PreviewMethods {
 }
 
 impl PreviewMethods {
-    /// The options to render `scene` with, `dragging` or not, at the
-    /// preview's anti-aliasing `aa` (View › Anti-aliasing: above 1×1 it is
-    /// asked for and wins over the method's, see [`crate::request`]).
-    pub fn options(&self, scene: &Scene, dragging: bool, aa: u32) -> RenderOptions {
+    /// What to render with, `dragging` or not, at the preview's
+    /// anti-aliasing `aa` (View › Anti-aliasing: above 1×1 it is asked for
+    /// and wins over the method's, see [`crate::request`]).
+    pub fn request(&self, dragging: bool, aa: u32) -> RenderRequest {
         let method = match (&self.dragging, dragging) {
             (Some(fast), true) => fast,
             _ => &self.preview,
@@ -72,7 +72,6 @@ impl PreviewMethods {
             aa: (aa > 1).then_some(aa),
             threads: None,
         }
-        .options(scene)
     }
 }
 

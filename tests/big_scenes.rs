@@ -1,0 +1,155 @@
+//! A big scene costs the app what it costs the command line, not a copy
+//! more per place that holds it (issue 15, item 6): the objects of the
+//! file's scene, the edited one, the one being rendered and the one read
+//! back after a save are shared where they are the same; a scene is
+//! prepared once however often the camera moves; a save scans only the
+//! objects it changes. Each is checked here by what is shared, not by
+//! memory or time, so the tests stay small and exact.
+
+use rayoflight::gui::document::{Document, Reload};
+use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
+use rayoflight::gui::worker::{Event, Worker};
+use rayoflight::render::RenderOptions;
+use rayoflight::scene::edit::{Edit, Field, Value};
+use rayoflight::scene::{self, Scene};
+use std::path::Path;
+use std::sync::Arc;
+use std::sync::mpsc;
+use std::time::Duration;
+
+/// `n` small spheres in a row, each with a colour and two steps, a light,
+/// a 24×24 camera.
+fn spheres_text(n: usize) -> String {
+    let mut text = String::from("<scene>\n");
+    for i in 0..n {
+        text.push_str(&format!(
+            "  <!-- ball {i} -->\n  <sphere>\n    <color red=\"0.5\" green=\"{}\" blue=\"0.25\"/>\n    \
+             <transformation><scale factor=\"0.1\"/><translate x=\"{}\" z=\"5\"/></transformation>\n  </sphere>\n",
+            (i % 100) as f64 / 100.0,
+            i as f64 * 0.01 - 5.0,
+        ));
+    }
+    text.push_str("  <light x=\"0\" y=\"-3\" z=\"-3\"/>\n");
+    text.push_str("  <camera width=\"24\" height=\"24\" eyeDistance=\"2\"/>\n</scene>\n");
+    text
+}
+
+fn set(path: &str, value: f64) -> Edit {
+    Edit::Set(Field::parse(path).unwrap(), Value::Number(value))
+}
+
+/// Which objects of `a` and `b` (of one length) are not one shared object.
+fn unshared(a: &Scene, b: &Scene) -> Vec<usize> {
+    assert_eq!(a.objects.len(), b.objects.len());
+    (0..a.objects.len())
+        .filter(|&i| !Arc::ptr_eq(&a.objects[i], &b.objects[i]))
+        .collect()
+}
+
+fn document_on(text: &str) -> (tempfile::TempDir, std::path::PathBuf, Document) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, text).unwrap();
+    let doc = Document::open(&path).unwrap();
+    (dir, path, doc)
+}
+
+#[test]
+fn the_edited_scene_shares_every_object_but_the_one_edited() {
+    let (_dir, _path, mut doc) = document_on(&spheres_text(1000));
+    assert!(unshared(doc.file_scene(), doc.scene()).is_empty());
+    // Paths count from 1: object[700] is index 699.
+    doc.apply(set("object[700].material.ka", 0.5)).unwrap();
+    assert_eq!(unshared(doc.file_scene(), doc.scene()), vec![699]);
+    // A copy of the scene (what a render request sends) shares them all.
+    let sent = doc.scene().clone();
+    assert!(unshared(&sent, doc.scene()).is_empty());
+    // Undone, the one copied object is equal again: nothing unsaved.
+    doc.undo();
+    assert!(!doc.has_unsaved_edits());
+    assert_eq!(unshared(doc.file_scene(), doc.scene()), vec![699]);
+}
+
+#[test]
+fn a_save_is_read_back_sharing_the_objects_on_screen() {
+    let (_dir, path, mut doc) = document_on(&spheres_text(1000));
+    let (tx, rx) = mpsc::channel();
+    let watcher = SceneWatcher::new(&path, move |e| {
+        let _ = tx.send(e);
+    })
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    doc.apply(set("object[4].color.red", 0.75)).unwrap();
+    watcher.share(&doc.scene().objects);
+    doc.save().unwrap();
+    let back = loop {
+        match rx
+            .recv_timeout(Duration::from_secs(5))
+            .expect("the save is seen")
+        {
+            FileEvent::Loaded(text, back) => break (text, back),
+            FileEvent::Broken(e) => panic!("{e}"),
+            FileEvent::Missing => {}
+        }
+    };
+    assert!(unshared(&back.1, doc.scene()).is_empty());
+    assert_eq!(doc.file_loaded(back.0, *back.1), Reload::Unchanged);
+    // What the file holds now is what was saved: every object shared.
+    assert!(unshared(doc.file_scene(), doc.scene()).is_empty());
+}
+
+#[test]
+fn parsing_again_shares_the_objects_that_did_not_change() {
+    let text = spheres_text(50);
+    let first = scene::parse(&text, Path::new("a.xml")).unwrap();
+    let changed = text.replacen("green=\"0.3\"", "green=\"0.35\"", 1);
+    let again = scene::parse_sharing(&changed, Path::new("a.xml"), &first.objects).unwrap();
+    assert_eq!(unshared(&first, &again), vec![30]);
+    assert_eq!(again, scene::parse(&changed, Path::new("a.xml")).unwrap());
+}
+
+/// Renders `scene` in the worker and waits for its last pass.
+fn render(worker: &Worker, scene: &Scene) {
+    let generation = worker.request(Arc::new(scene.clone()), RenderOptions::default());
+    loop {
+        match worker.next_event(Duration::from_secs(20)) {
+            Some(Event::PassFinished {
+                generation: g,
+                scale: 1,
+                ..
+            }) if g == generation => return,
+            Some(Event::Failed { message, .. }) => panic!("{message}"),
+            Some(_) => {}
+            None => panic!("the render did not finish"),
+        }
+    }
+}
+
+#[test]
+fn moving_the_camera_does_not_prepare_the_scene_again() {
+    let worker = Worker::spawn(1, || {});
+    let scene = scene::parse(&spheres_text(200), Path::new("a.xml")).unwrap();
+    render(&worker, &scene);
+    let first = worker.prepared(&scene).expect("the scene just rendered");
+
+    // Another camera: the same prepared scene, for the render and for
+    // picking.
+    let mut moved = scene.clone();
+    moved.camera.eye_distance = 3.0;
+    assert!(worker.prepared(&moved).unwrap().same_world(&first));
+    render(&worker, &moved);
+    let after = worker.prepared(&moved).unwrap();
+    assert!(after.same_world(&first));
+    assert_eq!(after.camera().ray(12.0, 12.0), {
+        let fresh = rayoflight::render::prepare(&moved, &RenderOptions::default());
+        fresh.camera().ray(12.0, 12.0)
+    });
+
+    // Another object value: prepared again, and not offered for picks
+    // until then.
+    let mut edited = moved.clone();
+    Arc::make_mut(&mut edited.objects[5]).material.kd = 0.1;
+    assert!(worker.prepared(&edited).is_none());
+    render(&worker, &edited);
+    assert!(!worker.prepared(&edited).unwrap().same_world(&first));
+}
