@@ -135,6 +135,8 @@ pub struct RayOfLightApp {
     /// Print the status figures to stderr once a second (RAYOFLIGHT_STATS).
     stats: bool,
     last_stats: Instant,
+    /// The longest time `draw` took since the last stats line.
+    slowest_frame: Duration,
     ctx: egui::Context,
 }
 
@@ -162,6 +164,7 @@ impl RayOfLightApp {
             allow_close: false,
             stats: std::env::var_os("RAYOFLIGHT_STATS").is_some(),
             last_stats: Instant::now(),
+            slowest_frame: Duration::ZERO,
             path_prompt: None,
             view: View::default(),
             selection: Selection::default(),
@@ -309,7 +312,9 @@ impl RayOfLightApp {
 
 impl eframe::App for RayOfLightApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
+        let start = Instant::now();
         self.draw(ui);
+        self.slowest_frame = self.slowest_frame.max(start.elapsed());
     }
 
     fn on_exit(&mut self, _gl: Option<&eframe::glow::Context>) {

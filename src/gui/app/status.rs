@@ -143,8 +143,9 @@ impl RayOfLightApp {
         if self.stats && now.duration_since(self.last_stats) >= Duration::from_secs(1) {
             self.last_stats = now;
             eprintln!(
-                "stats: fps={} pictures={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
+                "stats: fps={} slowest_frame_ms={:.1} pictures={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
                 self.frames.len(),
+                std::mem::take(&mut self.slowest_frame).as_secs_f64() * 1e3,
                 self.pictures.len(),
                 self.preview.state(),
                 self.preview.first_pass().map(|d| d.as_secs_f64() * 1e3),
