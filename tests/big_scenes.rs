@@ -87,13 +87,13 @@ fn a_save_is_read_back_sharing_the_objects_on_screen() {
             .recv_timeout(Duration::from_secs(5))
             .expect("the save is seen")
         {
-            FileEvent::Loaded(text, back) => break (text, back),
+            FileEvent::Loaded(read) => break read,
             FileEvent::Broken(e) => panic!("{e}"),
             FileEvent::Missing => {}
         }
     };
-    assert!(unshared(&back.1, doc.scene()).is_empty());
-    assert_eq!(doc.file_loaded(back.0, *back.1), Reload::Unchanged);
+    assert!(unshared(&back.scene, doc.scene()).is_empty());
+    assert_eq!(doc.file_read(*back), Reload::Unchanged);
     // What the file holds now is what was saved: every object shared.
     assert!(unshared(doc.file_scene(), doc.scene()).is_empty());
 }

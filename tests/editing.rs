@@ -317,7 +317,7 @@ fn next_loaded(rx: &std::sync::mpsc::Receiver<FileEvent>) -> Scene {
     loop {
         let left = Duration::from_secs(5).saturating_sub(start.elapsed());
         match rx.recv_timeout(left) {
-            Ok(FileEvent::Loaded(_, scene)) => return *scene,
+            Ok(FileEvent::Loaded(read)) => return read.scene,
             Ok(_) => continue,
             Err(_) => panic!("no Loaded event within 5 s"),
         }

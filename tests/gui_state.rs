@@ -186,7 +186,7 @@ fn next(rx: &mpsc::Receiver<FileEvent>) -> FileEvent {
 
 fn assert_loaded_red(event: FileEvent, red: f64) {
     match event {
-        FileEvent::Loaded(_, s) => assert_eq!(s.objects[0].color.x, red),
+        FileEvent::Loaded(read) => assert_eq!(read.scene.objects[0].color.x, red),
         other => panic!("expected a loaded scene, got {other:?}"),
     }
 }

@@ -7,7 +7,7 @@
 //! made to the target show. Events are debounced (notify-debouncer-full)
 //! and filtered by file name and kind — opening or reading the file is no
 //! change, and the watcher's own reads must not wake it again — then the
-//! file is read and parsed completely on a background thread, and only the
+//! file is read, parsed and fingerprinted on a background thread, and only the
 //! result is handed to the app.
 //!
 //! A directory that is deleted takes its watch with it. A second thread
@@ -22,7 +22,8 @@
 //! watcher cannot know.
 
 use crate::files::through_links;
-use crate::scene::{self, LoadError, Object, Scene};
+use crate::gui::document::FileRead;
+use crate::scene::{self, LoadError, Object};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
 use std::path::{Path, PathBuf};
@@ -39,8 +40,9 @@ pub const POLL: Duration = Duration::from_millis(250);
 /// What happened to the watched file.
 #[derive(Debug)]
 pub enum FileEvent {
-    /// It changed and parses: its text and scene.
-    Loaded(String, Box<Scene>),
+    /// It changed and parses: its text and scene (and what the document
+    /// computes from them, computed here).
+    Loaded(Box<FileRead>),
     /// It changed and does not parse (or cannot be read).
     Broken(LoadError),
     /// It is gone (deleted or renamed away).
@@ -196,16 +198,22 @@ impl SceneWatcher {
             let on_event = on_event.clone();
             let target = path.clone();
             let seen = seen.clone();
-            move || {
-                let now = stamp(&target);
+            // `missed`: called by the poll, for a change no report saw.
+            move |missed: bool| {
+                // One read at a time (a gigabyte file takes a second).
                 let Ok(mut last) = last.lock() else { return };
+                let now = stamp(&target);
+                // A report that ran meanwhile saw it.
+                if missed && seen.lock().is_ok_and(|s| s.0 == now) {
+                    return;
+                }
                 let event = read(&target, &last);
-                if let FileEvent::Loaded(_, scene) = &event {
-                    last.clone_from(&scene.objects);
+                if let FileEvent::Loaded(read) = &event {
+                    last.clone_from(&read.scene.objects);
                 }
                 drop(last);
                 let key = match &event {
-                    FileEvent::Loaded(text, _) => hash(&("loaded", text)),
+                    FileEvent::Loaded(read) => hash(&("loaded", read.fingerprint())),
                     FileEvent::Broken(e) => hash(&("broken", e.to_string())),
                     FileEvent::Missing => hash(&"missing"),
                 };
@@ -236,7 +244,7 @@ impl SceneWatcher {
                             .any(|p| names.iter().flatten().any(|n| p.file_name() == Some(n)))
                 });
                 if ours {
-                    report();
+                    report(false);
                 }
             }
         };
@@ -281,7 +289,7 @@ fn poll(
     watched: &Mutex<Watched>,
     seen: &Mutex<(Option<Stamp>, Option<u64>)>,
     stop: &AtomicBool,
-    report: impl Fn(),
+    report: impl Fn(bool),
 ) {
     let mut settling: Option<Option<Stamp>> = None;
     while !stop.load(Ordering::Relaxed) {
@@ -297,7 +305,7 @@ fn poll(
         let known = seen.lock().map(|s| s.0 == now).unwrap_or(true);
         if rewatched || (!known && settling.as_ref() == Some(&now)) {
             settling = None;
-            report();
+            report(true);
         } else {
             settling = (!known).then_some(now);
         }
@@ -311,7 +319,7 @@ pub fn read(path: &Path, like: &[Arc<Object>]) -> FileEvent {
         return FileEvent::Missing;
     }
     match scene::load_sharing(path, like) {
-        Ok((text, scene)) => FileEvent::Loaded(text, Box::new(scene)),
+        Ok((text, scene)) => FileEvent::Loaded(Box::new(FileRead::new(text, scene))),
         Err(e) => FileEvent::Broken(e),
     }
 }

@@ -123,7 +123,7 @@ impl RayOfLightApp {
 
     pub(super) fn file_event(&mut self, event: FileEvent) {
         match event {
-            FileEvent::Loaded(text, scene) => match self.doc.file_loaded(text, *scene) {
+            FileEvent::Loaded(read) => match self.doc.file_read(*read) {
                 Reload::Replaced => self.after_edit(),
                 Reload::Merged => {
                     self.notify("the file changed on disk: your edits were applied onto it".into());

@@ -40,12 +40,38 @@ pub enum SaveError {
     Output(#[from] crate::output::OutputError),
 }
 
+/// The file as read from disk, and what the document needs of its text:
+/// its fingerprint and the objects' labels. The watcher makes it on its
+/// own thread, as on a gigabyte file each takes a second.
+#[derive(Debug, Clone)]
+pub struct FileRead {
+    pub text: String,
+    pub scene: Scene,
+    fingerprint: u64,
+    labels: Vec<Option<String>>,
+}
+
+impl FileRead {
+    pub fn new(text: String, scene: Scene) -> FileRead {
+        FileRead {
+            fingerprint: fingerprint(text.as_bytes()),
+            labels: splice::object_labels(&text),
+            text,
+            scene,
+        }
+    }
+
+    /// The [`fingerprint`] of the text (what the watcher compares).
+    pub fn fingerprint(&self) -> u64 {
+        self.fingerprint
+    }
+}
+
 /// A file version that conflicts with the unsaved edits, waiting for the
 /// user's choices.
 #[derive(Debug, Clone)]
 pub struct PendingMerge {
-    text: String,
-    scene: Scene,
+    read: FileRead,
     conflicts: Vec<Conflict>,
     /// Save once the conflicts are settled (the merge came from Ctrl+S).
     save_after: bool,
@@ -102,21 +128,31 @@ impl Fingerprint {
 impl Document {
     /// The file on disk was read and loads (`text`, `parsed`).
     pub fn file_loaded(&mut self, text: String, parsed: Scene) -> Reload {
+        self.file_read(FileRead::new(text, parsed))
+    }
+
+    /// The file on disk was read and loads.
+    pub fn file_read(&mut self, read: FileRead) -> Reload {
         self.state = FileState::Watching;
         self.error = None;
-        if self.disk == Some(fingerprint(text.as_bytes())) {
+        if self.disk == Some(read.fingerprint) {
             return Reload::Unchanged;
         }
         if self.placeholder {
-            *self = Document::from_text(self.path.clone(), text, parsed, FileState::Watching);
+            *self = Document::from_text(
+                self.path.clone(),
+                read.text,
+                read.scene,
+                FileState::Watching,
+            );
             return Reload::Replaced;
         }
         let save_after = self.conflict.as_ref().is_some_and(|c| c.save_after);
         if !self.dirty && self.conflict.is_none() {
             // Undoing the reload brings back the scene before it.
-            let back = merge::edits_between(&parsed, self.scene());
+            let back = merge::edits_between(&read.scene, self.scene());
             let undos = back.into_iter().rev().map(Undo::from_edit).collect();
-            self.rebase(text, parsed, None, Vec::new());
+            self.rebase(read, None, Vec::new());
             self.undo.push(Step {
                 label: "reload from disk".to_owned(),
                 undos,
@@ -125,39 +161,43 @@ impl Document {
             self.redo.clear();
             return Reload::Replaced;
         }
-        self.merge_with(text, parsed, &BTreeMap::new(), save_after)
+        self.merge_with(read, &BTreeMap::new(), save_after)
     }
 
-    /// Replays the unsaved edits onto the file's `text`; with conflicts
-    /// left, keeps it pending and asks.
+    /// Replays the unsaved edits onto the file's version `read`; with
+    /// conflicts left, keeps it pending and asks.
     fn merge_with(
         &mut self,
-        text: String,
-        theirs: Scene,
+        read: FileRead,
         choices: &BTreeMap<usize, Choice>,
         save_after: bool,
     ) -> Reload {
-        let merged = merge::merge(self.saved.scene(), &theirs, &self.log, choices);
+        let merged = merge::merge(self.saved.scene(), &read.scene, &self.log, choices);
         if !merged.conflicts.is_empty() {
             self.conflict = Some(PendingMerge {
-                text,
-                scene: theirs,
+                read,
                 conflicts: merged.conflicts,
                 save_after,
             });
             return Reload::Conflict;
         }
         self.conflict = None;
-        self.rebase(text, theirs, Some(merged.edited), merged.applied);
+        self.rebase(read, Some(merged.edited), merged.applied);
         Reload::Merged
     }
 
-    /// The file's `text` (loading to `theirs`) becomes the source; the
-    /// scene on screen becomes `edited`, whose origins point into it, with
-    /// `log` its unsaved edits (`None`: the file's scene itself).
-    fn rebase(&mut self, text: String, theirs: Scene, edited: Option<Edited>, log: Vec<Edit>) {
-        self.disk = Some(fingerprint(text.as_bytes()));
-        self.labels = splice::object_labels(&text);
+    /// The file's version `read` becomes the source; the scene on screen
+    /// becomes `edited`, whose origins point into its text, with `log` its
+    /// unsaved edits (`None`: the file's scene itself).
+    fn rebase(&mut self, read: FileRead, edited: Option<Edited>, log: Vec<Edit>) {
+        let FileRead {
+            text,
+            scene: theirs,
+            fingerprint,
+            labels,
+        } = read;
+        self.disk = Some(fingerprint);
+        self.labels = labels;
         self.source = text;
         self.source_scene = theirs.clone();
         self.saved = Edited::new(theirs);
@@ -185,7 +225,7 @@ impl Document {
             .zip(choices)
             .map(|(c, choice)| (c.edit, *choice))
             .collect();
-        let reload = self.merge_with(pending.text, pending.scene, &map, pending.save_after);
+        let reload = self.merge_with(pending.read, &map, pending.save_after);
         if reload == Reload::Merged && pending.save_after {
             self.save()?;
         }
@@ -230,7 +270,7 @@ impl Document {
                     // Nothing of ours to write: take the file's version.
                     return Ok(self.file_loaded(text, theirs));
                 }
-                match self.merge_with(text, theirs, &BTreeMap::new(), true) {
+                match self.merge_with(FileRead::new(text, theirs), &BTreeMap::new(), true) {
                     Reload::Conflict => return Err(SaveError::Conflict),
                     other => other,
                 }

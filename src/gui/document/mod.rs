@@ -27,7 +27,7 @@ mod disk;
 mod history;
 
 use disk::fingerprint;
-pub use disk::{PendingMerge, Reload, SaveError};
+pub use disk::{FileRead, PendingMerge, Reload, SaveError};
 use history::Step;
 
 use std::collections::BTreeMap;
