@@ -120,6 +120,18 @@ fn step_until(
 fn ctrl(harness: &mut Harness<'_, RayOfLightApp>, key: egui::Key) {
     harness.key_press_modifiers(egui::Modifiers::COMMAND, key);
     harness.run_steps(2);
+    until_saved(harness);
+}
+
+/// Runs frames until no save is running (saves run on their own thread).
+fn until_saved(harness: &mut Harness<'_, RayOfLightApp>) {
+    let start = std::time::Instant::now();
+    while harness.state().is_saving() {
+        assert!(start.elapsed() < Duration::from_secs(10), "the save ended");
+        std::thread::sleep(Duration::from_millis(5));
+        harness.run_steps(1);
+    }
+    harness.run_steps(1);
 }
 
 // ----- the defects -----
@@ -974,4 +986,46 @@ fn random_edits_undos_and_redos_save_exactly_and_undo_to_the_original() {
             );
         }
     }
+}
+
+/// Saving runs on a thread of its own (a million objects take seconds to
+/// write and check): the frame that asks for it returns with the save
+/// still running, the window goes on, and an edit made meanwhile is not
+/// lost — it stays unsaved, after the save wrote the edits before it.
+#[test]
+fn a_save_runs_beside_the_window_and_edits_made_meanwhile_stay_unsaved() {
+    let spheres: String = (0..5000)
+        .map(|i| {
+            format!(
+                "  <sphere><transformation><scale factor=\"0.01\"/><translate x=\"{}\" z=\"4\"/></transformation></sphere>\n",
+                f64::from(i) * 0.001
+            )
+        })
+        .collect();
+    let text = SCENE.replacen("<scene>\n", &format!("<scene>\n{spheres}"), 1);
+    let (_dir, path) = file_with(&text);
+    let mut harness = app_on(Document::open(&path).unwrap());
+    harness.get_by_label("lambert").click();
+    harness.run_steps(2);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    harness.run_steps(1);
+    assert!(
+        harness.state().is_saving(),
+        "the save runs beside the frame"
+    );
+    harness.get_by_label("ambient").click();
+    harness.run_steps(1);
+    until_saved(&mut harness);
+    let saved = scene::load(&path).unwrap();
+    assert_eq!(saved.model.illumination, Illumination::Lambert);
+    let doc = harness.state().document();
+    assert_eq!(doc.scene().model.illumination, Illumination::Ambient);
+    assert!(doc.has_unsaved_edits());
+    // Saving again writes the rest.
+    ctrl(&mut harness, egui::Key::S);
+    assert!(!harness.state().document().has_unsaved_edits());
+    assert_eq!(
+        scene::load(&path).unwrap().model.illumination,
+        Illumination::Ambient
+    );
 }

@@ -222,6 +222,12 @@ fn the_saved_view_renders_on_the_command_line_as_on_screen_and_home_returns() {
     );
     harness.key_press_modifiers(Modifiers::COMMAND, egui::Key::S);
     harness.run_steps(2);
+    let start = Instant::now();
+    while harness.state().is_saving() {
+        assert!(start.elapsed() < Duration::from_secs(10), "the save ended");
+        std::thread::sleep(Duration::from_millis(5));
+        harness.run_steps(1);
+    }
     let saved = scene::load(&path).unwrap();
     assert_eq!(&saved, harness.state().document().scene());
     // The file's text kept its comments; the camera's steps were replaced.

@@ -68,28 +68,88 @@ impl RayOfLightApp {
     }
 
     pub(super) fn save(&mut self) {
+        self.save_then(None);
+    }
+
+    /// Starts saving on a thread of its own (a million objects take
+    /// seconds to write and check); `then` runs once the edits are saved.
+    /// Editing goes on meanwhile; what is edited then stays unsaved.
+    pub(super) fn save_then(&mut self, then: Option<Command>) {
+        if self.saving.is_some() {
+            self.notify("already saving: wait for it".into());
+            return;
+        }
+        let job = match self.doc.save_job() {
+            Ok(job) => job,
+            Err(e) => return self.save_failed(e),
+        };
         // The watcher reads the saved file back: it shares what is shown.
         if let Some(watcher) = &self.watcher {
             watcher.share(&self.doc.scene().objects);
         }
-        match self.doc.save() {
-            Ok(Reload::Merged) => {
-                self.notify("merged the file's changes and saved".into());
+        self.saving = Some(Saving {
+            then,
+            merged: false,
+            started: Instant::now(),
+        });
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        std::thread::spawn(move || {
+            let outcome = job.run();
+            let _ = tx.send(Background::Saved(Box::new(job), outcome));
+            ctx.request_repaint();
+        });
+    }
+
+    /// A save ended: what it did, then what was to follow it, then the
+    /// watcher's reports held back while it ran.
+    pub(super) fn saved(&mut self, job: SaveJob, outcome: SaveOutcome) {
+        let Some(saving) = self.saving.take() else {
+            return;
+        };
+        match self.doc.save_done(job, outcome) {
+            Ok(SaveStep::Again) => {
+                // The file's changes were merged with the edits: write both.
                 self.after_edit();
+                self.save_then(saving.then);
+                if let Some(next) = &mut self.saving {
+                    next.merged = true;
+                }
+                return;
             }
-            Ok(Reload::Replaced) => {
+            Ok(SaveStep::Done(Reload::Replaced)) => {
                 self.notify(
                     "the file changed on disk and nothing here was unsaved: showing it".into(),
                 );
                 self.after_edit();
             }
-            Ok(_) => self.notify("saved".into()),
-            Err(SaveError::NoPath) => self.start_dialog(DialogKind::SaveAs),
-            Err(SaveError::Conflict) => {
+            Ok(SaveStep::Done(_)) if saving.merged => {
+                self.notify("merged the file's changes and saved".into());
+            }
+            Ok(SaveStep::Done(_)) => self.notify("saved".into()),
+            Err(e) => self.save_failed(e),
+        }
+        if let Some(then) = saving.then {
+            if !self.doc.has_unsaved_edits() && self.doc.conflict().is_none() {
+                self.execute(then);
+            } else if self.doc.conflict().is_none() {
+                // Edited while saving, or not saved: ask again.
+                self.confirm = Some(Confirm::Discard(then));
+            }
+        }
+        for event in std::mem::take(&mut self.deferred_file_events) {
+            self.file_event(event);
+        }
+    }
+
+    fn save_failed(&mut self, e: SaveError) {
+        match e {
+            SaveError::NoPath => self.start_dialog(DialogKind::SaveAs),
+            SaveError::Conflict => {
                 self.notify("the file changed on disk: choose between the versions".into());
                 self.conflict_choices.clear();
             }
-            Err(e) => self.notify(format!("not saved: {e}")),
+            e => self.notify(format!("not saved: {e}")),
         }
     }
 
@@ -210,12 +270,17 @@ impl RayOfLightApp {
         }
     }
 
-    /// Holds back closing the window while there are unsaved edits: ask.
+    /// Holds back closing the window while there are unsaved edits (ask)
+    /// or a save runs (close when it is done).
     pub(super) fn guard_close(&mut self, ctx: &egui::Context) {
-        if ctx.input(|i| i.viewport().close_requested())
-            && self.doc.has_unsaved_edits()
-            && !self.allow_close
-        {
+        if !ctx.input(|i| i.viewport().close_requested()) || self.allow_close {
+            return;
+        }
+        if let Some(saving) = &mut self.saving {
+            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
+            saving.then = Some(Command::Quit);
+            self.notify("saving: the window closes when the file is written".into());
+        } else if self.doc.has_unsaved_edits() {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.confirm = Some(Confirm::Discard(Command::Quit));
         }
@@ -283,13 +348,9 @@ impl RayOfLightApp {
             (Answer::Cancel, _) => {}
             (Answer::Go, Confirm::Replace(path)) => self.save_as(&path),
             (Answer::Go, Confirm::Discard(command)) => self.execute(command),
-            (Answer::SaveThen, Confirm::Discard(command)) => {
-                self.save();
-                // Saved (no conflict, no error): go on; else the edits stay.
-                if !self.doc.has_unsaved_edits() && self.doc.conflict().is_none() {
-                    self.execute(command);
-                }
-            }
+            // Once saved (no conflict, no error) it goes on; else the edits
+            // stay.
+            (Answer::SaveThen, Confirm::Discard(command)) => self.save_then(Some(command)),
             (Answer::SaveThen, Confirm::Replace(_)) => {}
         }
     }
@@ -397,6 +458,15 @@ impl RayOfLightApp {
             }
         }
     }
+}
+
+/// A save under way (see [`RayOfLightApp::save_then`]).
+pub(super) struct Saving {
+    /// What to do once saved.
+    then: Option<Command>,
+    /// The file's changes were merged into the edits on the way.
+    merged: bool,
+    pub(super) started: Instant,
 }
 
 /// An export under way: where it goes, how far it is, and its stop switch

@@ -110,11 +110,13 @@ impl RayOfLightApp {
         while let Ok(message) = self.background.try_recv() {
             match message {
                 Background::Ids(key, ids) => self.outline_ready(key, ids),
-                Background::File(generation, event) => {
-                    if generation == self.watch_generation {
-                        self.file_event(event);
-                    }
+                Background::File(generation, _) if generation != self.watch_generation => {}
+                // What the watcher saw while a save ran comes after it.
+                Background::File(_, event) if self.saving.is_some() => {
+                    self.deferred_file_events.push(event);
                 }
+                Background::File(_, event) => self.file_event(event),
+                Background::Saved(job, outcome) => self.saved(*job, outcome),
                 Background::Exported(path, result) => self.exported(&path, result),
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
             }

@@ -30,7 +30,7 @@ pub use command::Command;
 use dialogs::{Confirm, DialogKind, PathPrompt};
 use picture::View;
 
-use super::document::{Document, FileState, Reload, SaveError};
+use super::document::{Document, FileState, Reload, SaveError, SaveJob, SaveOutcome, SaveStep};
 use super::pace::Pace;
 use super::panel::{self, Selection};
 use super::preview::{Preview, RenderState};
@@ -57,6 +57,8 @@ enum Background {
     /// An export ended: written, failed, or (`Ok(false)`) cancelled.
     Exported(PathBuf, Result<bool, String>),
     Dialog(DialogKind, Option<PathBuf>, Duration),
+    /// A save ran (on a thread of its own).
+    Saved(Box<SaveJob>, SaveOutcome),
 }
 
 pub struct RayOfLightApp {
@@ -91,6 +93,11 @@ pub struct RayOfLightApp {
     notice: Option<(String, Instant)>,
     /// The export running in the background, if any.
     export: Option<dialogs::Export>,
+    /// The save under way, if any.
+    saving: Option<dialogs::Saving>,
+    /// The watcher's reports that came while a save ran: handled after it,
+    /// as they came.
+    deferred_file_events: Vec<FileEvent>,
     recent: Recent,
     /// Window size, anti-aliasing and study runs, saved on exit.
     settings: Settings,
@@ -176,6 +183,8 @@ impl RayOfLightApp {
             study: StudyWindow::with_runs(settings.study_runs),
             notice: None,
             export: None,
+            saving: None,
+            deferred_file_events: Vec::new(),
             recent,
             settings,
             watch_generation: 0,
@@ -264,6 +273,11 @@ impl RayOfLightApp {
 
     pub fn document(&self) -> &Document {
         &self.doc
+    }
+
+    /// A save is running (on its own thread).
+    pub fn is_saving(&self) -> bool {
+        self.saving.is_some()
     }
 
     /// The object selected in the picture or the panel.

@@ -97,6 +97,15 @@ impl RayOfLightApp {
                 ui.separator();
                 ui.label(format!("{} fps", self.frames.len()));
                 self.export_progress(ui);
+                if let Some(saving) = &self.saving {
+                    ui.separator();
+                    ui.spinner();
+                    ui.label(format!(
+                        "saving… {:.0} s",
+                        saving.started.elapsed().as_secs_f64().floor()
+                    ));
+                    ui.ctx().request_repaint_after(Duration::from_millis(250));
+                }
                 if let Some((notice, _)) = &self.notice {
                     ui.separator();
                     ui.label(notice.as_str());

@@ -1,7 +1,6 @@
 //! A [`Document`] and its file on disk: what the watcher read (the same
 //! bytes, another version to merge with, a broken or missing file), and
-//! saving, which reads the file again first and never writes over text the
-//! app has not read.
+//! the fingerprint that tells them apart. Saving is in `save`.
 
 use super::*;
 
@@ -166,7 +165,7 @@ impl Document {
 
     /// Replays the unsaved edits onto the file's version `read`; with
     /// conflicts left, keeps it pending and asks.
-    fn merge_with(
+    pub(super) fn merge_with(
         &mut self,
         read: FileRead,
         choices: &BTreeMap<usize, Choice>,
@@ -198,7 +197,7 @@ impl Document {
         } = read;
         self.disk = Some(fingerprint);
         self.labels = labels;
-        self.source = text;
+        self.source = Arc::new(text);
         self.source_scene = theirs.clone();
         self.saved = Edited::new(theirs);
         self.edited = edited.unwrap_or_else(|| self.saved.clone());
@@ -242,101 +241,6 @@ impl Document {
     /// The file disappeared.
     pub fn file_missing(&mut self) {
         self.state = FileState::Missing;
-    }
-
-    /// Writes the edits into the file. The file is read first: if it is not
-    /// what the app last read or wrote, the edits are merged onto it (and
-    /// the user asked on conflicts) — never written over unread text.
-    pub fn save(&mut self) -> Result<Reload, SaveError> {
-        let Some(path) = self.path.clone() else {
-            return Err(SaveError::NoPath);
-        };
-        if self.conflict.is_some() {
-            return Err(SaveError::Conflict);
-        }
-        if self.placeholder {
-            return Err(SaveError::NothingLoaded);
-        }
-        let reload = match fingerprint_file(&path) {
-            // Nothing unsaved and the file as we know it: nothing to do.
-            Ok(seen) if Some(seen) == self.disk && !self.dirty => {
-                return Ok(Reload::Unchanged);
-            }
-            Ok(seen) if Some(seen) == self.disk => Reload::Unchanged,
-            Ok(_) => {
-                let (text, theirs) = scene::load_sharing(&path, &self.scene().objects)
-                    .map_err(|e| SaveError::DiskBroken(Box::new(e)))?;
-                if !self.dirty && self.log.is_empty() {
-                    // Nothing of ours to write: take the file's version.
-                    return Ok(self.file_loaded(text, theirs));
-                }
-                match self.merge_with(FileRead::new(text, theirs), &BTreeMap::new(), true) {
-                    Reload::Conflict => return Err(SaveError::Conflict),
-                    other => other,
-                }
-            }
-            // A file deleted since: writing brings it back.
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Reload::Unchanged,
-            Err(e) => {
-                return Err(SaveError::DiskBroken(Box::new(LoadError::new(
-                    &path,
-                    None,
-                    LoadErrorKind::Io {
-                        kind: e.kind(),
-                        message: e.to_string(),
-                    },
-                ))));
-            }
-        };
-        self.write(&path)?;
-        Ok(reload)
-    }
-
-    /// Writes the scene to `path` (atomically, through a symbolic link) and
-    /// makes it this document's file. Asking before replacing another file
-    /// is the caller's.
-    pub fn save_as(&mut self, path: &Path) -> Result<(), SaveError> {
-        if self.placeholder {
-            return Err(SaveError::NothingLoaded);
-        }
-        self.write(path)?;
-        self.path = Some(path.to_owned());
-        self.state = FileState::Watching;
-        self.error = None;
-        self.conflict = None;
-        Ok(())
-    }
-
-    /// Streams the edits spliced into the source to `path`; the new file
-    /// is read back and must load as the edited scene before it replaces
-    /// the old one. No copy of the text is built: on a file of a million
-    /// objects the text is 170 MB.
-    fn write(&mut self, path: &Path) -> Result<(), SaveError> {
-        let rewrite = splice::plan(&self.source, &self.source_scene, &self.edited)?;
-        let mut written = None;
-        crate::output::write_atomic_with(
-            path,
-            |w| rewrite.write_to(w),
-            |new: &Path| -> Result<(), SaveError> {
-                let text = std::fs::read_to_string(new).map_err(|source| {
-                    crate::output::OutputError::Io {
-                        path: path.to_owned(),
-                        source,
-                    }
-                })?;
-                splice::check(&text, path, &self.edited)?;
-                written = Some(fingerprint(text.as_bytes()));
-                Ok(())
-            },
-        )?;
-        self.disk = written;
-        self.saved = self.edited.clone();
-        self.log.clear();
-        self.dirty = false;
-        if self.state == FileState::Missing {
-            self.state = FileState::Watching;
-        }
-        Ok(())
     }
 }
 

@@ -20,19 +20,22 @@
 //! source the edits' origins point into), so unchanged bytes stay as they
 //! are and undoing everything and saving gives the file back byte for byte.
 //!
-//! The undo history lives in `history`, reading and writing the file in
-//! `disk`.
+//! The undo history lives in `history`, reading the file in `disk`,
+//! saving (on another thread if need be) in `save`.
 
 mod disk;
 mod history;
+mod save;
 
 use disk::fingerprint;
 pub use disk::{FileRead, PendingMerge, Reload, SaveError};
 use history::Step;
+pub use save::{SaveJob, SaveOutcome, SaveStep};
 
 use std::collections::BTreeMap;
 use std::hash::Hasher;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::scene::edit::{Edit, EditError, Edited, Field, Owner, Undo};
@@ -54,7 +57,7 @@ pub struct Document {
     path: Option<PathBuf>,
     /// The text last read from the file, which the elements' origins point
     /// into; saves splice the edits into it.
-    source: String,
+    source: Arc<String>,
     /// The scene `source` loads to (sharing its objects with `saved` and
     /// `edited` where they are the same): saves compare with it rather
     /// than parse the text again.
@@ -102,7 +105,7 @@ impl Document {
             path,
             disk: Some(fingerprint(text.as_bytes())),
             labels: splice::object_labels(&text),
-            source: text,
+            source: Arc::new(text),
             source_scene: scene.clone(),
             edited: saved.clone(),
             saved,

@@ -1,0 +1,216 @@
+//! Saving a [`Document`], in three steps so that the slow one can run on
+//! another thread (a million objects take seconds to write and check; the
+//! window must not wait):
+//!
+//! 1. [`Document::save_job`] takes what the save needs — the source text,
+//!    its scene, the edited scene, the fingerprint of the file as last
+//!    read or written — all shared, nothing copied;
+//! 2. [`SaveJob::run`], on any thread, reads the file's fingerprint: the
+//!    file as known is written (the edits spliced into the source and
+//!    streamed, the new file read back and checked before it replaces the
+//!    old one), a file changed by another program is read and handed back
+//!    unwritten;
+//! 3. [`Document::save_done`] takes the outcome: the edits made while it
+//!    ran stay unsaved; a changed file is merged with the edits (asking on
+//!    conflicts) and written by a new job.
+//!
+//! [`Document::save`] does the three in a row.
+
+use super::disk::{fingerprint, fingerprint_file};
+use super::*;
+use std::sync::Arc;
+
+/// A save taken from a document, to run on any thread.
+#[derive(Debug, Clone)]
+pub struct SaveJob {
+    path: PathBuf,
+    source: Arc<String>,
+    source_scene: Scene,
+    edited: Edited,
+    /// The fingerprint of the file as last read or written.
+    disk: Option<u64>,
+    dirty: bool,
+    /// Edits logged when the job was taken: those written.
+    logged: usize,
+}
+
+/// What a [`SaveJob`] did.
+#[derive(Debug)]
+pub enum SaveOutcome {
+    /// The file was written; its fingerprint (`None` for a device or FIFO,
+    /// written without being read back).
+    Written(Option<u64>),
+    /// Nothing to write: the file is as known and nothing is unsaved.
+    Unchanged,
+    /// Another program changed the file: it was read, not written.
+    FileChanged(Box<FileRead>),
+    Failed(SaveError),
+}
+
+/// What the document made of a [`SaveOutcome`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SaveStep {
+    /// Saved (or nothing to save), after `Reload`.
+    Done(Reload),
+    /// The file's changes were merged with the edits: run a new job to
+    /// write them.
+    Again,
+}
+
+impl SaveJob {
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Writes the edited scene to the file unless another program changed
+    /// it; never writes over text the app has not read.
+    pub fn run(&self) -> SaveOutcome {
+        match fingerprint_file(&self.path) {
+            // Nothing unsaved and the file as we know it: nothing to do.
+            Ok(seen) if Some(seen) == self.disk && !self.dirty => SaveOutcome::Unchanged,
+            Ok(seen) if Some(seen) == self.disk => self.write(),
+            Ok(_) => match scene::load_sharing(&self.path, &self.edited.scene().objects) {
+                Ok((text, theirs)) => {
+                    SaveOutcome::FileChanged(Box::new(FileRead::new(text, theirs)))
+                }
+                Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(e))),
+            },
+            // A file deleted since: writing brings it back.
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => self.write(),
+            Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(LoadError::new(
+                &self.path,
+                None,
+                LoadErrorKind::Io {
+                    kind: e.kind(),
+                    message: e.to_string(),
+                },
+            )))),
+        }
+    }
+
+    fn write(&self) -> SaveOutcome {
+        match write_scene(&self.path, &self.source, &self.source_scene, &self.edited) {
+            Ok(written) => SaveOutcome::Written(written),
+            Err(e) => SaveOutcome::Failed(e),
+        }
+    }
+}
+
+/// Streams `edited` spliced into `source` (whose scene is `source_scene`)
+/// to `path`; the new file is read back and must load as the edited scene
+/// before it replaces the old one. No copy of the text is built: on a file
+/// of a million objects the text is 170 MB. Returns the new file's
+/// fingerprint (`None` for a device or FIFO, not read back).
+fn write_scene(
+    path: &Path,
+    source: &str,
+    source_scene: &Scene,
+    edited: &Edited,
+) -> Result<Option<u64>, SaveError> {
+    let rewrite = splice::plan(source, source_scene, edited)?;
+    let mut written = None;
+    crate::output::write_atomic_with(
+        path,
+        |w| rewrite.write_to(w),
+        |new: &Path| -> Result<(), SaveError> {
+            let text =
+                std::fs::read_to_string(new).map_err(|source| crate::output::OutputError::Io {
+                    path: path.to_owned(),
+                    source,
+                })?;
+            splice::check(&text, path, edited)?;
+            written = Some(fingerprint(text.as_bytes()));
+            Ok(())
+        },
+    )?;
+    Ok(written)
+}
+
+impl Document {
+    /// Takes a save of the edits into the file, to run anywhere.
+    pub fn save_job(&self) -> Result<SaveJob, SaveError> {
+        let Some(path) = self.path.clone() else {
+            return Err(SaveError::NoPath);
+        };
+        if self.conflict.is_some() {
+            return Err(SaveError::Conflict);
+        }
+        if self.placeholder {
+            return Err(SaveError::NothingLoaded);
+        }
+        Ok(SaveJob {
+            path,
+            source: Arc::clone(&self.source),
+            source_scene: self.source_scene.clone(),
+            edited: self.edited.clone(),
+            disk: self.disk,
+            dirty: self.dirty,
+            logged: self.log.len(),
+        })
+    }
+
+    /// Takes what `job` (taken from this document) did. Edits made since
+    /// the job was taken stay unsaved.
+    pub fn save_done(&mut self, job: SaveJob, outcome: SaveOutcome) -> Result<SaveStep, SaveError> {
+        match outcome {
+            SaveOutcome::Written(written) => {
+                self.disk = written;
+                self.saved = job.edited;
+                self.log.drain(..job.logged.min(self.log.len()));
+                if self.state == FileState::Missing {
+                    self.state = FileState::Watching;
+                }
+                self.update_dirty();
+                Ok(SaveStep::Done(Reload::Unchanged))
+            }
+            SaveOutcome::Unchanged => Ok(SaveStep::Done(Reload::Unchanged)),
+            SaveOutcome::FileChanged(read) => {
+                if !self.dirty && self.log.is_empty() {
+                    // Nothing of ours to write: take the file's version.
+                    return Ok(SaveStep::Done(self.file_read(*read)));
+                }
+                match self.merge_with(*read, &BTreeMap::new(), true) {
+                    Reload::Conflict => Err(SaveError::Conflict),
+                    _ => Ok(SaveStep::Again),
+                }
+            }
+            SaveOutcome::Failed(e) => Err(e),
+        }
+    }
+
+    /// Writes the edits into the file, here and now. The file is read
+    /// first: if it is not what the app last read or wrote, the edits are
+    /// merged onto it (and the user asked on conflicts) — never written
+    /// over unread text.
+    pub fn save(&mut self) -> Result<Reload, SaveError> {
+        let mut reload = Reload::Unchanged;
+        loop {
+            let job = self.save_job()?;
+            let outcome = job.run();
+            match self.save_done(job, outcome)? {
+                SaveStep::Done(Reload::Unchanged) => return Ok(reload),
+                SaveStep::Done(other) => return Ok(other),
+                SaveStep::Again => reload = Reload::Merged,
+            }
+        }
+    }
+
+    /// Writes the scene to `path` (atomically, through a symbolic link) and
+    /// makes it this document's file. Asking before replacing another file
+    /// is the caller's.
+    pub fn save_as(&mut self, path: &Path) -> Result<(), SaveError> {
+        if self.placeholder {
+            return Err(SaveError::NothingLoaded);
+        }
+        let written = write_scene(path, &self.source, &self.source_scene, &self.edited)?;
+        self.disk = written;
+        self.saved = self.edited.clone();
+        self.log.clear();
+        self.path = Some(path.to_owned());
+        self.state = FileState::Watching;
+        self.error = None;
+        self.conflict = None;
+        self.update_dirty();
+        Ok(())
+    }
+}
