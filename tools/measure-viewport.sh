@@ -4,7 +4,8 @@
 # second during a 4000x4000 render, idle CPU, and the time from releasing
 # the mouse to the full picture. Drives the release build under Xvfb with
 # xdotool and reads the app's RAYOFLIGHT_STATS lines.
-# Usage: tools/measure-viewport.sh [OUT_DIR]   (needs xvfb, xdotool)
+# Usage: tools/measure-viewport.sh [OUT_DIR [SCENE...]]   (needs xvfb, xdotool)
+# With scenes, measures those instead (a million spheres, say).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-/tmp/measure-viewport}
@@ -78,5 +79,11 @@ run() {
   wait $app 2>/dev/null || true
 }
 
-run scenes/bench/room.xml room
-run "$big" big-4000
+if (( $# > 1 )); then
+  for scene in "${@:2}"; do
+    run "$scene" "$(basename "$scene" .xml)"
+  done
+else
+  run scenes/bench/room.xml room
+  run "$big" big-4000
+fi

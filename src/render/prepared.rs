@@ -11,6 +11,9 @@
 //! - Shading data (colour, material) sits apart, read once per hit.
 //! - Whitted chains stop as soon as nothing the rest of the chain could add
 //!   can change the pixel's 8-bit value (exact: the image is unchanged).
+//! - All of it but the camera is one shared [`World`]: another view of the
+//!   same scene ([`Prepared::with_view`]: a coarse pass, a moved camera, a
+//!   pick) prepares nothing again.
 
 use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
 use crate::geometry::{Aabb, Bvh, Primitive, Primitive32, Ray, Ray32};
