@@ -2,46 +2,18 @@
 //! binary, so `rayoflight bench` runs from anywhere) and generated scenes
 //! of n spheres on a floor for the cost-against-object-count series.
 //!
-//! Timing, POV-Ray and reporting live with the command line; this module
-//! only says what is rendered.
+//! Timing is [`crate::measure`]'s; POV-Ray and reporting live with the
+//! command line; this module only says what is rendered.
 
-use crate::scene::{self, Scene};
-use std::path::Path;
+use crate::measure::BuiltinScene;
 
-/// A bench scene as shipped in `scenes/bench/`.
-pub struct BenchScene {
-    pub name: &'static str,
-    pub text: &'static str,
-}
-
-/// The issue-5 set, in the order reported.
-pub const SCENES: [BenchScene; 4] = [
-    BenchScene {
-        name: "example-2000",
-        text: include_str!("../scenes/bench/example-2000.xml"),
-    },
-    BenchScene {
-        name: "spheres-2000",
-        text: include_str!("../scenes/bench/spheres-2000.xml"),
-    },
-    BenchScene {
-        name: "mirrors",
-        text: include_str!("../scenes/bench/mirrors.xml"),
-    },
-    BenchScene {
-        name: "room",
-        text: include_str!("../scenes/bench/room.xml"),
-    },
+/// The bench set, in the order reported.
+pub const SCENES: [BuiltinScene; 4] = [
+    crate::builtin!("bench", "example-2000"),
+    crate::builtin!("bench", "spheres-2000"),
+    crate::builtin!("bench", "mirrors"),
+    crate::builtin!("bench", "room"),
 ];
-
-impl BenchScene {
-    pub fn scene(&self) -> Result<Scene, scene::LoadError> {
-        scene::parse(
-            self.text,
-            Path::new(&format!("scenes/bench/{}.xml", self.name)),
-        )
-    }
-}
 
 /// A scene of `n` spheres of radius 0.2 scattered on a floor, seen from
 /// above at `width × height`, phong, two lights. The floor's side grows
@@ -91,7 +63,7 @@ mod tests {
     fn generated_scenes_load_with_n_spheres() {
         for n in [1, 10, 1000] {
             let text = spheres_on_floor(n, 80, 60);
-            let scene = scene::parse(&text, Path::new("gen.xml")).unwrap();
+            let scene = crate::scene::parse(&text, std::path::Path::new("gen.xml")).unwrap();
             assert_eq!(scene.objects.len(), n + 1);
             assert_eq!(text, spheres_on_floor(n, 80, 60), "deterministic");
         }

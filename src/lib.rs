@@ -17,6 +17,8 @@
 //! - [`files`]: special files and symbolic links, for reading and writing.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
+//! - [`measure`]: render time, medians, image differences, CSV: measured
+//!   one way by the bench, the study, `-time` and the tests.
 //! - [`study`]: speed against accuracy: methods, study scenes, measures.
 //! - `gui` (feature `gui`): the desktop previewer, which uses only the
 //!   modules above.
@@ -31,6 +33,7 @@ pub mod geometry;
 #[cfg(feature = "gui")]
 pub mod gui;
 pub mod math;
+pub mod measure;
 pub mod output;
 pub mod pov;
 pub mod render;

@@ -14,13 +14,14 @@
 
 pub mod chart;
 
+use crate::measure::{BuiltinScene, Csv, Difference, RenderPool, Timed, median_of, render_timed};
 use crate::render::{
-    self, Cancel, MAX_AA, Offset, Precision, RenderError, RenderOptions, SphereTest,
+    self, Cancel, MAX_AA, Offset, Precision, Progress, RenderError, RenderOptions, SphereTest,
 };
 use crate::scene::{self, LoadError, Scene};
 use image::RgbImage;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 /// Why a study stopped.
 #[derive(Debug, thiserror::Error)]
@@ -159,52 +160,27 @@ pub struct StudyScene {
 }
 
 /// The built-in study scenes (`scenes/study/`), in the order reported.
-pub const SCENES: [(&str, &str); 10] = [
-    ("example", include_str!("../scenes/study/example.xml")),
-    (
-        "example-1e3",
-        include_str!("../scenes/study/example-1e3.xml"),
-    ),
-    (
-        "example-1e5",
-        include_str!("../scenes/study/example-1e5.xml"),
-    ),
-    (
-        "example-1e7",
-        include_str!("../scenes/study/example-1e7.xml"),
-    ),
-    (
-        "grazing-plane",
-        include_str!("../scenes/study/grazing-plane.xml"),
-    ),
-    (
-        "tiny-on-huge",
-        include_str!("../scenes/study/tiny-on-huge.xml"),
-    ),
-    ("tiny-far", include_str!("../scenes/study/tiny-far.xml")),
-    (
-        "mirror-corridor",
-        include_str!("../scenes/study/mirror-corridor.xml"),
-    ),
-    (
-        "inside-sphere",
-        include_str!("../scenes/study/inside-sphere.xml"),
-    ),
-    (
-        "many-spheres",
-        include_str!("../scenes/study/many-spheres.xml"),
-    ),
+pub const SCENES: [BuiltinScene; 10] = [
+    crate::builtin!("study", "example"),
+    crate::builtin!("study", "example-1e3"),
+    crate::builtin!("study", "example-1e5"),
+    crate::builtin!("study", "example-1e7"),
+    crate::builtin!("study", "grazing-plane"),
+    crate::builtin!("study", "tiny-on-huge"),
+    crate::builtin!("study", "tiny-far"),
+    crate::builtin!("study", "mirror-corridor"),
+    crate::builtin!("study", "inside-sphere"),
+    crate::builtin!("study", "many-spheres"),
 ];
 
 /// Parses the built-in study scenes.
 pub fn builtin_scenes() -> Result<Vec<StudyScene>, LoadError> {
     SCENES
         .iter()
-        .map(|(name, text)| {
-            let path = format!("scenes/study/{name}.xml");
+        .map(|builtin| {
             Ok(StudyScene {
-                name: (*name).to_owned(),
-                scene: scene::parse(text, Path::new(&path))?,
+                name: builtin.name.to_owned(),
+                scene: builtin.scene()?,
             })
         })
         .collect()
@@ -303,26 +279,6 @@ pub struct Row {
 /// The share of pixels within one level below which a method fails.
 pub const FAIL_BELOW: f64 = 0.99;
 
-/// How far an image is from a reference of the same size:
-/// (max_diff, mean_diff, within1).
-pub fn compare(image: &RgbImage, reference: &RgbImage) -> (u8, f64, f64) {
-    assert_eq!(image.dimensions(), reference.dimensions());
-    let (mut max, mut sum, mut within) = (0u8, 0u64, 0u64);
-    for (a, b) in image.pixels().zip(reference.pixels()) {
-        let mut worst = 0;
-        for c in 0..3 {
-            let d = a[c].abs_diff(b[c]);
-            worst = worst.max(d);
-            sum += u64::from(d);
-        }
-        max = max.max(worst);
-        within += u64::from(worst <= 1);
-    }
-    let pixels = u64::from(image.width()) * u64::from(image.height());
-    let pixels = pixels.max(1) as f64;
-    (max, sum as f64 / (3.0 * pixels), within as f64 / pixels)
-}
-
 /// Renders `scene` with `method` `runs` times (at least once) and measures
 /// it against `reference`: the median time, the rays, the error.
 pub fn measure(
@@ -331,47 +287,45 @@ pub fn measure(
     reference: &RgbImage,
     runs: usize,
 ) -> Result<Row, StudyError> {
-    measure_image(scene, method, reference, runs, None, &Cancel::never()).map(|(row, _)| row)
+    let pool = RenderPool::new(None)?;
+    measure_image(scene, method, reference, runs, &pool, &Cancel::never()).map(|(row, _)| row)
 }
 
-/// [`measure`] with `threads` threads (`None`: one per core), and the image
-/// the method rendered (its first run), unless cancelled. The time
-/// includes `auto`'s planning.
+/// [`measure`] on `pool`, and the image the method rendered (its first
+/// run), unless cancelled. The time is render time as [`crate::measure`]
+/// defines it (`auto`'s planning included), as the command line renders
+/// with `--method`.
 pub fn measure_image(
     scene: &StudyScene,
     method: &Method,
     reference: &RgbImage,
     runs: usize,
-    threads: Option<usize>,
+    pool: &RenderPool,
     cancel: &Cancel,
 ) -> Result<(Row, RgbImage), StudyError> {
-    let mut times = Vec::with_capacity(runs.max(1));
-    let mut result = None;
-    for _ in 0..runs.max(1) {
-        let start = Instant::now();
-        // As the command line renders with --method (planning included).
-        let options = crate::request::RenderRequest {
-            method: Some(method.clone()),
-            aa: None,
-            threads,
-        }
-        .options(&scene.scene);
-        let (image, stats) = render_or_stop(&scene.scene, &options, cancel)?;
-        times.push(start.elapsed());
-        result.get_or_insert((image, stats));
-    }
-    times.sort();
-    let (image, stats) = result.expect("at least one run");
-    let (max_diff, mean_diff, within1) = compare(&image, reference);
+    let request = crate::request::RenderRequest {
+        method: Some(method.clone()),
+        ..Default::default()
+    };
+    let mut first = None;
+    let time = median_of(runs, || {
+        let timed = render_timed(&scene.scene, &request, pool, cancel, &Progress::default())?
+            .ok_or(StudyError::Cancelled)?;
+        let elapsed = timed.elapsed;
+        first.get_or_insert(timed);
+        Ok::<_, StudyError>(elapsed)
+    })?;
+    let Timed { image, stats, .. } = first.ok_or(StudyError::Cancelled)?;
+    let difference = Difference::between(&image, reference);
     let row = Row {
         scene: scene.name.clone(),
         method: method.name,
-        time: times[times.len() / 2],
+        time,
         rays: stats.rays,
-        max_diff,
-        mean_diff,
-        within1,
-        failed: within1 < FAIL_BELOW,
+        max_diff: difference.max,
+        mean_diff: difference.mean,
+        within1: difference.within1,
+        failed: difference.within1 < FAIL_BELOW,
     };
     Ok((row, image))
 }
@@ -390,11 +344,12 @@ pub fn run(
     progress: &mut dyn FnMut(&Row, &RgbImage, &RgbImage),
 ) -> Result<Vec<Row>, StudyError> {
     let mut rows = Vec::new();
+    let pool = RenderPool::new(threads)?;
     for scene in scenes {
         let references = References::new(&scene.scene, methods, threads, cancel)?;
         for method in methods {
             let reference = references.for_method(method);
-            let (row, image) = measure_image(scene, method, reference, runs, threads, cancel)?;
+            let (row, image) = measure_image(scene, method, reference, runs, &pool, cancel)?;
             progress(&row, &image, reference);
             rows.push(row);
         }
@@ -407,30 +362,20 @@ pub const CSV_HEADER: &str = "scene,method,time_ms,rays,max_diff,mean_diff,withi
 
 /// The rows as CSV text, header first.
 pub fn csv(rows: &[Row]) -> String {
-    let mut text = format!("{CSV_HEADER}\n");
+    let mut csv = Csv::new(&CSV_HEADER.split(',').collect::<Vec<_>>());
     for r in rows {
-        text.push_str(&format!(
-            "{},{},{:.3},{},{},{:.4},{:.6},{}\n",
-            csv_field(&r.scene),
-            r.method,
-            r.time.as_secs_f64() * 1e3,
-            r.rays,
-            r.max_diff,
-            r.mean_diff,
-            r.within1,
-            r.failed
-        ));
+        csv.row([
+            r.scene.clone(),
+            r.method.to_owned(),
+            format!("{:.3}", r.time.as_secs_f64() * 1e3),
+            r.rays.to_string(),
+            r.max_diff.to_string(),
+            format!("{:.4}", r.mean_diff),
+            format!("{:.6}", r.within1),
+            r.failed.to_string(),
+        ]);
     }
-    text
-}
-
-/// Quotes a field that holds a comma, a quote or a line break.
-fn csv_field(text: &str) -> String {
-    if text.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", text.replace('"', "\"\""))
-    } else {
-        text.to_owned()
-    }
+    csv.into_text()
 }
 
 #[cfg(test)]
@@ -454,16 +399,6 @@ mod tests {
         names.sort();
         names.dedup();
         assert_eq!(names.len(), m.len());
-    }
-
-    #[test]
-    fn compare_counts_levels() {
-        let a = RgbImage::from_raw(2, 1, vec![10, 10, 10, 0, 0, 0]).unwrap();
-        let b = RgbImage::from_raw(2, 1, vec![11, 10, 10, 0, 9, 0]).unwrap();
-        let (max, mean, within) = compare(&a, &b);
-        assert_eq!(max, 9);
-        assert!((mean - 10.0 / 6.0).abs() < 1e-12);
-        assert_eq!(within, 0.5);
     }
 
     #[test]

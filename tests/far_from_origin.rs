@@ -44,17 +44,8 @@ fn a_scene_moved_by_1e5_renders_like_at_the_origin() {
         let there = translate_scene(&here, offset);
         let a = render::render(&here, &RenderOptions::default()).unwrap();
         let b = render::render(&there, &RenderOptions::default()).unwrap();
-        let total = a.pixels().len();
-        let mut within1 = 0;
-        let mut max = 0;
-        for (p, q) in a.pixels().zip(b.pixels()) {
-            let d = (0..3).map(|c| p.0[c].abs_diff(q.0[c])).max().unwrap();
-            max = max.max(d);
-            if d <= 1 {
-                within1 += 1;
-            }
-        }
-        let share = within1 as f64 / total as f64;
+        let difference = rayoflight::measure::Difference::between(&a, &b);
+        let (share, max) = (difference.within1, difference.max);
         assert!(
             share >= 0.9999 && max <= 8,
             "{name}: {:.4} % within one level, max difference {max}",

@@ -104,19 +104,16 @@ struct Comparison {
 
 impl Comparison {
     fn new(ours: &RgbImage, reference: &RgbImage) -> Comparison {
-        assert_eq!(ours.dimensions(), reference.dimensions());
         let (w, h) = ours.dimensions();
-        let mut diffs = Vec::with_capacity((w * h) as usize);
+        let diffs = rayoflight::measure::pixel_differences(ours, reference);
         let mut worst = (0, 0, [0; 3], [0; 3]);
         let mut max_diff = 0;
-        for (x, y, a) in ours.enumerate_pixels() {
-            let b = reference.get_pixel(x, y);
-            let d = (0..3).map(|c| a.0[c].abs_diff(b.0[c])).max().unwrap();
+        for (k, &d) in diffs.iter().enumerate() {
             if d > max_diff {
+                let (x, y) = (k as u32 % w, k as u32 / w);
                 max_diff = d;
-                worst = (x, y, a.0, b.0);
+                worst = (x, y, ours.get_pixel(x, y).0, reference.get_pixel(x, y).0);
             }
-            diffs.push(d);
         }
         let at = |x: i64, y: i64| -> u8 {
             if x < 0 || y < 0 || x >= i64::from(w) || y >= i64::from(h) {

@@ -3,7 +3,8 @@
 //! peak memory. Prints a table on stdout and optionally writes a CSV.
 
 use super::progress::Steps;
-use rayoflight::render::{self, RenderOptions, RenderStats};
+use rayoflight::measure::{Csv, Difference, RenderPool, Timed, median_of, render_timed};
+use rayoflight::render::{Cancel, Progress, RenderStats};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
 use rayoflight::{bench, output, pov};
@@ -212,7 +213,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         let median = median_of(args.runs, || {
             let start = Instant::now();
             output::encode(&image, format).map_err(|e| e.to_string())?;
-            Ok(start.elapsed())
+            Ok::<_, String>(start.elapsed())
         })?;
         let base = *png.get_or_insert(median);
         out(&format!(
@@ -271,16 +272,25 @@ fn scene_line(row: &Row) -> String {
 }
 
 fn csv(rows: &[Row]) -> String {
-    let mut text = String::from(
-        "section,scene,width,height,threads,objects,median_ms,rays,mrays_per_s,pov_ms,ratio,within1,max_diff,peak_mb\n",
-    );
+    let mut csv = Csv::new(&[
+        "section",
+        "scene",
+        "width",
+        "height",
+        "threads",
+        "objects",
+        "median_ms",
+        "rays",
+        "mrays_per_s",
+        "pov_ms",
+        "ratio",
+        "within1",
+        "max_diff",
+        "peak_mb",
+    ]);
     for r in rows {
         let secs = r.median.as_secs_f64();
-        let mrays = if secs > 0.0 {
-            format!("{:.2}", r.stats.rays as f64 / secs / 1e6)
-        } else {
-            String::new()
-        };
+        let timed = |text: String| if secs > 0.0 { text } else { String::new() };
         let (pov_ms, ratio, within1, max_diff) = match &r.pov {
             Some(p) => (
                 format!("{:.2}", ms(p.median)),
@@ -290,79 +300,51 @@ fn csv(rows: &[Row]) -> String {
             ),
             None => Default::default(),
         };
-        let _ = writeln!(
-            text,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.section,
-            r.scene,
-            r.width,
-            r.height,
-            r.threads,
-            r.objects,
-            if secs > 0.0 {
-                format!("{:.3}", ms(r.median))
-            } else {
-                String::new()
-            },
-            r.stats.rays,
-            mrays,
+        csv.row([
+            r.section.to_owned(),
+            r.scene.clone(),
+            r.width.to_string(),
+            r.height.to_string(),
+            r.threads.to_string(),
+            r.objects.to_string(),
+            timed(format!("{:.3}", ms(r.median))),
+            r.stats.rays.to_string(),
+            timed(format!("{:.2}", r.stats.rays as f64 / secs / 1e6)),
             pov_ms,
             ratio,
             within1,
             max_diff,
-            r.peak_mb.map(|m| format!("{m:.1}")).unwrap_or_default()
-        );
+            r.peak_mb.map(|m| format!("{m:.1}")).unwrap_or_default(),
+        ]);
     }
-    text
+    csv.into_text()
 }
 
-/// Median render time over `runs` (prepare and trace, as `-time`).
+/// Median render time over `runs`, as [`rayoflight::measure`] defines it
+/// (the CLI's request: `auto`; the pool built before the clock).
 fn time_render(
     scene: &Scene,
     threads: usize,
     runs: usize,
 ) -> Result<(Duration, RenderStats, image::RgbImage), String> {
-    // What the CLI renders: the options `auto` plans for the scene.
-    let options = RenderRequest {
-        threads: Some(threads),
-        ..RenderRequest::default()
-    }
-    .options(scene);
-    // The pool is built once, outside the timing.
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .map_err(|e| e.to_string())?;
+    let pool = RenderPool::new(Some(threads)).map_err(|e| e.to_string())?;
     let mut last = None;
     let median = median_of(runs, || {
-        let start = Instant::now();
-        let result = pool.install(|| {
-            render::render_with_stats(
-                scene,
-                &RenderOptions {
-                    threads: None,
-                    ..options.clone()
-                },
-            )
-        });
-        let elapsed = start.elapsed();
-        last = Some(result.map_err(|e| e.to_string())?);
-        Ok(elapsed)
+        let timed = render_timed(
+            scene,
+            &RenderRequest::default(),
+            &pool,
+            &Cancel::never(),
+            &Progress::default(),
+        )
+        .map_err(|e| e.to_string())?
+        .ok_or("cancelled")?;
+        let elapsed = timed.elapsed;
+        last = Some(timed);
+        Ok::<_, String>(elapsed)
     })?;
-    let (image, stats) = last.ok_or("no run")?;
+    let Timed { image, stats, .. } = last.ok_or("no run")?;
     Ok((median, stats, image))
-}
-
-/// The median of `runs` (at least one) timings by `run`.
-fn median_of(
-    runs: usize,
-    mut run: impl FnMut() -> Result<Duration, String>,
-) -> Result<Duration, String> {
-    let mut times = (0..runs.max(1))
-        .map(|_| run())
-        .collect::<Result<Vec<_>, _>>()?;
-    times.sort();
-    Ok(times[times.len() / 2])
 }
 
 fn povray_version() -> Option<String> {
@@ -384,8 +366,7 @@ fn pov_render(
 ) -> Result<PovRun, String> {
     let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
     std::fs::write(dir.path().join("scene.pov"), pov::export(scene)).map_err(|e| e.to_string())?;
-    let mut times = Vec::new();
-    for _ in 0..runs.max(1) {
+    let median = median_of(runs, || {
         let out = Command::new("povray")
             .current_dir(dir.path())
             .args([
@@ -409,22 +390,16 @@ fn pov_render(
             .and_then(|l| l.split_whitespace().next())
             .and_then(|s| s.parse::<f64>().ok())
             .ok_or_else(|| format!("povray gave no trace time: {}", text.trim()))?;
-        times.push(Duration::from_secs_f64(seconds));
-    }
-    times.sort();
+        Ok::<_, String>(Duration::from_secs_f64(seconds))
+    })?;
     let theirs = image::open(dir.path().join("scene.png"))
         .map_err(|e| format!("POV-Ray's image: {e}"))?
         .to_rgb8();
-    let (mut within, mut max) = (0usize, 0u8);
-    for (a, b) in ours.pixels().zip(theirs.pixels()) {
-        let d = (0..3).map(|c| a.0[c].abs_diff(b.0[c])).max().unwrap_or(0);
-        max = max.max(d);
-        within += usize::from(d <= 1);
-    }
+    let difference = Difference::between(ours, &theirs);
     Ok(PovRun {
-        median: times[times.len() / 2],
-        within1: within as f64 / ours.pixels().len().max(1) as f64,
-        max_diff: max,
+        median,
+        within1: difference.within1,
+        max_diff: difference.max,
     })
 }
 

@@ -13,11 +13,10 @@ use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
-use rayoflight::{output, pov, render, scene};
+use rayoflight::{measure, output, pov, render, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use std::time::Instant;
 
 /// A failure at the edge: what to print and which status to exit with.
 enum Failure {
@@ -119,24 +118,23 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     // The output can take this image: a folder that exists and is
     // writable, a format that holds its size, no special file in the way.
     output::check_target(&out, scene.camera.width, scene.camera.height).map_err(fail)?;
-    let start = Instant::now();
-    let options = RenderRequest {
+    let request = RenderRequest {
         method: r.method.clone(),
         aa: r.aa,
         threads: r.threads,
-    }
-    .options(scene);
+    };
+    // Render time as the bench and the study measure it (rayoflight::measure).
+    let pool = measure::RenderPool::new(r.threads).map_err(fail)?;
     let counted = render::Progress::default();
     let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
-        render::render_watched(scene, &options, &render::Cancel::never(), &counted)
+        measure::render_timed(scene, &request, &pool, &render::Cancel::never(), &counted)
     });
-    let elapsed = start.elapsed();
-    let (image, _) = rendered
+    let timed = rendered
         .map_err(fail)?
         .ok_or_else(|| Failure::Error("the render was cancelled".to_owned()))?;
-    output::save(&image, &out).map_err(fail)?;
+    output::save(&timed.image, &out).map_err(fail)?;
     if r.time {
-        print_line(&format!("render: {} ns", elapsed.as_nanos()));
+        print_line(&format!("render: {} ns", timed.elapsed.as_nanos()));
     }
     Ok(())
 }
