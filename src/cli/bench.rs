@@ -35,6 +35,9 @@ struct Row {
     stats: RenderStats,
     pov: Option<PovRun>,
     peak_mb: Option<f64>,
+    /// The app's render time for the same scene (scenes section, GUI
+    /// build).
+    app: Option<Duration>,
 }
 
 struct PovRun {
@@ -64,10 +67,12 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             .unwrap_or(if args.pov { "not found" } else { "skipped" }),
     ));
 
-    out("\nScenes (same image, same thread count as POV-Ray's +WT)\n");
+    out(
+        "\nScenes (same image, same thread count as POV-Ray's +WT; app: the app's render worker, no window)\n",
+    );
     out(&format!(
-        "{:<14} {:>10} {:>10} {:>9} {:>11} {:>7} {:>9} {:>4}\n",
-        "scene", "size", "ours ms", "Mrays/s", "POV-Ray ms", "ratio", "within 1", "max"
+        "{:<14} {:>10} {:>10} {:>9} {:>11} {:>7} {:>9} {:>4} {:>10}\n",
+        "scene", "size", "ours ms", "Mrays/s", "POV-Ray ms", "ratio", "within 1", "max", "app ms"
     ));
     let mut sets: Vec<(String, Scene)> = Vec::new();
     let example = scene::parse(rayoflight::EXAMPLE_SCENE, Path::new("scenes/example.xml"))
@@ -89,7 +94,9 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             Some(_) => Some(pov_render(scene, args.threads, args.runs, &image)?),
             None => None,
         };
+        let app = app_time(scene, args.threads, args.runs)?;
         let row = Row {
+            app,
             section: "scene",
             scene: name.clone(),
             width: scene.camera.width,
@@ -140,6 +147,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
                 stats,
                 pov: None,
                 peak_mb: None,
+                app: None,
             });
         }
         out("\n");
@@ -175,6 +183,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             stats,
             pov: None,
             peak_mb: None,
+            app: None,
         });
     }
 
@@ -196,6 +205,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
                 stats: RenderStats::default(),
                 pov: None,
                 peak_mb: Some(beyond),
+                app: None,
             });
         }
         None => out("not measurable here (needs Linux /proc)\n"),
@@ -232,6 +242,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             stats: RenderStats::default(),
             pov: None,
             peak_mb: None,
+            app: None,
         });
     }
 
@@ -267,6 +278,12 @@ fn scene_line(row: &Row) -> String {
         }
         None => line.push_str("           -       -         -    -"),
     }
+    match row.app {
+        Some(app) => {
+            let _ = write!(line, " {:>10.2}", ms(app));
+        }
+        None => line.push_str("          -"),
+    }
     line.push('\n');
     line
 }
@@ -287,6 +304,7 @@ fn csv(rows: &[Row]) -> String {
         "within1",
         "max_diff",
         "peak_mb",
+        "app_ms",
     ]);
     for r in rows {
         let secs = r.median.as_secs_f64();
@@ -315,6 +333,7 @@ fn csv(rows: &[Row]) -> String {
             within1,
             max_diff,
             r.peak_mb.map(|m| format!("{m:.1}")).unwrap_or_default(),
+            r.app.map(|d| format!("{:.3}", ms(d))).unwrap_or_default(),
         ]);
     }
     csv.into_text()
@@ -345,6 +364,39 @@ fn time_render(
     })?;
     let Timed { image, stats, .. } = last.ok_or("no run")?;
     Ok((median, stats, image))
+}
+
+/// The app's render time for `scene` with `threads` render threads,
+/// median of `runs`: the render worker's path (one full-size pass, as the
+/// preview of a small picture or an export), without a window, from the
+/// request to the pass done. A new worker each run: the first render of a
+/// scene prepares it, as the command line does.
+#[cfg(feature = "gui")]
+fn app_time(scene: &Scene, threads: usize, runs: usize) -> Result<Option<Duration>, String> {
+    use rayoflight::gui::worker::{Event, Worker};
+    let scene = std::sync::Arc::new(scene.clone());
+    median_of(runs, || {
+        let worker = Worker::spawn(threads, || {});
+        let start = Instant::now();
+        let generation = worker.request_passes(scene.clone(), RenderRequest::default(), vec![1]);
+        loop {
+            match worker.next_event(Duration::from_secs(600)) {
+                Some(Event::PassFinished { generation: g, .. }) if g == generation => {
+                    return Ok(start.elapsed());
+                }
+                Some(Event::Failed { message, .. }) => return Err(message),
+                Some(_) => {}
+                None => return Err("the app's worker did not answer".to_owned()),
+            }
+        }
+    })
+    .map(Some)
+}
+
+/// Without the app (a headless build), nothing to time.
+#[cfg(not(feature = "gui"))]
+fn app_time(_: &Scene, _: usize, _: usize) -> Result<Option<Duration>, String> {
+    Ok(None)
 }
 
 fn povray_version() -> Option<String> {
