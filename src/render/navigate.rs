@@ -113,8 +113,10 @@ impl Pose {
         }
     }
 
-    /// The pose as transformation steps: `scale` (when not 1), `rotate-z`
-    /// (when there is a roll), `rotate-x`, `rotate-y`, `translate`.
+    /// The pose as transformation steps: `scale`, `rotate-z`, `rotate-x`,
+    /// `rotate-y`, `translate`, each only when it does something (a camera
+    /// dollied straight ahead is saved as one `translate`, not with
+    /// `rotate-x angle="-0"` beside it).
     pub fn steps(&self) -> Vec<TransformStep> {
         let (yaw, pitch, roll) = angles(&self.rotation);
         let mut steps = Vec::new();
@@ -124,9 +126,15 @@ impl Pose {
         if roll != 0.0 {
             steps.push(TransformStep::RotateZ(roll));
         }
-        steps.push(TransformStep::RotateX(pitch));
-        steps.push(TransformStep::RotateY(yaw));
-        steps.push(TransformStep::Translate(self.position));
+        if pitch != 0.0 {
+            steps.push(TransformStep::RotateX(pitch));
+        }
+        if yaw != 0.0 {
+            steps.push(TransformStep::RotateY(yaw));
+        }
+        if self.position != DVec3::ZERO {
+            steps.push(TransformStep::Translate(self.position));
+        }
         steps
     }
 }
@@ -192,6 +200,18 @@ mod tests {
 
     fn close(a: DVec3, b: DVec3) -> bool {
         (a - b).length() < 1e-12 * (1.0 + a.length())
+    }
+
+    #[test]
+    fn steps_that_do_nothing_are_left_out() {
+        let c = camera(vec![TransformStep::Translate(DVec3::new(0.0, 0.0, -20.0))]);
+        let pose = Pose::of(&c).unwrap().dolly(DVec3::Z, 5.0);
+        assert_eq!(
+            pose.steps(),
+            vec![TransformStep::Translate(DVec3::new(0.0, 0.0, -15.0))]
+        );
+        let home = Pose::of(&camera(Vec::new())).unwrap();
+        assert_eq!(home.steps(), Vec::new());
     }
 
     #[test]
