@@ -119,7 +119,7 @@ mod tests {
             radius: 1.5,
         };
         let ray = super::super::Ray::new(DVec3::ZERO, DVec3::new(0.1, 0.05, 1.0).normalize());
-        let t64 = ball.intersect(&ray).unwrap();
+        let t64 = ball.intersect::<false>(&ray).unwrap();
         let p = Primitive32::new(&ball);
         let r = Ray32::from_f64(&ray);
         for t in [p.intersect::<false>(&r), p.intersect::<true>(&r)] {

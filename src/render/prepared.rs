@@ -181,13 +181,9 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
 
     #[inline]
     fn nearest(&self, p: &Prepared, ray: &Ray, among: Candidates) -> Option<Hit> {
-        if TEXTBOOK {
-            p.nearest_with(ray, among, &p.world.bounded, &p.world.planes, |q| {
-                q.intersect_textbook(ray)
-            })
-        } else {
-            p.nearest_hit_among(ray, among)
-        }
+        p.nearest_with(ray, among, &p.world.bounded, &p.world.planes, |q| {
+            q.intersect::<TEXTBOOK>(ray)
+        })
     }
 
     #[inline]
@@ -443,16 +439,12 @@ impl Prepared {
     /// The nearest hit with t > 0 in world distance, if any. Ties go to the
     /// object listed first in the scene.
     pub fn nearest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.nearest_hit_among(ray, Candidates::All)
-    }
-
-    fn nearest_hit_among(&self, ray: &Ray, candidates: Candidates) -> Option<Hit> {
         self.nearest_with(
             ray,
-            candidates,
+            Candidates::All,
             &self.world.bounded,
             &self.world.planes,
-            |p| p.intersect(ray),
+            |p| p.intersect::<false>(ray),
         )
     }
 
