@@ -10,19 +10,29 @@
 //! [`Primitive`] flattens what the transform allows (a sphere under a
 //! similarity is a world centre and radius; a plane a world point and
 //! normal); [`Bvh`] finds the nearest of many bounded primitives.
+//!
+//! Each intersection formula is written once, generic over the precision
+//! ([`Vector`]: f64, or f32 for the study's [`Primitive32`]), so the two
+//! cannot drift: [`stable_roots`] and [`textbook_roots`] for spheres,
+//! [`plane_hit`] for planes.
 
 mod bvh;
 mod plane;
+mod precision;
 mod primitive;
 mod ray;
 mod single;
 mod sphere;
+#[cfg(test)]
+mod unchanged;
 
 pub use bvh::{Aabb, Bvh};
-pub use plane::intersect_plane_world;
+pub use plane::{intersect_plane_world, plane_hit};
+pub use precision::{Real, Vector};
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
 pub use single::{Primitive32, Ray32};
 pub use sphere::{
-    intersect_ball, intersect_ball_textbook, intersect_sphere, intersect_sphere_textbook,
+    Leading, Receding, UnitDirection, intersect_ball, intersect_ball_textbook, intersect_sphere,
+    intersect_sphere_textbook, stable_roots, textbook_roots,
 };

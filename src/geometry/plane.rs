@@ -2,20 +2,30 @@
 //! a point and a unit normal).
 
 use super::Ray;
+use super::precision::{Real, Vector};
 
-/// t > 0 where the ray meets the plane through `point` with unit `normal`
-/// (world space), or `None` when parallel or moving away.
-#[inline]
-pub fn intersect_plane_world(ray: &Ray, point: glam::DVec3, normal: glam::DVec3) -> Option<f64> {
-    let denom = normal.dot(ray.dir);
-    let num = normal.dot(point - ray.origin);
-    // t = num / denom > 0 needs equal signs: most planes behind the ray are
-    // dismissed without the division.
-    if denom == 0.0 || (num > 0.0) != (denom > 0.0) {
+/// t > 0 where the ray `origin + t · dir` meets the plane through `point`
+/// with unit `normal`, or `None` when parallel or moving away; in f64 or
+/// f32.
+#[inline(always)]
+pub fn plane_hit<V: Vector>(origin: V, dir: V, point: V, normal: V) -> Option<V::Real> {
+    let zero = V::Real::ZERO;
+    // t = num / denom, num = N·(P − O), denom = N·D.
+    let denom = normal.dot(dir);
+    let num = normal.dot(point - origin);
+    // Receding or parallel: t > 0 needs equal signs, so most planes behind
+    // the ray are dismissed without the division.
+    if denom == zero || (num > zero) != (denom > zero) {
         return None;
     }
     let t = num / denom;
-    (t > 0.0 && t.is_finite()).then_some(t)
+    (t > zero && t.is_finite()).then_some(t)
+}
+
+/// [`plane_hit`] in f64 for a world-space ray.
+#[inline]
+pub fn intersect_plane_world(ray: &Ray, point: glam::DVec3, normal: glam::DVec3) -> Option<f64> {
+    plane_hit(ray.origin, ray.dir, point, normal)
 }
 
 #[cfg(test)]

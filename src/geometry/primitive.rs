@@ -68,29 +68,27 @@ impl Primitive {
         }
     }
 
-    /// The nearest t > 0 at which `ray` (unit direction) meets the surface.
+    /// The nearest t > 0 at which `ray` (unit direction) meets the
+    /// surface. `TEXTBOOK` picks the textbook quadratic for spheres (the
+    /// study's method; planes are unchanged).
     #[inline]
-    pub fn intersect(&self, ray: &Ray) -> Option<f64> {
+    pub fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray) -> Option<f64> {
         match self {
+            Primitive::Ball { center, radius } if TEXTBOOK => {
+                intersect_ball_textbook(ray, *center, *radius)
+            }
             Primitive::Ball { center, radius } => intersect_ball(ray, *center, *radius),
-            Primitive::Ellipsoid(e) => intersect_sphere(&Ray::new(
-                e.to_object.transform_point3(ray.origin),
-                e.to_object.transform_vector3(ray.dir),
-            )),
-            Primitive::Plane { point, normal } => intersect_plane_world(ray, *point, *normal),
-        }
-    }
-
-    /// Like [`Primitive::intersect`], with the textbook quadratic for
-    /// spheres (the study's method; planes are unchanged).
-    #[inline]
-    pub fn intersect_textbook(&self, ray: &Ray) -> Option<f64> {
-        match self {
-            Primitive::Ball { center, radius } => intersect_ball_textbook(ray, *center, *radius),
-            Primitive::Ellipsoid(e) => intersect_sphere_textbook(&Ray::new(
-                e.to_object.transform_point3(ray.origin),
-                e.to_object.transform_vector3(ray.dir),
-            )),
+            Primitive::Ellipsoid(e) => {
+                let local = Ray::new(
+                    e.to_object.transform_point3(ray.origin),
+                    e.to_object.transform_vector3(ray.dir),
+                );
+                if TEXTBOOK {
+                    intersect_sphere_textbook(&local)
+                } else {
+                    intersect_sphere(&local)
+                }
+            }
             Primitive::Plane { point, normal } => intersect_plane_world(ray, *point, *normal),
         }
     }
@@ -191,7 +189,10 @@ mod tests {
         for k in 0..50 {
             let y = -1.5 + 0.06 * f64::from(k);
             let ray = Ray::new(DVec3::ZERO, DVec3::new(0.1, y, 1.0).normalize() * 1.0);
-            let (a, b) = (ball.intersect(&ray), ellipsoid.intersect(&ray));
+            let (a, b) = (
+                ball.intersect::<false>(&ray),
+                ellipsoid.intersect::<false>(&ray),
+            );
             match (a, b) {
                 (Some(a), Some(b)) => {
                     assert!((a - b).abs() < 1e-12 * a, "{a} {b}");

@@ -4,6 +4,8 @@
 //! (far from the origin, thin offsets).
 
 use super::Primitive;
+use super::plane::plane_hit;
+use super::sphere::{Receding, stable_roots, textbook_roots};
 use glam::{Affine3A, Mat3, Vec3};
 
 /// A ray in f32: `origin + t · dir`, unit `dir` in world space.
@@ -59,28 +61,22 @@ impl Primitive32 {
         }
     }
 
-    /// The nearest t > 0, in f32; `TEXTBOOK` picks the root formula.
+    /// The nearest t > 0, in f32: the same formulas as [`Primitive::intersect`]
+    /// (the direction's a = |d|² computed for balls too); `TEXTBOOK` picks
+    /// the root formula.
     #[inline]
     pub fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32> {
         match self {
             Primitive32::Ball { center, radius } => {
                 let f = ray.origin - *center;
-                quadratic::<TEXTBOOK>(f, ray.dir, *radius * *radius)
+                sphere::<TEXTBOOK>(f, ray.dir, *radius * *radius)
             }
-            Primitive32::Ellipsoid { to_object, .. } => quadratic::<TEXTBOOK>(
+            Primitive32::Ellipsoid { to_object, .. } => sphere::<TEXTBOOK>(
                 to_object.transform_point3(ray.origin),
                 to_object.transform_vector3(ray.dir),
                 1.0,
             ),
-            Primitive32::Plane { point, normal } => {
-                let denom = normal.dot(ray.dir);
-                let num = normal.dot(*point - ray.origin);
-                if denom == 0.0 || (num > 0.0) != (denom > 0.0) {
-                    return None;
-                }
-                let t = num / denom;
-                (t > 0.0 && t.is_finite()).then_some(t)
-            }
+            Primitive32::Plane { point, normal } => plane_hit(ray.origin, ray.dir, *point, *normal),
         }
     }
 
@@ -99,35 +95,16 @@ impl Primitive32 {
     }
 }
 
-/// Nearest root t > 0 of |f + t d|² = r², in f32: the stable form of
-/// [`super::intersect_ball`] / [`super::intersect_sphere`], or the textbook
-/// formula.
+/// Nearest root t > 0 of |f + t d|² = r², in f32, with a = |d|² computed
+/// and no early out: the stable form or the textbook formula.
 #[inline]
-fn quadratic<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
+fn sphere<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
     let a = d.length_squared();
-    let c = f.length_squared() - r2;
-    let (t0, t1) = if TEXTBOOK {
-        let b = 2.0 * f.dot(d);
-        let disc = b * b - 4.0 * a * c;
-        if disc.is_nan() || disc < 0.0 {
-            return None;
-        }
-        let sq = disc.sqrt();
-        ((-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a))
+    if TEXTBOOK {
+        textbook_roots(f, d, a, r2)
     } else {
-        let b = f.dot(d);
-        let l = f - (b / a) * d;
-        let quarter_disc = a * (r2 - l.length_squared());
-        if quarter_disc.is_nan() || quarter_disc < 0.0 {
-            return None;
-        }
-        let q = -(b + quarter_disc.sqrt().copysign(b));
-        if q == 0.0 {
-            return None;
-        }
-        (q / a, c / q)
-    };
-    super::sphere::nearest_positive(t0, t1)
+        stable_roots(f, d, a, r2, Receding::Solve)
+    }
 }
 
 #[cfg(test)]
@@ -142,7 +119,7 @@ mod tests {
             radius: 1.5,
         };
         let ray = super::super::Ray::new(DVec3::ZERO, DVec3::new(0.1, 0.05, 1.0).normalize());
-        let t64 = ball.intersect(&ray).unwrap();
+        let t64 = ball.intersect::<false>(&ray).unwrap();
         let p = Primitive32::new(&ball);
         let r = Ray32::from_f64(&ray);
         for t in [p.intersect::<false>(&r), p.intersect::<true>(&r)] {

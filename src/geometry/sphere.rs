@@ -1,91 +1,183 @@
-//! Ray against the unit sphere |P|² = 1 centred on the origin.
+//! Ray against a sphere: the quadratic |f + t d|² = r² in t, f from the
+//! centre to the ray's origin, d the ray's direction. Written once, generic
+//! over the precision ([`Vector`]): the f64 reference and the study's f32
+//! method run the same formulas.
+//!
+//! Two root formulas:
+//!
+//! - [`stable_roots`]: the numerically stable form (the reference);
+//! - [`textbook_roots`]: (−b ± √(b² − 4ac)) / 2a, kept for the study of
+//!   where it fails.
+//!
+//! Each takes the leading coefficient a as a [`Leading`]: the computed
+//! |d|² (object space, where the direction is scaled), or [`UnitDirection`]
+//! (world space, where a = 1 and is never applied).
 
 use super::Ray;
+use super::precision::{Real, Vector};
 
-/// Nearest root t > 0 of |o + t d|² = 1, or `None`.
+/// The leading coefficient a = |d|² of the quadratic, as the formulas
+/// apply it.
+pub trait Leading<R: Real>: Copy {
+    /// a · x.
+    fn times(self, x: R) -> R;
+    /// k · a, for a constant k (2a, 4a).
+    fn multiple(self, k: R) -> R;
+    /// x / a.
+    fn divide(self, x: R) -> R;
+}
+
+/// a = 1: a unit direction. Applying it is no operation at all (not a
+/// product or quotient by one), so the unit-direction formulas keep their
+/// own arithmetic.
+#[derive(Debug, Clone, Copy)]
+pub struct UnitDirection;
+
+impl<R: Real> Leading<R> for UnitDirection {
+    #[inline(always)]
+    fn times(self, x: R) -> R {
+        x
+    }
+    #[inline(always)]
+    fn multiple(self, k: R) -> R {
+        k
+    }
+    #[inline(always)]
+    fn divide(self, x: R) -> R {
+        x
+    }
+}
+
+macro_rules! computed_leading {
+    ($t:ty) => {
+        /// a = |d|², computed by the caller.
+        impl Leading<$t> for $t {
+            #[inline(always)]
+            fn times(self, x: $t) -> $t {
+                self * x
+            }
+            #[inline(always)]
+            fn multiple(self, k: $t) -> $t {
+                k * self
+            }
+            #[inline(always)]
+            fn divide(self, x: $t) -> $t {
+                x / self
+            }
+        }
+    };
+}
+computed_leading!(f64);
+computed_leading!(f32);
+
+/// What the stable formula does with a ray that starts outside the sphere
+/// (c > 0) and moves away from it (b > 0): it has no root t > 0.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Receding {
+    /// Dismissed before the discriminant (most spheres behind the ray).
+    Dismiss,
+    /// Solved like any other ray.
+    Solve,
+}
+
+/// Nearest root t > 0 of |f + t d|² = r², or `None`: the numerically
+/// stable form.
 ///
-/// Numerically stable form: the discriminant is computed from the distance
-/// of the line to the centre (Hearn & Baker, as in *Ray Tracing Gems* ch. 7),
-/// which does not cancel when the sphere is small and far, and the two roots
-/// come from `q` and `c / q`, which avoids subtracting nearly equal numbers.
-pub fn intersect_sphere(ray: &Ray) -> Option<f64> {
-    let (o, d) = (ray.origin, ray.dir);
-    let a = d.length_squared();
-    // Half of the usual b: the quadratic is a t² + 2 b t + c = 0.
-    let b = o.dot(d);
-    let c = o.length_squared() - 1.0;
-    // Δ/4 = b² − a c = a (1 − |l|²), l the closest point of the line to the centre.
-    let l = o - (b / a) * d;
-    let quarter_disc = a * (1.0 - l.length_squared());
-    if quarter_disc.is_nan() || quarter_disc < 0.0 {
+/// The discriminant is computed from the distance of the line to the
+/// centre (Hearn & Baker, as in *Ray Tracing Gems* ch. 7), which does not
+/// cancel when the sphere is small and far, and the two roots come from
+/// `q` and `c / q`, which avoids subtracting nearly equal numbers.
+#[inline(always)]
+pub fn stable_roots<V: Vector>(
+    f: V,
+    d: V,
+    a: impl Leading<V::Real>,
+    r2: V::Real,
+    receding: Receding,
+) -> Option<V::Real> {
+    let zero = V::Real::ZERO;
+    // Coefficients: half of the usual b, the quadratic is
+    // a t² + 2 b t + c = 0.
+    let b = f.dot(d);
+    let c = f.length_squared() - r2;
+    // Receding ray: outside the sphere and moving away from it.
+    if receding == Receding::Dismiss && c > zero && b > zero {
         return None;
     }
+    // Quarter discriminant: Δ/4 = b² − a c = a (r² − |l|²), l = f − (b/a) d
+    // the foot of the perpendicular from the centre to the line.
+    let l = f - d.scaled(a.divide(b));
+    let quarter_disc = a.times(r2 - l.length_squared());
+    if quarter_disc.is_nan() || quarter_disc < zero {
+        return None;
+    }
+    // Roots: q = −(b + sign(b) √(Δ/4)), then t = q / a and t = c / q.
     let q = -(b + quarter_disc.sqrt().copysign(b));
-    if q == 0.0 {
+    if q == zero {
         // Tangent ray through the centre's perpendicular foot: b = Δ = 0.
         return None;
     }
-    let (t0, t1) = (q / a, c / q);
-    nearest_positive(t0, t1)
+    nearest_positive(a.divide(q), c / q)
+}
+
+/// Nearest root t > 0 of |f + t d|² = r², or `None`: the textbook root
+/// formula (−b ± √(b² − 4ac)) / 2a. It cancels for small, distant spheres.
+#[inline(always)]
+pub fn textbook_roots<V: Vector>(
+    f: V,
+    d: V,
+    a: impl Leading<V::Real>,
+    r2: V::Real,
+) -> Option<V::Real> {
+    // Coefficients: the usual b, the quadratic is a t² + b t + c = 0.
+    let b = V::Real::TWO * f.dot(d);
+    let c = f.length_squared() - r2;
+    // Discriminant: Δ = b² − 4ac.
+    let disc = b * b - a.multiple(V::Real::FOUR) * c;
+    if disc.is_nan() || disc < V::Real::ZERO {
+        return None;
+    }
+    // Roots: (−b ∓ √Δ) / 2a.
+    let sq = disc.sqrt();
+    nearest_positive(
+        (-b - sq) / a.multiple(V::Real::TWO),
+        (-b + sq) / a.multiple(V::Real::TWO),
+    )
+}
+
+/// Nearest root t > 0 of |o + t d|² = 1 (the unit sphere in its own
+/// space; d is the mapped direction, not unit), stable form.
+pub fn intersect_sphere(ray: &Ray) -> Option<f64> {
+    let d = ray.dir;
+    stable_roots(ray.origin, d, d.length_squared(), 1.0, Receding::Solve)
 }
 
 /// Nearest root t > 0 of |o + t d − center|² = radius² for a unit
-/// direction d: the same stable formula in world space, for spheres whose
+/// direction d: the stable form in world space, for spheres whose
 /// transform is a similarity.
 #[inline]
 pub fn intersect_ball(ray: &Ray, center: glam::DVec3, radius: f64) -> Option<f64> {
-    // f: from the centre to the origin; with |d| = 1 the quadratic is
-    // t² + 2 b t + c = 0.
-    let f = ray.origin - center;
-    let d = ray.dir;
-    let b = f.dot(d);
-    let r2 = radius * radius;
-    let c = f.length_squared() - r2;
-    if c > 0.0 && b > 0.0 {
-        return None; // outside the sphere and moving away from it
-    }
-    // Δ/4 = r² − |l|², l the foot of the perpendicular from the centre.
-    let l = f - b * d;
-    let quarter_disc = r2 - l.length_squared();
-    if quarter_disc.is_nan() || quarter_disc < 0.0 {
-        return None;
-    }
-    let q = -(b + quarter_disc.sqrt().copysign(b));
-    if q == 0.0 {
-        return None;
-    }
-    nearest_positive(q, c / q)
+    stable_roots(
+        ray.origin - center,
+        ray.dir,
+        UnitDirection,
+        radius * radius,
+        Receding::Dismiss,
+    )
 }
 
-/// The textbook root formula (−b ± √(b² − 4ac)) / 2a, kept for the study of
-/// where it fails: it cancels for small, distant spheres.
+/// The textbook formula for the unit sphere in its own space.
 pub fn intersect_sphere_textbook(ray: &Ray) -> Option<f64> {
-    let (o, d) = (ray.origin, ray.dir);
-    let a = d.length_squared();
-    let b = 2.0 * o.dot(d);
-    let c = o.length_squared() - 1.0;
-    let disc = b * b - 4.0 * a * c;
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let sq = disc.sqrt();
-    nearest_positive((-b - sq) / (2.0 * a), (-b + sq) / (2.0 * a))
+    let d = ray.dir;
+    textbook_roots(ray.origin, d, d.length_squared(), 1.0)
 }
 
 /// The textbook formula for a ball in world space (unit direction d):
-/// a = 1, b = 2 f·d, c = |f|² − r², roots (−b ± √(b² − 4c)) / 2. Kept for
-/// the study: it cancels when the origin is far from a small ball.
+/// a = 1, roots (−b ± √(b² − 4c)) / 2. It cancels when the origin is far
+/// from a small ball.
 #[inline]
 pub fn intersect_ball_textbook(ray: &Ray, center: glam::DVec3, radius: f64) -> Option<f64> {
-    let f = ray.origin - center;
-    let b = 2.0 * f.dot(ray.dir);
-    let c = f.length_squared() - radius * radius;
-    let disc = b * b - 4.0 * c;
-    if disc.is_nan() || disc < 0.0 {
-        return None;
-    }
-    let sq = disc.sqrt();
-    nearest_positive((-b - sq) / 2.0, (-b + sq) / 2.0)
+    textbook_roots(ray.origin - center, ray.dir, UnitDirection, radius * radius)
 }
 
 /// The smaller of two roots that is > 0, in f64 or f32 (`T::default()` is

@@ -112,49 +112,6 @@ enum Candidates<'a> {
     Only(&'a [usize]),
 }
 
-/// Runs `$body` with `$k` bound to the kernel of the prepared scene's
-/// method: one branch per call, and each kernel's trace loop compiled on
-/// its own, so the reference path pays nothing for the others.
-macro_rules! with_kernel {
-    ($p:expr, |$k:ident| $body:expr) => {{
-        let p: &Prepared = $p;
-        match (p.world.precision, p.world.sphere, p.world.offset) {
-            (Precision::F64, SphereTest::Stable, Offset::Contract) => {
-                let $k = &Exact::<false, OFFSET_CONTRACT> { fixed: 0.0 };
-                $body
-            }
-            (Precision::F64, SphereTest::Stable, Offset::Fixed(fixed)) => {
-                let $k = &Exact::<false, OFFSET_FIXED> { fixed };
-                $body
-            }
-            (Precision::F64, SphereTest::Stable, Offset::None) => {
-                let $k = &Exact::<false, OFFSET_NONE> { fixed: 0.0 };
-                $body
-            }
-            (Precision::F64, SphereTest::Textbook, Offset::Contract) => {
-                let $k = &Exact::<true, OFFSET_CONTRACT> { fixed: 0.0 };
-                $body
-            }
-            (Precision::F64, SphereTest::Textbook, Offset::Fixed(fixed)) => {
-                let $k = &Exact::<true, OFFSET_FIXED> { fixed };
-                $body
-            }
-            (Precision::F64, SphereTest::Textbook, Offset::None) => {
-                let $k = &Exact::<true, OFFSET_NONE> { fixed: 0.0 };
-                $body
-            }
-            (Precision::F32, SphereTest::Stable, offset) => {
-                let $k = &Single::<false> { offset };
-                $body
-            }
-            (Precision::F32, SphereTest::Textbook, offset) => {
-                let $k = &Single::<true> { offset };
-                $body
-            }
-        }
-    }};
-}
-
 /// The geometry of a method: how a ray is held, what it hits, the hit
 /// point and normal, and the reflected ray. Shading (f64) stays in
 /// [`Prepared::trace`].
@@ -166,6 +123,42 @@ trait Kernel {
     fn surface(&self, p: &Prepared, ray: &Self::Ray, hit: &Hit) -> SurfacePoint;
     /// The reflected ray R leaving `point`, offset off the surface.
     fn reflected(&self, point: &SurfacePoint) -> Self::Ray;
+}
+
+/// Work that runs with the kernel of the prepared scene's method
+/// ([`Prepared::with_kernel`]): generic over it, so each kernel's trace
+/// loop is compiled on its own and the reference path pays nothing for the
+/// others.
+trait WithKernel {
+    type Output;
+    fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Self::Output;
+}
+
+/// [`Prepared::pixel`]'s work.
+struct PixelAt {
+    i: u32,
+    j: u32,
+}
+
+impl WithKernel for PixelAt {
+    type Output = [u8; 3];
+    fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> [u8; 3] {
+        p.pixel_among(kernel, self.i, self.j, Candidates::All, &mut 0)
+    }
+}
+
+/// [`Prepared::render_tile_into`]'s work.
+struct TileInto<'a> {
+    tile: &'a Tile,
+    cancel: &'a Cancel,
+    out: &'a mut Vec<u8>,
+}
+
+impl WithKernel for TileInto<'_> {
+    type Output = Option<u64>;
+    fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Option<u64> {
+        p.tile_into(kernel, self.tile, self.cancel, self.out)
+    }
 }
 
 const OFFSET_CONTRACT: u8 = 0;
@@ -188,13 +181,9 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
 
     #[inline]
     fn nearest(&self, p: &Prepared, ray: &Ray, among: Candidates) -> Option<Hit> {
-        if TEXTBOOK {
-            p.nearest_with(ray, among, &p.world.bounded, &p.world.planes, |q| {
-                q.intersect_textbook(ray)
-            })
-        } else {
-            p.nearest_hit_among(ray, among)
-        }
+        p.nearest_with(ray, among, &p.world.bounded, &p.world.planes, |q| {
+            q.intersect::<TEXTBOOK>(ray)
+        })
     }
 
     #[inline]
@@ -450,16 +439,12 @@ impl Prepared {
     /// The nearest hit with t > 0 in world distance, if any. Ties go to the
     /// object listed first in the scene.
     pub fn nearest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.nearest_hit_among(ray, Candidates::All)
-    }
-
-    fn nearest_hit_among(&self, ray: &Ray, candidates: Candidates) -> Option<Hit> {
         self.nearest_with(
             ray,
-            candidates,
+            Candidates::All,
             &self.world.bounded,
             &self.world.planes,
-            |p| p.intersect(ray),
+            |p| p.intersect::<false>(ray),
         )
     }
 
@@ -608,10 +593,40 @@ impl Prepared {
         (0..3).all(|c| to_8bit(color[c]) == to_8bit(high[c]))
     }
 
+    /// Runs `work` with the kernel of the method's choices, each dispatched
+    /// once, one choice at a time: the sphere test, the precision, then
+    /// (f64) the offset.
+    fn with_kernel<W: WithKernel>(&self, work: W) -> W::Output {
+        match self.world.sphere {
+            SphereTest::Stable => self.with_precision::<false, W>(work),
+            SphereTest::Textbook => self.with_precision::<true, W>(work),
+        }
+    }
+
+    fn with_precision<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
+        match self.world.precision {
+            Precision::F64 => self.with_offset::<TEXTBOOK, W>(work),
+            Precision::F32 => work.run(
+                self,
+                &Single::<TEXTBOOK> {
+                    offset: self.world.offset,
+                },
+            ),
+        }
+    }
+
+    fn with_offset<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
+        match self.world.offset {
+            Offset::Contract => work.run(self, &Exact::<TEXTBOOK, OFFSET_CONTRACT> { fixed: 0.0 }),
+            Offset::Fixed(fixed) => work.run(self, &Exact::<TEXTBOOK, OFFSET_FIXED> { fixed }),
+            Offset::None => work.run(self, &Exact::<TEXTBOOK, OFFSET_NONE> { fixed: 0.0 }),
+        }
+    }
+
     /// The 8-bit colour of pixel (i, j): one ray through its centre, or the
     /// mean of `aa × aa` clamped samples on a regular grid.
     pub fn pixel(&self, i: u32, j: u32) -> [u8; 3] {
-        with_kernel!(self, |k| self.pixel_among(k, i, j, Candidates::All, &mut 0))
+        self.with_kernel(PixelAt { i, j })
     }
 
     fn pixel_among<K: Kernel>(
@@ -650,7 +665,7 @@ impl Prepared {
     /// checking `cancel` before every pixel. Returns the number of rays
     /// traced, or `None` when cancelled.
     pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> Option<u64> {
-        with_kernel!(self, |k| self.tile_into(k, tile, cancel, out))
+        self.with_kernel(TileInto { tile, cancel, out })
     }
 
     fn tile_into<K: Kernel>(
