@@ -226,11 +226,16 @@ impl Preview {
                 scale,
                 elapsed,
                 since_start,
+                prepare,
                 rays,
                 ..
             } => {
                 self.first_pass.get_or_insert(since_start);
                 if scale == 1 {
+                    // Render time: the request resolved, the scene
+                    // prepared, the full-size pass traced (the coarse
+                    // passes are previews, not part of the picture's cost).
+                    let elapsed = prepare + elapsed;
                     self.state = RenderState::Done { elapsed, rays };
                     self.last_render = Some((elapsed, rays));
                 }
@@ -318,6 +323,23 @@ mod tests {
             },
             pixels: vec![200; (width * height * 3) as usize],
         }
+    }
+
+    #[test]
+    fn render_time_is_the_request_prepared_and_the_full_pass() {
+        let mut p = Preview::default();
+        let finished = |scale, elapsed| Event::PassFinished {
+            generation: 1,
+            scale,
+            elapsed: Duration::from_millis(elapsed),
+            since_start: Duration::from_millis(100),
+            prepare: Duration::from_millis(30),
+            rays: 1000,
+        };
+        p.apply(1, finished(4, 5));
+        assert_eq!(p.last_render(), None, "a coarse pass is a preview");
+        p.apply(1, finished(1, 50));
+        assert_eq!(p.last_render(), Some((Duration::from_millis(80), 1000)));
     }
 
     #[test]

@@ -55,6 +55,11 @@ pub enum Event {
         elapsed: Duration,
         /// Time since the worker took the request (all passes so far).
         since_start: Duration,
+        /// Time from the request to its first pass: resolving it and
+        /// preparing the scene (next to nothing when the last request's
+        /// prepared scene served). With `elapsed` of the full-size pass:
+        /// render time, as [`crate::measure`] defines it.
+        prepare: Duration,
         /// Rays traced in this pass, primary and reflected (as `RenderStats`).
         rays: u64,
     },
@@ -273,8 +278,11 @@ impl WorkerThread {
                 } => {
                     let cancel = Cancel::new(self.newest.clone(), generation);
                     if !cancel.is_cancelled() {
+                        // Render time starts with the request resolved, as
+                        // crate::measure defines it.
+                        let start = Instant::now();
                         let options = request.options(&scene);
-                        self.render(generation, &scene, &options, &passes, &cancel);
+                        self.render(generation, &scene, &options, &passes, &cancel, start);
                     }
                 }
                 Message::Study {
@@ -303,6 +311,7 @@ impl WorkerThread {
         options: &RenderOptions,
         passes: &[u32],
         cancel: &Cancel,
+        render_start: Instant,
     ) {
         if let Err(e) = options.validate() {
             self.send(Event::Failed {
@@ -312,7 +321,6 @@ impl WorkerThread {
             return;
         }
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let render_start = Instant::now();
         // The scene is prepared once (or was, for the last request, if only
         // the camera or the anti-aliasing changed); each pass is a view.
         let reused = self.latest.lock().ok().and_then(|latest| {
@@ -334,6 +342,7 @@ impl WorkerThread {
             }
             prepared
         });
+        let prepare = render_start.elapsed();
         for &scale in passes {
             let scale = scale.max(1);
             if cancel.is_cancelled() {
@@ -377,6 +386,7 @@ impl WorkerThread {
                 scale,
                 elapsed: start.elapsed(),
                 since_start: render_start.elapsed(),
+                prepare,
                 rays,
             });
         }
