@@ -5,9 +5,13 @@
 //! one within a pixel (the [`Cancel`] token is checked before every pixel),
 //! and requests that queued up while a render ran are skipped for the
 //! newest, so dragging a slider never stacks renders behind each other.
-//! Each request is rendered coarse to fine (1/8, 1/2, then full
+//! Each request is rendered coarse to fine (1/8, 1/4, then full
 //! resolution for large images) and every finished tile is sent to the UI
-//! at once, with a wake-up call so it repaints.
+//! at once, with a wake-up call so it repaints. The request is resolved
+//! here (`auto` looks at every object) and the scene prepared once for all
+//! its passes; the next request reuses that prepared scene when only the
+//! camera or the anti-aliasing changed, and the app picks objects in it
+//! ([`Worker::prepared`]).
 //!
 //! The worker also runs the study of the current scene ([`Worker::study`]):
 //! it is a request like a render, with a generation, cancelled the same way

@@ -8,7 +8,8 @@
 //! rest:
 //! - [`command`]: the [`Command`] enum of menus and keys, and the one place
 //!   that carries it out;
-//! - `dialogs`: open, save, export, and the modal questions;
+//! - `dialogs`: open, save (on a thread of its own), export, and the modal
+//!   questions;
 //! - `events`: render requests and what the worker, the watcher and the
 //!   dialogs send back;
 //! - `picture`: the picture, its zoom and pan, the pick;
