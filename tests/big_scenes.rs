@@ -6,7 +6,9 @@
 //! objects it changes. Each is checked here by what is shared, not by
 //! memory or time, so the tests stay small and exact.
 
-use rayoflight::gui::document::{Document, Reload};
+mod common;
+
+use rayoflight::gui::document::Reload;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::render::RenderOptions;
@@ -46,17 +48,9 @@ fn unshared(a: &Scene, b: &Scene) -> Vec<usize> {
         .collect()
 }
 
-fn document_on(text: &str) -> (tempfile::TempDir, std::path::PathBuf, Document) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    std::fs::write(&path, text).unwrap();
-    let doc = Document::open(&path).unwrap();
-    (dir, path, doc)
-}
-
 #[test]
 fn the_edited_scene_shares_every_object_but_the_one_edited() {
-    let (_dir, _path, mut doc) = document_on(&spheres_text(1000));
+    let (_dir, _path, mut doc) = common::document_on(&spheres_text(1000));
     assert!(unshared(doc.file_scene(), doc.scene()).is_empty());
     // Paths count from 1: object[700] is index 699.
     doc.apply(set("object[700].material.ka", 0.5)).unwrap();
@@ -72,7 +66,7 @@ fn the_edited_scene_shares_every_object_but_the_one_edited() {
 
 #[test]
 fn a_save_is_read_back_sharing_the_objects_on_screen() {
-    let (_dir, path, mut doc) = document_on(&spheres_text(1000));
+    let (_dir, path, mut doc) = common::document_on(&spheres_text(1000));
     let (tx, rx) = mpsc::channel();
     let watcher = SceneWatcher::new(&path, move |e| {
         let _ = tx.send(e);

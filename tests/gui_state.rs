@@ -268,17 +268,9 @@ fn watcher_sees_renames_writes_deletes_and_recreates() {
     quiet(&rx);
 }
 
-fn document_on(text: &str) -> (tempfile::TempDir, std::path::PathBuf, Document) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    std::fs::write(&path, text).unwrap();
-    let doc = Document::open(&path).unwrap();
-    (dir, path, doc)
-}
-
 #[test]
 fn a_broken_save_keeps_the_last_good_scene_and_shows_the_error() {
-    let (_dir, path, mut doc) = document_on(&scene_text(0.1, 8));
+    let (_dir, path, mut doc) = common::document_on(&scene_text(0.1, 8));
     let good = doc.scene().clone();
     let error = scene::load(&path).err();
     assert!(error.is_none());

@@ -96,3 +96,21 @@ pub fn env_or(name: &str, default: u64) -> u64 {
         .and_then(|v| v.parse().ok())
         .unwrap_or(default)
 }
+
+/// A scene file holding `text` in a new temporary folder, opened as a
+/// document: the folder (kept while it lives), the file's path, the
+/// document.
+#[cfg(feature = "gui")]
+pub fn document_on(
+    text: &str,
+) -> (
+    tempfile::TempDir,
+    std::path::PathBuf,
+    rayoflight::gui::document::Document,
+) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    fs::write(&path, text).unwrap();
+    let doc = rayoflight::gui::document::Document::open(&path).unwrap();
+    (dir, path, doc)
+}

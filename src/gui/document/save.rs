@@ -154,13 +154,7 @@ impl Document {
     pub fn save_done(&mut self, job: SaveJob, outcome: SaveOutcome) -> Result<SaveStep, SaveError> {
         match outcome {
             SaveOutcome::Written(written) => {
-                self.disk = written;
-                self.saved = job.edited;
-                self.log.drain(..job.logged.min(self.log.len()));
-                if self.state == FileState::Missing {
-                    self.state = FileState::Watching;
-                }
-                self.update_dirty();
+                self.wrote(written, job.edited, job.logged);
                 Ok(SaveStep::Done(Reload::Unchanged))
             }
             SaveOutcome::Unchanged => Ok(SaveStep::Done(Reload::Unchanged)),
@@ -203,14 +197,23 @@ impl Document {
             return Err(SaveError::NothingLoaded);
         }
         let written = write_scene(path, &self.source, &self.source_scene, &self.edited)?;
-        self.disk = written;
-        self.saved = self.edited.clone();
-        self.log.clear();
         self.path = Some(path.to_owned());
         self.state = FileState::Watching;
         self.error = None;
         self.conflict = None;
-        self.update_dirty();
+        self.wrote(written, self.edited.clone(), self.log.len());
         Ok(())
+    }
+
+    /// The file now holds `saved` (`written`: its fingerprint), with the
+    /// first `logged` edits of the log: those are no longer unsaved.
+    fn wrote(&mut self, written: Option<u64>, saved: Edited, logged: usize) {
+        self.disk = written;
+        self.saved = saved;
+        self.log.drain(..logged.min(self.log.len()));
+        if self.state == FileState::Missing {
+            self.state = FileState::Watching;
+        }
+        self.update_dirty();
     }
 }
