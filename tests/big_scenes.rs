@@ -6,6 +6,9 @@
 //! objects it changes. Each is checked here by what is shared, not by
 //! memory or time, so the tests stay small and exact.
 
+// The app's document, watcher and worker are in the GUI build.
+#![cfg(feature = "gui")]
+
 mod common;
 
 use rayoflight::gui::document::Reload;

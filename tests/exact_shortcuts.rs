@@ -1,7 +1,8 @@
 //! The work the renderer skips must never show: the per-tile frustum culling
 //! of primary rays, the black tiles, the BVH, the early end of whitted
 //! chains and the options `auto` plans all give exactly the image of the
-//! plain path (every pixel through `Prepared::pixel`, every ray against
+//! plain path (every pixel through `Prepared::pixel`, alone in its packet
+//! of rays where a tile fills every lane, every ray against
 //! every object, every chain to its full depth).
 
 use rayoflight::render::{self, RenderOptions};

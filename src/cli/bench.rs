@@ -81,7 +81,12 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     for s in &bench::SCENES {
         sets.push((s.name.into(), s.scene().map_err(|e| e.to_string())?));
     }
-    let counts = [1, 2, 4, 8, 16];
+    // Powers of two up to the most threads a render may ask for (four per
+    // core): past the cores the table shows what oversubscription costs.
+    let counts: Vec<usize> = (0..)
+        .map(|k| 1usize << k)
+        .take_while(|&t| t <= rayoflight::render::max_threads())
+        .collect();
     let sizes = [10, 100, 1_000, 10_000, 100_000];
     let formats = ["png", "gif", "jpg", "webp"];
     steps.set_total(
@@ -114,7 +119,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
 
     out("\nThread scaling (ms, and speed-up over 1 thread)\n");
     out(&format!("{:<14}", "scene"));
-    for t in counts {
+    for &t in &counts {
         out(&format!(
             " {:>16}",
             format!("{t} thread{}", if t == 1 { "" } else { "s" })
@@ -124,7 +129,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     for (name, scene) in sets.iter().skip(1) {
         out(&format!("{name:<14}"));
         let mut one = None;
-        for t in counts {
+        for &t in &counts {
             step(&format!("{name}, {t} threads"));
             let (median, stats, _) = time_render(scene, t, args.runs)?;
             let base = *one.get_or_insert(median);

@@ -5,7 +5,7 @@
 //! (`first`, `first + 1`), a leaf holds `count` primitives from `first` in
 //! the hierarchy's own primitive order ([`Bvh::order`]).
 
-use super::Ray;
+use super::{Lanes, Mask, Ray};
 use glam::DVec3;
 
 /// An axis-aligned box.
@@ -38,15 +38,38 @@ impl Aabb {
         d.x * d.y + d.y * d.z + d.z * d.x
     }
 
-    /// Entry distance of the ray into the box if it enters before `t_max`.
-    #[inline]
-    fn entry(&self, origin: DVec3, inv_dir: DVec3, t_max: f64) -> Option<f64> {
-        let t1 = (self.min - origin) * inv_dir;
-        let t2 = (self.max - origin) * inv_dir;
-        let near = t1.min(t2).max_element().max(0.0);
-        let far = t1.max(t2).min_element().min(t_max);
-        (near <= far).then_some(near)
+    /// Entry distance of each lane's ray into the box, and the lanes that
+    /// enter it before their `t_max` (the slab test, in glam's min/max).
+    #[inline(always)]
+    fn entry<L: Lanes>(&self, origin: &[L; 3], inv_dir: &[L; 3], t_max: L) -> (L, L::Mask) {
+        let min = |a: L, b: L| L::select(a.lt(b), a, b);
+        let max = |a: L, b: L| L::select(a.gt(b), a, b);
+        let (mut near, mut far) = (L::ZERO, L::ZERO);
+        for axis in 0..3 {
+            let t1 = (L::splat(self.min[axis]) - origin[axis]) * inv_dir[axis];
+            let t2 = (L::splat(self.max[axis]) - origin[axis]) * inv_dir[axis];
+            let (low, high) = (min(t1, t2), max(t1, t2));
+            (near, far) = if axis == 0 {
+                (low, high)
+            } else {
+                (max(near, low), min(far, high))
+            };
+        }
+        // Not behind the origin, not past t_max (a NaN gives way, as
+        // f64::max and f64::min do).
+        let near = L::select(near.gt(L::ZERO), near, L::ZERO);
+        let far = L::select(far.lt(t_max), far, t_max);
+        (near, near.le(far))
     }
+}
+
+/// What [`Bvh::nearest`] asks of the search it serves: the distance each
+/// lane must beat, and to test a primitive for some lanes.
+pub trait Search<L: Lanes> {
+    /// Per lane, the nearest hit so far (infinity before any).
+    fn t_max(&self) -> L;
+    /// Tests the primitive at position `k` of [`Bvh::order`] for `lanes`.
+    fn test(&mut self, k: usize, lanes: L::Mask);
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -125,75 +148,78 @@ impl Bvh {
         &self.order
     }
 
-    /// The nearest hit below `t_max`. `hit(k)` intersects the primitive at
-    /// position `k` of [`Bvh::order`] and returns its t if any; the
-    /// result is the smallest t and its position. Ties go to the smaller
-    /// `rank(k)` (the scene passes the object's index in the file, so that
-    /// the BVH picks what a plain scan would).
+    /// Walks the hierarchy front to back for the `alive` lanes of `ray`,
+    /// handing `search` each primitive whose box a lane enters before its
+    /// nearest hit so far. A node is entered by the lanes that reach it;
+    /// the primitives are tested for those lanes only, so each lane finds
+    /// what it would find alone.
     #[inline]
-    pub fn nearest(
+    pub fn nearest<L: Lanes>(
         &self,
-        ray: &Ray,
-        t_max: f64,
-        mut hit: impl FnMut(usize) -> Option<f64>,
-        rank: impl Fn(usize) -> usize,
-    ) -> Option<(f64, usize)> {
-        let inv_dir = ray.dir.recip();
-        let mut best: Option<(f64, usize)> = None;
-        let mut best_t = t_max;
-        let mut stack = [0u32; STACK];
+        ray: &Ray<L::Vector>,
+        alive: L::Mask,
+        search: &mut impl Search<L>,
+    ) {
+        let origin = L::components(ray.origin);
+        let inv_dir = L::components(ray.dir).map(|d| L::ONE / d);
+        let mut stack = [(0u32, alive); STACK];
         let mut top = 0;
         let mut node = &self.nodes[0];
-        node.bounds.entry(ray.origin, inv_dir, best_t)?;
+        let mut lanes = alive & node.bounds.entry(&origin, &inv_dir, search.t_max()).1;
+        if !lanes.any() {
+            return;
+        }
         loop {
             if node.count > 0 {
                 let start = node.first as usize;
                 for k in start..start + node.count as usize {
-                    if let Some(t) = hit(k)
-                        && (t < best_t
-                            || (t == best_t && best.is_some_and(|(_, b)| rank(k) < rank(b))))
-                    {
-                        best_t = t;
-                        best = Some((t, k));
-                    }
+                    search.test(k, lanes);
                 }
             } else {
                 let (l, r) = (node.first as usize, node.first as usize + 1);
-                let el = self.nodes[l].bounds.entry(ray.origin, inv_dir, best_t);
-                let er = self.nodes[r].bounds.entry(ray.origin, inv_dir, best_t);
-                match (el, er) {
-                    (Some(a), Some(b)) => {
-                        // Nearer child first; the other waits on the stack.
-                        let (near, far) = if a <= b { (l, r) } else { (r, l) };
-                        stack[top] = far as u32;
+                let t_max = search.t_max();
+                let (el, in_l) = self.nodes[l].bounds.entry(&origin, &inv_dir, t_max);
+                let (er, in_r) = self.nodes[r].bounds.entry(&origin, &inv_dir, t_max);
+                let (in_l, in_r) = (lanes & in_l, lanes & in_r);
+                match (in_l.any(), in_r.any()) {
+                    (true, true) => {
+                        // Nearer child first (for most of the lanes in
+                        // both); the other waits on the stack.
+                        let both = in_l & in_r;
+                        let left_first = 2 * (both & el.le(er)).count() >= both.count();
+                        let (near, far) = if left_first {
+                            ((l, in_l), (r, in_r))
+                        } else {
+                            ((r, in_r), (l, in_l))
+                        };
+                        stack[top] = (far.0 as u32, far.1);
                         top += 1;
-                        node = &self.nodes[near];
+                        (node, lanes) = (&self.nodes[near.0], near.1);
                         continue;
                     }
-                    (Some(_), None) => {
-                        node = &self.nodes[l];
+                    (true, false) => {
+                        (node, lanes) = (&self.nodes[l], in_l);
                         continue;
                     }
-                    (None, Some(_)) => {
-                        node = &self.nodes[r];
+                    (false, true) => {
+                        (node, lanes) = (&self.nodes[r], in_r);
                         continue;
                     }
-                    (None, None) => {}
+                    (false, false) => {}
                 }
             }
-            // Next pending node still worth entering.
+            // Next pending node still worth entering, for the lanes that
+            // still reach it.
             loop {
                 if top == 0 {
-                    return best;
+                    return;
                 }
                 top -= 1;
-                let candidate = &self.nodes[stack[top] as usize];
-                if candidate
-                    .bounds
-                    .entry(ray.origin, inv_dir, best_t)
-                    .is_some()
-                {
-                    node = candidate;
+                let (index, waiting) = stack[top];
+                let candidate = &self.nodes[index as usize];
+                let enter = waiting & candidate.bounds.entry(&origin, &inv_dir, search.t_max()).1;
+                if enter.any() {
+                    (node, lanes) = (candidate, enter);
                     break;
                 }
             }
@@ -375,6 +401,7 @@ fn sah_split(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::geometry::{F64x4, Mask4};
 
     /// Unit boxes along a diagonal; "hit" is the box's entry distance.
     fn boxes(n: usize) -> Vec<Aabb> {
@@ -389,6 +416,87 @@ mod tests {
             .collect()
     }
 
+    /// A search by "hit" functions, one per lane: the nearest t, ties to
+    /// the smaller rank, as the renderer's search keeps them.
+    struct Scan<H: Fn(usize, usize) -> Option<f64>, R: Fn(usize) -> usize> {
+        hit: H,
+        rank: R,
+        best: [Option<(f64, usize)>; 4],
+        tested: usize,
+    }
+
+    impl<H: Fn(usize, usize) -> Option<f64>, R: Fn(usize) -> usize> Scan<H, R> {
+        fn new(hit: H, rank: R) -> Self {
+            Scan {
+                hit,
+                rank,
+                best: [None; 4],
+                tested: 0,
+            }
+        }
+
+        fn consider(&mut self, lane: usize, k: usize) {
+            self.tested += 1;
+            if let Some(t) = (self.hit)(lane, k) {
+                let better = self.best[lane]
+                    .is_none_or(|(b, j)| t < b || (t == b && (self.rank)(k) < (self.rank)(j)));
+                if better {
+                    self.best[lane] = Some((t, k));
+                }
+            }
+        }
+
+        fn t(&self, lane: usize) -> f64 {
+            self.best[lane].map_or(f64::INFINITY, |b| b.0)
+        }
+    }
+
+    impl<H: Fn(usize, usize) -> Option<f64>, R: Fn(usize) -> usize> Search<f64> for Scan<H, R> {
+        fn t_max(&self) -> f64 {
+            self.t(0)
+        }
+        fn test(&mut self, k: usize, lanes: bool) {
+            if lanes {
+                self.consider(0, k);
+            }
+        }
+    }
+
+    impl<H: Fn(usize, usize) -> Option<f64>, R: Fn(usize) -> usize> Search<F64x4> for Scan<H, R> {
+        fn t_max(&self) -> F64x4 {
+            F64x4::from_fn(|i| self.t(i))
+        }
+        fn test(&mut self, k: usize, lanes: Mask4) {
+            for i in 0..4 {
+                if lanes.lane(i) {
+                    self.consider(i, k);
+                }
+            }
+        }
+    }
+
+    fn diagonal_ray(k: u32) -> Ray {
+        let f = f64::from(k);
+        Ray::new(
+            DVec3::new(-5.0, -5.0, -5.0),
+            DVec3::new(
+                1.0 + (f * 0.37).sin(),
+                1.0 + (f * 0.71).cos(),
+                1.0 + 0.01 * f,
+            )
+            .normalize(),
+        )
+    }
+
+    fn entry(b: &Aabb, ray: &Ray) -> Option<f64> {
+        let (t, enters) = b.entry::<f64>(
+            &ray.origin.to_array(),
+            &ray.dir.recip().to_array(),
+            f64::INFINITY,
+        );
+        enters.then_some(t)
+    }
+
     #[test]
     fn nearest_equals_brute_force() {
         let b = boxes(500);
@@ -397,24 +505,39 @@ mod tests {
         sorted.sort();
         assert_eq!(sorted, (0..500).collect::<Vec<u32>>());
         for k in 0..200 {
-            let f = f64::from(k);
-            let ray = Ray::new(
-                DVec3::new(-5.0, -5.0, -5.0),
-                DVec3::new(
-                    1.0 + (f * 0.37).sin(),
-                    1.0 + (f * 0.71).cos(),
-                    1.0 + 0.01 * f,
-                )
-                .normalize(),
-            );
-            let hit = |i: usize| b[i].entry(ray.origin, ray.dir.recip(), f64::INFINITY);
+            let ray = diagonal_ray(k);
             let brute = (0..b.len())
-                .filter_map(|i| hit(i).map(|t| (t, i)))
+                .filter_map(|i| entry(&b[i], &ray).map(|t| (t, i)))
                 .min_by(|x, y| x.0.total_cmp(&y.0));
-            let fast = bvh
-                .nearest(&ray, f64::INFINITY, |k| hit(bvh.order()[k] as usize), |k| k)
-                .map(|(t, k)| (t, bvh.order()[k] as usize));
+            let mut scan = Scan::new(|_, k| entry(&b[bvh.order()[k] as usize], &ray), |k| k);
+            bvh.nearest::<f64>(&ray, true, &mut scan);
+            let fast = scan.best[0].map(|(t, k)| (t, bvh.order()[k] as usize));
             assert_eq!(brute.map(|x| x.0), fast.map(|x| x.0), "ray {k}");
+        }
+    }
+
+    /// Four rays walked together find, lane by lane, what each finds alone;
+    /// a lane left out finds nothing.
+    #[test]
+    fn lanes_find_what_each_ray_finds_alone() {
+        let b = boxes(500);
+        let bvh = Bvh::build(&b);
+        for k in 0..100 {
+            let rays: [Ray; 4] = std::array::from_fn(|i| diagonal_ray(4 * k + i as u32));
+            let lanes = Ray::new(
+                F64x4::vector_from_fn(|i| rays[i].origin),
+                F64x4::vector_from_fn(|i| rays[i].dir),
+            );
+            let hit = |lane: usize, k: usize| entry(&b[bvh.order()[k] as usize], &rays[lane]);
+            let mut together = Scan::new(hit, |k| k);
+            let alive = Mask4::from_fn(|i| i != 2);
+            bvh.nearest::<F64x4>(&lanes, alive, &mut together);
+            for (i, ray) in rays.iter().enumerate() {
+                let mut alone = Scan::new(|_, k| entry(&b[bvh.order()[k] as usize], ray), |k| k);
+                bvh.nearest::<f64>(ray, true, &mut alone);
+                let expected = if i == 2 { None } else { alone.best[0] };
+                assert_eq!(together.best[i], expected, "rays {k}, lane {i}");
+            }
         }
     }
 
@@ -430,21 +553,13 @@ mod tests {
         let bvh = Bvh::build(&b);
         assert!(bvh.nodes.iter().all(|n| n.count as usize <= MAX_LEAF));
         let ray = Ray::new(DVec3::splat(-1.0), DVec3::ONE.normalize());
-        let mut tested = 0;
         // Every primitive "hit" beyond the boxes: nothing can be pruned.
-        let found = bvh.nearest(
-            &ray,
-            f64::INFINITY,
-            |_| {
-                tested += 1;
-                Some(100.0)
-            },
-            |k| bvh.order()[k] as usize,
-        );
+        let mut scan = Scan::new(|_, _| Some(100.0), |k| bvh.order()[k] as usize);
+        bvh.nearest::<f64>(&ray, true, &mut scan);
         // The tie goes to the smallest rank: primitive 0, wherever the
         // build put it.
         let at = bvh.order().iter().position(|&i| i == 0);
-        assert_eq!(found, Some((100.0, at.unwrap())));
-        assert_eq!(tested, 10_000, "all overlap, so all are tested");
+        assert_eq!(scan.best[0], Some((100.0, at.unwrap())));
+        assert_eq!(scan.tested, 10_000, "all overlap, so all are tested");
     }
 }

@@ -12,9 +12,11 @@
 //! normal); [`Bvh`] finds the nearest of many bounded primitives.
 //!
 //! Each intersection formula is written once, generic over the precision
-//! ([`Vector`]: f64, or f32 for the study's [`Primitive32`]), so the two
-//! cannot drift: [`stable_roots`] and [`textbook_roots`] for spheres,
-//! [`plane_hit`] for planes.
+//! and width ([`Vector`]: f64, f32 for the study's [`Primitive32`], or four
+//! f64 lanes for the renderer's packets of rays), so they cannot drift:
+//! [`stable_roots`] and [`textbook_roots`] for spheres, [`plane_hit`] for
+//! planes. They answer per lane ([`Found`]); the BVH walks a packet's
+//! lanes together ([`Bvh::nearest`]).
 
 mod bvh;
 mod plane;
@@ -26,13 +28,13 @@ mod sphere;
 #[cfg(test)]
 mod unchanged;
 
-pub use bvh::{Aabb, Bvh};
+pub use bvh::{Aabb, Bvh, Search};
 pub use plane::{intersect_plane_world, plane_hit};
-pub use precision::{Real, Vector};
+pub use precision::{DVec3x4, F64x4, Lanes, Mask, Mask4, Real, Vector};
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
 pub use single::{Primitive32, Ray32};
 pub use sphere::{
-    Leading, Receding, UnitDirection, intersect_ball, intersect_ball_textbook, intersect_sphere,
-    intersect_sphere_textbook, stable_roots, textbook_roots,
+    Found, Leading, Receding, UnitDirection, intersect_ball, intersect_ball_textbook,
+    intersect_sphere, intersect_sphere_textbook, stable_roots, textbook_roots,
 };

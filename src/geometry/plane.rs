@@ -2,29 +2,34 @@
 //! a point and a unit normal).
 
 use super::Ray;
-use super::precision::{Real, Vector};
+use super::precision::{Mask, Real, Vector};
+use super::sphere::Found;
 
 /// t > 0 where the ray `origin + t · dir` meets the plane through `point`
-/// with unit `normal`, or `None` when parallel or moving away; in f64 or
-/// f32.
+/// with unit `normal` (per lane, not found when parallel or moving away);
+/// in f64, f32 or lanes.
 #[inline(always)]
-pub fn plane_hit<V: Vector>(origin: V, dir: V, point: V, normal: V) -> Option<V::Real> {
+pub fn plane_hit<V: Vector>(origin: V, dir: V, point: V, normal: V) -> Found<V::Real> {
     let zero = V::Real::ZERO;
     // t = num / denom, num = N·(P − O), denom = N·D.
     let denom = normal.dot(dir);
     let num = normal.dot(point - origin);
     // Receding or parallel: t > 0 needs equal signs, so most planes behind
     // the ray are dismissed without the division.
-    if denom == zero || (num > zero) != (denom > zero) {
-        return None;
+    let alive = !(denom.eq(zero) | (num.gt(zero) ^ denom.gt(zero)));
+    if !alive.any() {
+        return Found::none();
     }
     let t = num / denom;
-    (t > zero && t.is_finite()).then_some(t)
+    Found {
+        t,
+        found: alive & t.gt(zero) & t.is_finite(),
+    }
 }
 
-/// [`plane_hit`] in f64 for a world-space ray.
-#[inline]
-pub fn intersect_plane_world(ray: &Ray, point: glam::DVec3, normal: glam::DVec3) -> Option<f64> {
+/// [`plane_hit`] for a world-space ray.
+#[inline(always)]
+pub fn intersect_plane_world<V: Vector>(ray: &Ray<V>, point: V, normal: V) -> Found<V::Real> {
     plane_hit(ray.origin, ray.dir, point, normal)
 }
 
@@ -35,7 +40,7 @@ mod tests {
 
     /// The plane z = 0.
     fn intersect_plane(ray: &Ray) -> Option<f64> {
-        intersect_plane_world(ray, DVec3::ZERO, DVec3::Z)
+        intersect_plane_world(ray, DVec3::ZERO, DVec3::Z).get()
     }
 
     #[test]

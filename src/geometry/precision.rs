@@ -1,46 +1,103 @@
-//! The precision a formula runs in: f64 (the reference) or f32 (the
-//! study's "f32 everywhere" method). The intersection formulas are written
-//! once, generic over [`Vector`], and each precision runs exactly the
-//! operations it spells out: every method here is the one glam or the
-//! standard library already provides, nothing is added or reordered.
+//! The precision and width a formula runs in: one f64 (the reference), one
+//! f32 (the study's "f32 everywhere" method) or four f64 lanes side by side
+//! ([`F64x4`], the packets the renderer traces). The intersection and
+//! shading formulas are written once, generic over [`Real`] and [`Vector`],
+//! and each instance runs exactly the operations they spell out: every
+//! method here is the one glam or the standard library already provides
+//! (or, for lanes, the same IEEE operation on each lane), nothing is added
+//! or reordered, so a lane computes bit for bit what the scalar code would.
+//!
+//! Comparisons give a [`Mask`] (a `bool` for one value, one flag per lane
+//! for lanes); a formula's early outs become "no lane is still alive", and
+//! its `if`s become [`Real::select`].
 
 use glam::{DVec3, Vec3};
-use std::ops::{Add, Div, Mul, Neg, Sub};
+use std::ops::{Add, BitAnd, BitOr, BitXor, Div, Mul, Neg, Not, Sub};
+use wide::f64x4;
 
-/// A floating-point scalar: `f64` or `f32`.
+/// The outcome of a comparison: one flag per lane.
+pub trait Mask:
+    Copy + BitAnd<Output = Self> + BitOr<Output = Self> + BitXor<Output = Self> + Not<Output = Self>
+{
+    /// Every lane set.
+    const ALL: Self;
+    /// Whether any lane is set.
+    fn any(self) -> bool;
+    /// Lanes set.
+    fn count(self) -> u32;
+    /// Lane i's flag.
+    fn lane(self, i: usize) -> bool;
+    /// Lanes set where `f(i)`.
+    fn from_fn(f: impl FnMut(usize) -> bool) -> Self;
+}
+
+impl Mask for bool {
+    const ALL: bool = true;
+    #[inline(always)]
+    fn any(self) -> bool {
+        self
+    }
+    #[inline(always)]
+    fn count(self) -> u32 {
+        u32::from(self)
+    }
+    #[inline(always)]
+    fn lane(self, _: usize) -> bool {
+        self
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> bool) -> bool {
+        f(0)
+    }
+}
+
+/// A floating-point scalar: `f64`, `f32`, or lanes of f64 ([`F64x4`]).
 pub trait Real:
     Copy
-    + PartialOrd
-    + Default
     + Add<Output = Self>
     + Sub<Output = Self>
     + Mul<Output = Self>
     + Div<Output = Self>
     + Neg<Output = Self>
 {
+    type Mask: Mask;
     const ZERO: Self;
+    const ONE: Self;
     const TWO: Self;
     const FOUR: Self;
     fn sqrt(self) -> Self;
     /// `self`'s magnitude with `sign`'s sign.
     fn copysign(self, sign: Self) -> Self;
-    fn is_nan(self) -> bool;
-    fn is_finite(self) -> bool;
+    fn is_nan(self) -> Self::Mask;
+    fn is_finite(self) -> Self::Mask;
+    fn lt(self, other: Self) -> Self::Mask;
+    fn le(self, other: Self) -> Self::Mask;
+    fn gt(self, other: Self) -> Self::Mask;
+    fn eq(self, other: Self) -> Self::Mask;
+    /// Per lane, `if_true` where `mask` is set, else `if_false`.
+    fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
 }
 
-/// A 3-vector of a [`Real`]: `DVec3` or `Vec3`.
-pub trait Vector: Copy + Sub<Output = Self> {
+/// A 3-vector of a [`Real`]: `DVec3`, `Vec3` or [`DVec3x4`].
+pub trait Vector: Copy + Add<Output = Self> + Sub<Output = Self> + Neg<Output = Self> {
     type Real: Real;
     fn dot(self, other: Self) -> Self::Real;
     fn length_squared(self) -> Self::Real;
+    fn length(self) -> Self::Real;
+    /// `self / |self|`, as glam computes it: `self · (1 / |self|)`.
+    fn normalize(self) -> Self;
     /// `s · self`.
     fn scaled(self, s: Self::Real) -> Self;
+    /// Per lane, `if_true` where `mask` is set, else `if_false`.
+    fn select(mask: <Self::Real as Real>::Mask, if_true: Self, if_false: Self) -> Self;
 }
 
 macro_rules! real {
     ($t:ty) => {
         impl Real for $t {
+            type Mask = bool;
             const ZERO: $t = 0.0;
+            const ONE: $t = 1.0;
             const TWO: $t = 2.0;
             const FOUR: $t = 4.0;
             #[inline(always)]
@@ -59,6 +116,27 @@ macro_rules! real {
             fn is_finite(self) -> bool {
                 <$t>::is_finite(self)
             }
+            #[inline(always)]
+            fn lt(self, other: $t) -> bool {
+                self < other
+            }
+            #[inline(always)]
+            fn le(self, other: $t) -> bool {
+                self <= other
+            }
+            #[inline(always)]
+            fn gt(self, other: $t) -> bool {
+                self > other
+            }
+            #[inline(always)]
+            #[allow(clippy::float_cmp)]
+            fn eq(self, other: $t) -> bool {
+                self == other
+            }
+            #[inline(always)]
+            fn select(mask: bool, if_true: $t, if_false: $t) -> $t {
+                if mask { if_true } else { if_false }
+            }
         }
     };
 }
@@ -76,8 +154,20 @@ macro_rules! vector {
                 <$v>::length_squared(self)
             }
             #[inline(always)]
+            fn length(self) -> $t {
+                <$v>::length(self)
+            }
+            #[inline(always)]
+            fn normalize(self) -> $v {
+                <$v>::normalize(self)
+            }
+            #[inline(always)]
             fn scaled(self, s: $t) -> $v {
                 s * self
+            }
+            #[inline(always)]
+            fn select(mask: bool, if_true: $v, if_false: $v) -> $v {
+                if mask { if_true } else { if_false }
             }
         }
     };
@@ -87,3 +177,354 @@ real!(f64);
 real!(f32);
 vector!(DVec3, f64);
 vector!(Vec3, f32);
+
+/// Four f64 lanes (the `wide` crate's `f64x4`: AVX registers where the
+/// build targets them, pairs of SSE2 registers on baseline x86-64).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct F64x4(pub f64x4);
+
+/// One flag per lane of an [`F64x4`]: all bits set or all clear.
+#[derive(Debug, Clone, Copy)]
+pub struct Mask4(f64x4);
+
+/// A 3-vector of four lanes: four `DVec3`s, one per lane.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DVec3x4 {
+    pub x: F64x4,
+    pub y: F64x4,
+    pub z: F64x4,
+}
+
+const ALL_BITS: f64x4 = f64x4::splat(f64::from_bits(u64::MAX));
+
+macro_rules! binary {
+    ($t:ty, $trait:ident, $method:ident, $op:tt) => {
+        impl $trait for $t {
+            type Output = $t;
+            #[inline(always)]
+            fn $method(self, other: $t) -> $t {
+                Self(self.0 $op other.0)
+            }
+        }
+    };
+}
+binary!(F64x4, Add, add, +);
+binary!(F64x4, Sub, sub, -);
+binary!(F64x4, Mul, mul, *);
+binary!(F64x4, Div, div, /);
+binary!(Mask4, BitAnd, bitand, &);
+binary!(Mask4, BitOr, bitor, |);
+binary!(Mask4, BitXor, bitxor, ^);
+
+impl Neg for F64x4 {
+    type Output = F64x4;
+    #[inline(always)]
+    fn neg(self) -> F64x4 {
+        F64x4(-self.0)
+    }
+}
+
+impl Not for Mask4 {
+    type Output = Mask4;
+    #[inline(always)]
+    fn not(self) -> Mask4 {
+        Mask4(self.0 ^ ALL_BITS)
+    }
+}
+
+impl Mask for Mask4 {
+    const ALL: Mask4 = Mask4(ALL_BITS);
+    #[inline(always)]
+    fn any(self) -> bool {
+        self.0.any()
+    }
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.0.to_bitmask().count_ones()
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> bool {
+        self.0.to_bitmask() & (1 << i) != 0
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> bool) -> Mask4 {
+        let flag = |set: bool| if set { f64::from_bits(u64::MAX) } else { 0.0 };
+        Mask4(f64x4::new([flag(f(0)), flag(f(1)), flag(f(2)), flag(f(3))]))
+    }
+}
+
+impl Real for F64x4 {
+    type Mask = Mask4;
+    const ZERO: F64x4 = F64x4(f64x4::splat(0.0));
+    const ONE: F64x4 = F64x4(f64x4::splat(1.0));
+    const TWO: F64x4 = F64x4(f64x4::splat(2.0));
+    const FOUR: F64x4 = F64x4(f64x4::splat(4.0));
+    #[inline(always)]
+    fn sqrt(self) -> F64x4 {
+        F64x4(self.0.sqrt())
+    }
+    #[inline(always)]
+    fn copysign(self, sign: F64x4) -> F64x4 {
+        // The sign bit of `sign`, the other bits of `self` (f64::copysign).
+        const SIGN: f64x4 = f64x4::splat(-0.0);
+        F64x4((self.0 & !SIGN) | (sign.0 & SIGN))
+    }
+    #[inline(always)]
+    fn is_nan(self) -> Mask4 {
+        Mask4(self.0.is_nan())
+    }
+    #[inline(always)]
+    fn is_finite(self) -> Mask4 {
+        Mask4(self.0.is_finite())
+    }
+    #[inline(always)]
+    fn lt(self, other: F64x4) -> Mask4 {
+        Mask4(self.0.simd_lt(other.0))
+    }
+    #[inline(always)]
+    fn le(self, other: F64x4) -> Mask4 {
+        Mask4(self.0.simd_le(other.0))
+    }
+    #[inline(always)]
+    fn gt(self, other: F64x4) -> Mask4 {
+        Mask4(self.0.simd_gt(other.0))
+    }
+    #[inline(always)]
+    fn eq(self, other: F64x4) -> Mask4 {
+        Mask4(self.0.simd_eq(other.0))
+    }
+    #[inline(always)]
+    fn select(mask: Mask4, if_true: F64x4, if_false: F64x4) -> F64x4 {
+        F64x4(mask.0.select(if_true.0, if_false.0))
+    }
+}
+
+impl Add for DVec3x4 {
+    type Output = DVec3x4;
+    #[inline(always)]
+    fn add(self, o: DVec3x4) -> DVec3x4 {
+        DVec3x4 {
+            x: self.x + o.x,
+            y: self.y + o.y,
+            z: self.z + o.z,
+        }
+    }
+}
+
+impl Sub for DVec3x4 {
+    type Output = DVec3x4;
+    #[inline(always)]
+    fn sub(self, o: DVec3x4) -> DVec3x4 {
+        DVec3x4 {
+            x: self.x - o.x,
+            y: self.y - o.y,
+            z: self.z - o.z,
+        }
+    }
+}
+
+impl Neg for DVec3x4 {
+    type Output = DVec3x4;
+    #[inline(always)]
+    fn neg(self) -> DVec3x4 {
+        DVec3x4 {
+            x: -self.x,
+            y: -self.y,
+            z: -self.z,
+        }
+    }
+}
+
+impl Vector for DVec3x4 {
+    type Real = F64x4;
+    #[inline(always)]
+    fn dot(self, o: DVec3x4) -> F64x4 {
+        // glam's order: (x x') + (y y') + (z z').
+        (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
+    }
+    #[inline(always)]
+    fn length_squared(self) -> F64x4 {
+        self.dot(self)
+    }
+    #[inline(always)]
+    fn length(self) -> F64x4 {
+        self.dot(self).sqrt()
+    }
+    #[inline(always)]
+    fn normalize(self) -> DVec3x4 {
+        self.scaled(F64x4::ONE / self.length())
+    }
+    #[inline(always)]
+    fn scaled(self, s: F64x4) -> DVec3x4 {
+        DVec3x4 {
+            x: s * self.x,
+            y: s * self.y,
+            z: s * self.z,
+        }
+    }
+    #[inline(always)]
+    fn select(mask: Mask4, if_true: DVec3x4, if_false: DVec3x4) -> DVec3x4 {
+        DVec3x4 {
+            x: F64x4::select(mask, if_true.x, if_false.x),
+            y: F64x4::select(mask, if_true.y, if_false.y),
+            z: F64x4::select(mask, if_true.z, if_false.z),
+        }
+    }
+}
+
+/// f64 lanes the renderer traces side by side: one `f64` (the picks, the
+/// study's f32 method) or four ([`F64x4`]: the tiles). A lane's values
+/// come from and go back to plain `f64` and `DVec3`.
+pub trait Lanes: Real {
+    type Vector: Vector<Real = Self>;
+    /// Lanes traced together.
+    const WIDTH: usize;
+    fn splat(x: f64) -> Self;
+    fn lane(self, i: usize) -> f64;
+    fn from_fn(f: impl FnMut(usize) -> f64) -> Self;
+    fn splat_vector(v: DVec3) -> Self::Vector;
+    fn vector_lane(v: Self::Vector, i: usize) -> DVec3;
+    fn vector_from_fn(f: impl FnMut(usize) -> DVec3) -> Self::Vector;
+    /// A vector's x, y and z lanes.
+    fn components(v: Self::Vector) -> [Self; 3];
+}
+
+impl Lanes for f64 {
+    type Vector = DVec3;
+    const WIDTH: usize = 1;
+    #[inline(always)]
+    fn splat(x: f64) -> f64 {
+        x
+    }
+    #[inline(always)]
+    fn lane(self, _: usize) -> f64 {
+        self
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> f64 {
+        f(0)
+    }
+    #[inline(always)]
+    fn splat_vector(v: DVec3) -> DVec3 {
+        v
+    }
+    #[inline(always)]
+    fn vector_lane(v: DVec3, _: usize) -> DVec3 {
+        v
+    }
+    #[inline(always)]
+    fn vector_from_fn(mut f: impl FnMut(usize) -> DVec3) -> DVec3 {
+        f(0)
+    }
+    #[inline(always)]
+    fn components(v: DVec3) -> [f64; 3] {
+        v.to_array()
+    }
+}
+
+impl Lanes for F64x4 {
+    type Vector = DVec3x4;
+    const WIDTH: usize = 4;
+    #[inline(always)]
+    fn splat(x: f64) -> F64x4 {
+        F64x4(f64x4::splat(x))
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f64 {
+        self.0.as_array()[i]
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f64) -> F64x4 {
+        F64x4(f64x4::new([f(0), f(1), f(2), f(3)]))
+    }
+    #[inline(always)]
+    fn splat_vector(v: DVec3) -> DVec3x4 {
+        DVec3x4 {
+            x: Self::splat(v.x),
+            y: Self::splat(v.y),
+            z: Self::splat(v.z),
+        }
+    }
+    #[inline(always)]
+    fn vector_lane(v: DVec3x4, i: usize) -> DVec3 {
+        DVec3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i))
+    }
+    #[inline(always)]
+    fn vector_from_fn(mut f: impl FnMut(usize) -> DVec3) -> DVec3x4 {
+        let v = [f(0), f(1), f(2), f(3)];
+        DVec3x4 {
+            x: Self::from_fn(|i| v[i].x),
+            y: Self::from_fn(|i| v[i].y),
+            z: Self::from_fn(|i| v[i].z),
+        }
+    }
+    #[inline(always)]
+    fn components(v: DVec3x4) -> [F64x4; 3] {
+        [v.x, v.y, v.z]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Each lane operation gives what the f64 operation gives, bit for bit,
+    /// NaN, infinities, signed zeros and subnormals included.
+    #[test]
+    fn lanes_compute_what_f64_computes() {
+        let specials = [
+            0.0,
+            -0.0,
+            1.0,
+            -1.5,
+            f64::NAN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::MIN_POSITIVE / 3.0,
+            1e300,
+            -2.5e-310,
+            std::f64::consts::PI,
+        ];
+        let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
+        let mut next = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            let pick = (seed % 16) as usize;
+            if pick < specials.len() {
+                specials[pick]
+            } else {
+                f64::from_bits(seed >> 2) * if seed & 1 == 0 { 1.0 } else { -1.0 }
+            }
+        };
+        for _ in 0..20_000 {
+            let a: [f64; 4] = std::array::from_fn(|_| next());
+            let b: [f64; 4] = std::array::from_fn(|_| next());
+            let (x, y) = (F64x4::from_fn(|i| a[i]), F64x4::from_fn(|i| b[i]));
+            for i in 0..4 {
+                let (p, q) = (a[i], b[i]);
+                let same = |lanes: F64x4, scalar: f64| {
+                    assert_eq!(lanes.lane(i).to_bits(), scalar.to_bits(), "{p} {q}")
+                };
+                same(x + y, p + q);
+                same(x - y, p - q);
+                same(x * y, p * q);
+                same(x / y, p / q);
+                same(-x, -p);
+                same(x.sqrt(), p.sqrt());
+                same(Real::copysign(x, y), p.copysign(q));
+                same(F64x4::select(x.lt(y), x, y), if p < q { p } else { q });
+                assert_eq!(x.le(y).lane(i), p <= q);
+                assert_eq!(x.gt(y).lane(i), p > q);
+                assert_eq!(Real::eq(x, y).lane(i), p == q);
+                assert_eq!(Real::is_nan(x).lane(i), p.is_nan());
+                assert_eq!(Real::is_finite(x).lane(i), p.is_finite());
+                // NaN: neither less nor not-less-is-greater-or-equal.
+                assert_eq!(
+                    (!x.lt(y)).lane(i),
+                    p.partial_cmp(&q) != Some(std::cmp::Ordering::Less)
+                );
+            }
+        }
+    }
+}

@@ -10,8 +10,8 @@
 //!   normal.
 
 use super::{
-    Aabb, Ray, intersect_ball, intersect_ball_textbook, intersect_plane_world, intersect_sphere,
-    intersect_sphere_textbook,
+    Aabb, Found, Lanes, Ray, intersect_ball, intersect_ball_textbook, intersect_plane_world,
+    intersect_sphere, intersect_sphere_textbook,
 };
 use crate::math::Transform;
 use crate::scene::Shape;
@@ -69,19 +69,28 @@ impl Primitive {
     }
 
     /// The nearest t > 0 at which `ray` (unit direction) meets the
-    /// surface. `TEXTBOOK` picks the textbook quadratic for spheres (the
-    /// study's method; planes are unchanged).
-    #[inline]
-    pub fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray) -> Option<f64> {
+    /// surface, per lane. `TEXTBOOK` picks the textbook quadratic for
+    /// spheres (the study's method; planes are unchanged).
+    #[inline(always)]
+    pub fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
         match self {
-            Primitive::Ball { center, radius } if TEXTBOOK => {
-                intersect_ball_textbook(ray, *center, *radius)
+            Primitive::Ball { center, radius } => {
+                let (center, r2) = (L::splat_vector(*center), L::splat(radius * radius));
+                if TEXTBOOK {
+                    intersect_ball_textbook(ray, center, r2)
+                } else {
+                    intersect_ball(ray, center, r2)
+                }
             }
-            Primitive::Ball { center, radius } => intersect_ball(ray, *center, *radius),
             Primitive::Ellipsoid(e) => {
+                // Each lane's ray mapped to object space on its own.
                 let local = Ray::new(
-                    e.to_object.transform_point3(ray.origin),
-                    e.to_object.transform_vector3(ray.dir),
+                    L::vector_from_fn(|i| {
+                        e.to_object.transform_point3(L::vector_lane(ray.origin, i))
+                    }),
+                    L::vector_from_fn(|i| {
+                        e.to_object.transform_vector3(L::vector_lane(ray.dir, i))
+                    }),
                 );
                 if TEXTBOOK {
                     intersect_sphere_textbook(&local)
@@ -89,7 +98,9 @@ impl Primitive {
                     intersect_sphere(&local)
                 }
             }
-            Primitive::Plane { point, normal } => intersect_plane_world(ray, *point, *normal),
+            Primitive::Plane { point, normal } => {
+                intersect_plane_world(ray, L::splat_vector(*point), L::splat_vector(*normal))
+            }
         }
     }
 
@@ -190,8 +201,8 @@ mod tests {
             let y = -1.5 + 0.06 * f64::from(k);
             let ray = Ray::new(DVec3::ZERO, DVec3::new(0.1, y, 1.0).normalize() * 1.0);
             let (a, b) = (
-                ball.intersect::<false>(&ray),
-                ellipsoid.intersect::<false>(&ray),
+                ball.intersect::<false, f64>(&ray).get(),
+                ellipsoid.intersect::<false, f64>(&ray).get(),
             );
             match (a, b) {
                 (Some(a), Some(b)) => {

@@ -1,20 +1,23 @@
+use super::Vector;
 use glam::DVec3;
 
-/// A half-line `origin + t · dir`, t > 0.
+/// A half-line `origin + t · dir`, t > 0; or, with lanes of vectors
+/// ([`super::DVec3x4`]), one ray per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ray {
-    pub origin: DVec3,
+pub struct Ray<V = DVec3> {
+    pub origin: V,
     /// Unit length in world space; in object space it carries the scale.
-    pub dir: DVec3,
+    pub dir: V,
 }
 
-impl Ray {
-    pub fn new(origin: DVec3, dir: DVec3) -> Ray {
+impl<V: Vector> Ray<V> {
+    pub fn new(origin: V, dir: V) -> Ray<V> {
         Ray { origin, dir }
     }
 
     /// The point at parameter t.
-    pub fn at(&self, t: f64) -> DVec3 {
-        self.origin + t * self.dir
+    #[inline(always)]
+    pub fn at(&self, t: V::Real) -> V {
+        self.origin + self.dir.scaled(t)
     }
 }

@@ -76,7 +76,9 @@ impl Primitive32 {
                 to_object.transform_vector3(ray.dir),
                 1.0,
             ),
-            Primitive32::Plane { point, normal } => plane_hit(ray.origin, ray.dir, *point, *normal),
+            Primitive32::Plane { point, normal } => {
+                plane_hit(ray.origin, ray.dir, *point, *normal).get()
+            }
         }
     }
 
@@ -101,9 +103,9 @@ impl Primitive32 {
 fn sphere<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
     let a = d.length_squared();
     if TEXTBOOK {
-        textbook_roots(f, d, a, r2)
+        textbook_roots(f, d, a, r2).get()
     } else {
-        stable_roots(f, d, a, r2, Receding::Solve)
+        stable_roots(f, d, a, r2, Receding::Solve).get()
     }
 }
 
@@ -119,7 +121,7 @@ mod tests {
             radius: 1.5,
         };
         let ray = super::super::Ray::new(DVec3::ZERO, DVec3::new(0.1, 0.05, 1.0).normalize());
-        let t64 = ball.intersect::<false>(&ray).unwrap();
+        let t64 = ball.intersect::<false, f64>(&ray).get().unwrap();
         let p = Primitive32::new(&ball);
         let r = Ray32::from_f64(&ray);
         for t in [p.intersect::<false>(&r), p.intersect::<true>(&r)] {

@@ -14,7 +14,7 @@
 //! (world space, where a = 1 and is never applied).
 
 use super::Ray;
-use super::precision::{Real, Vector};
+use super::precision::{Mask, Real, Vector};
 
 /// The leading coefficient a = |d|² of the quadratic, as the formulas
 /// apply it.
@@ -48,27 +48,21 @@ impl<R: Real> Leading<R> for UnitDirection {
     }
 }
 
-macro_rules! computed_leading {
-    ($t:ty) => {
-        /// a = |d|², computed by the caller.
-        impl Leading<$t> for $t {
-            #[inline(always)]
-            fn times(self, x: $t) -> $t {
-                self * x
-            }
-            #[inline(always)]
-            fn multiple(self, k: $t) -> $t {
-                k * self
-            }
-            #[inline(always)]
-            fn divide(self, x: $t) -> $t {
-                x / self
-            }
-        }
-    };
+/// a = |d|², computed by the caller.
+impl<R: Real> Leading<R> for R {
+    #[inline(always)]
+    fn times(self, x: R) -> R {
+        self * x
+    }
+    #[inline(always)]
+    fn multiple(self, k: R) -> R {
+        k * self
+    }
+    #[inline(always)]
+    fn divide(self, x: R) -> R {
+        x / self
+    }
 }
-computed_leading!(f64);
-computed_leading!(f32);
 
 /// What the stable formula does with a ray that starts outside the sphere
 /// (c > 0) and moves away from it (b > 0): it has no root t > 0.
@@ -80,13 +74,42 @@ pub enum Receding {
     Solve,
 }
 
-/// Nearest root t > 0 of |f + t d|² = r², or `None`: the numerically
-/// stable form.
+/// A root per lane and whether that lane found one: what the formulas
+/// return, for one value or for lanes alike.
+#[derive(Debug, Clone, Copy)]
+pub struct Found<R: Real> {
+    pub t: R,
+    pub found: R::Mask,
+}
+
+impl<R: Real> Found<R> {
+    /// No lane found anything.
+    #[inline(always)]
+    pub fn none() -> Found<R> {
+        Found {
+            t: R::ZERO,
+            found: !R::Mask::ALL,
+        }
+    }
+}
+
+impl<R: Real<Mask = bool>> Found<R> {
+    /// The root of a single ray, if any.
+    #[inline(always)]
+    pub fn get(self) -> Option<R> {
+        self.found.then_some(self.t)
+    }
+}
+
+/// Nearest root t > 0 of |f + t d|² = r²: the numerically stable form.
 ///
 /// The discriminant is computed from the distance of the line to the
 /// centre (Hearn & Baker, as in *Ray Tracing Gems* ch. 7), which does not
 /// cancel when the sphere is small and far, and the two roots come from
 /// `q` and `c / q`, which avoids subtracting nearly equal numbers.
+///
+/// With lanes, each early out drops the lanes it concerns and returns
+/// once none is left; the survivors compute what a single ray would.
 #[inline(always)]
 pub fn stable_roots<V: Vector>(
     f: V,
@@ -94,104 +117,127 @@ pub fn stable_roots<V: Vector>(
     a: impl Leading<V::Real>,
     r2: V::Real,
     receding: Receding,
-) -> Option<V::Real> {
+) -> Found<V::Real> {
     let zero = V::Real::ZERO;
     // Coefficients: half of the usual b, the quadratic is
     // a t² + 2 b t + c = 0.
     let b = f.dot(d);
     let c = f.length_squared() - r2;
+    let mut alive = <V::Real as Real>::Mask::ALL;
     // Receding ray: outside the sphere and moving away from it.
-    if receding == Receding::Dismiss && c > zero && b > zero {
-        return None;
+    if receding == Receding::Dismiss {
+        alive = !(c.gt(zero) & b.gt(zero));
+        if !alive.any() {
+            return Found::none();
+        }
     }
     // Quarter discriminant: Δ/4 = b² − a c = a (r² − |l|²), l = f − (b/a) d
     // the foot of the perpendicular from the centre to the line.
     let l = f - d.scaled(a.divide(b));
     let quarter_disc = a.times(r2 - l.length_squared());
-    if quarter_disc.is_nan() || quarter_disc < zero {
-        return None;
+    alive = alive & !(quarter_disc.is_nan() | quarter_disc.lt(zero));
+    if !alive.any() {
+        return Found::none();
     }
     // Roots: q = −(b + sign(b) √(Δ/4)), then t = q / a and t = c / q.
     let q = -(b + quarter_disc.sqrt().copysign(b));
-    if q == zero {
-        // Tangent ray through the centre's perpendicular foot: b = Δ = 0.
-        return None;
+    // q = 0: a tangent ray through the centre's perpendicular foot
+    // (b = Δ = 0).
+    alive = alive & !q.eq(zero);
+    if !alive.any() {
+        return Found::none();
     }
-    nearest_positive(a.divide(q), c / q)
+    let nearest = nearest_positive(a.divide(q), c / q);
+    Found {
+        t: nearest.t,
+        found: alive & nearest.found,
+    }
 }
 
-/// Nearest root t > 0 of |f + t d|² = r², or `None`: the textbook root
-/// formula (−b ± √(b² − 4ac)) / 2a. It cancels for small, distant spheres.
+/// Nearest root t > 0 of |f + t d|² = r²: the textbook root formula
+/// (−b ± √(b² − 4ac)) / 2a. It cancels for small, distant spheres.
 #[inline(always)]
 pub fn textbook_roots<V: Vector>(
     f: V,
     d: V,
     a: impl Leading<V::Real>,
     r2: V::Real,
-) -> Option<V::Real> {
+) -> Found<V::Real> {
     // Coefficients: the usual b, the quadratic is a t² + b t + c = 0.
     let b = V::Real::TWO * f.dot(d);
     let c = f.length_squared() - r2;
     // Discriminant: Δ = b² − 4ac.
     let disc = b * b - a.multiple(V::Real::FOUR) * c;
-    if disc.is_nan() || disc < V::Real::ZERO {
-        return None;
+    let alive = !(disc.is_nan() | disc.lt(V::Real::ZERO));
+    if !alive.any() {
+        return Found::none();
     }
     // Roots: (−b ∓ √Δ) / 2a.
     let sq = disc.sqrt();
-    nearest_positive(
+    let nearest = nearest_positive(
         (-b - sq) / a.multiple(V::Real::TWO),
         (-b + sq) / a.multiple(V::Real::TWO),
-    )
+    );
+    Found {
+        t: nearest.t,
+        found: alive & nearest.found,
+    }
 }
 
 /// Nearest root t > 0 of |o + t d|² = 1 (the unit sphere in its own
 /// space; d is the mapped direction, not unit), stable form.
-pub fn intersect_sphere(ray: &Ray) -> Option<f64> {
+#[inline(always)]
+pub fn intersect_sphere<V: Vector>(ray: &Ray<V>) -> Found<V::Real> {
     let d = ray.dir;
-    stable_roots(ray.origin, d, d.length_squared(), 1.0, Receding::Solve)
+    stable_roots(
+        ray.origin,
+        d,
+        d.length_squared(),
+        V::Real::ONE,
+        Receding::Solve,
+    )
 }
 
 /// Nearest root t > 0 of |o + t d − center|² = radius² for a unit
 /// direction d: the stable form in world space, for spheres whose
-/// transform is a similarity.
-#[inline]
-pub fn intersect_ball(ray: &Ray, center: glam::DVec3, radius: f64) -> Option<f64> {
+/// transform is a similarity. `r2` is radius².
+#[inline(always)]
+pub fn intersect_ball<V: Vector>(ray: &Ray<V>, center: V, r2: V::Real) -> Found<V::Real> {
     stable_roots(
         ray.origin - center,
         ray.dir,
         UnitDirection,
-        radius * radius,
+        r2,
         Receding::Dismiss,
     )
 }
 
 /// The textbook formula for the unit sphere in its own space.
-pub fn intersect_sphere_textbook(ray: &Ray) -> Option<f64> {
+#[inline(always)]
+pub fn intersect_sphere_textbook<V: Vector>(ray: &Ray<V>) -> Found<V::Real> {
     let d = ray.dir;
-    textbook_roots(ray.origin, d, d.length_squared(), 1.0)
+    textbook_roots(ray.origin, d, d.length_squared(), V::Real::ONE)
 }
 
 /// The textbook formula for a ball in world space (unit direction d):
 /// a = 1, roots (−b ± √(b² − 4c)) / 2. It cancels when the origin is far
-/// from a small ball.
-#[inline]
-pub fn intersect_ball_textbook(ray: &Ray, center: glam::DVec3, radius: f64) -> Option<f64> {
-    textbook_roots(ray.origin - center, ray.dir, UnitDirection, radius * radius)
+/// from a small ball. `r2` is radius².
+#[inline(always)]
+pub fn intersect_ball_textbook<V: Vector>(ray: &Ray<V>, center: V, r2: V::Real) -> Found<V::Real> {
+    textbook_roots(ray.origin - center, ray.dir, UnitDirection, r2)
 }
 
-/// The smaller of two roots that is > 0, in f64 or f32 (`T::default()` is
-/// zero). NaN roots are never chosen.
-#[inline]
-pub(super) fn nearest_positive<T: PartialOrd + Copy + Default>(t0: T, t1: T) -> Option<T> {
-    let zero = T::default();
-    let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
-    if near > zero {
-        Some(near)
-    } else if far > zero {
-        Some(far)
-    } else {
-        None
+/// The smaller of two roots that is > 0 (per lane). NaN roots are never
+/// chosen.
+#[inline(always)]
+pub(super) fn nearest_positive<R: Real>(t0: R, t1: R) -> Found<R> {
+    let zero = R::ZERO;
+    let ordered = t0.le(t1);
+    let (near, far) = (R::select(ordered, t0, t1), R::select(ordered, t1, t0));
+    let near_ahead = near.gt(zero);
+    Found {
+        t: R::select(near_ahead, near, far),
+        found: near_ahead | far.gt(zero),
     }
 }
 
@@ -203,18 +249,21 @@ mod tests {
     #[test]
     fn hits_the_front_from_outside() {
         let r = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z);
-        assert_eq!(intersect_sphere(&r), Some(4.0));
-        assert_eq!(intersect_sphere_textbook(&r), Some(4.0));
-        assert_eq!(intersect_ball_textbook(&r, DVec3::ZERO, 1.0), Some(4.0));
+        assert_eq!(intersect_sphere(&r).get(), Some(4.0));
+        assert_eq!(intersect_sphere_textbook(&r).get(), Some(4.0));
+        assert_eq!(
+            intersect_ball_textbook(&r, DVec3::ZERO, 1.0).get(),
+            Some(4.0)
+        );
     }
 
     #[test]
     fn ball_matches_the_unit_sphere_scaled() {
         let c = DVec3::new(1.0, -2.0, 10.0);
         let r = Ray::new(DVec3::ZERO, (c + DVec3::new(0.5, 0.0, 0.0)).normalize());
-        let t = intersect_ball(&r, c, 2.0).unwrap();
+        let t = intersect_ball(&r, c, 4.0).get().unwrap();
         let local = Ray::new((r.origin - c) / 2.0, r.dir / 2.0);
-        let u = intersect_sphere(&local).unwrap();
+        let u = intersect_sphere(&local).get().unwrap();
         assert!((t - u).abs() < 1e-12, "{t} {u}");
         assert!(((r.at(t) - c).length() - 2.0).abs() < 1e-12);
     }
@@ -222,17 +271,17 @@ mod tests {
     #[test]
     fn hits_the_far_side_from_inside() {
         let r = Ray::new(DVec3::ZERO, DVec3::X);
-        assert_eq!(intersect_sphere(&r), Some(1.0));
+        assert_eq!(intersect_sphere(&r).get(), Some(1.0));
     }
 
     #[test]
     fn misses_behind_and_beside() {
         assert_eq!(
-            intersect_sphere(&Ray::new(DVec3::new(0.0, 0.0, 5.0), DVec3::Z)),
+            intersect_sphere(&Ray::new(DVec3::new(0.0, 0.0, 5.0), DVec3::Z)).get(),
             None
         );
         assert_eq!(
-            intersect_sphere(&Ray::new(DVec3::new(0.0, 1.5, -5.0), DVec3::Z)),
+            intersect_sphere(&Ray::new(DVec3::new(0.0, 1.5, -5.0), DVec3::Z)).get(),
             None
         );
     }
@@ -242,7 +291,7 @@ mod tests {
         // A sphere of radius 2 seen in its object space: the unit world
         // direction becomes length 1/2, and t stays the world distance.
         let r = Ray::new(DVec3::new(0.0, 0.0, -5.0), DVec3::Z * 0.5);
-        assert_eq!(intersect_sphere(&r), Some(8.0));
+        assert_eq!(intersect_sphere(&r).get(), Some(8.0));
     }
 
     #[test]
@@ -252,14 +301,14 @@ mod tests {
         let o = DVec3::new(0.0, 0.0, -1e9);
         let hit = Ray::new(o, DVec3::new(0.0, 0.5e-9, 1.0).normalize());
         let exact = 1e9 - 0.75_f64.sqrt();
-        let t = intersect_sphere(&hit).unwrap();
+        let t = intersect_sphere(&hit).get().unwrap();
         assert!((t - exact).abs() < 1e-6, "{t}");
-        let t = intersect_sphere_textbook(&hit).unwrap();
+        let t = intersect_sphere_textbook(&hit).get().unwrap();
         assert!((t - exact).abs() > 0.5, "{t}");
         // Passing 1.5 from the centre: a miss, which the textbook formula
         // reports as a tangent hit.
         let miss = Ray::new(o, DVec3::new(0.0, 1.5e-9, 1.0).normalize());
-        assert_eq!(intersect_sphere(&miss), None);
-        assert!(intersect_sphere_textbook(&miss).is_some());
+        assert_eq!(intersect_sphere(&miss).get(), None);
+        assert!(intersect_sphere_textbook(&miss).get().is_some());
     }
 }

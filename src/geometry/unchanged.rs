@@ -3,8 +3,9 @@
 //! bit for bit, on a few thousand random rays: a changed operation or a
 //! changed order fails here, before it can move a pixel.
 
+use super::precision::{F64x4, Lanes, Mask};
 use super::single::{Primitive32, Ray32};
-use super::sphere::{nearest_positive, stable_roots};
+use super::sphere::stable_roots;
 use super::{
     Ray, Receding, intersect_ball, intersect_ball_textbook, intersect_plane_world,
     intersect_sphere, intersect_sphere_textbook,
@@ -13,7 +14,19 @@ use glam::{DVec3, Vec3};
 
 mod old {
     //! Verbatim copies of the replaced functions (doc comments trimmed).
-    use super::{DVec3, Ray, Vec3, nearest_positive};
+    use super::{DVec3, Ray, Vec3};
+
+    pub fn nearest_positive<T: PartialOrd + Copy + Default>(t0: T, t1: T) -> Option<T> {
+        let zero = T::default();
+        let (near, far) = if t0 <= t1 { (t0, t1) } else { (t1, t0) };
+        if near > zero {
+            Some(near)
+        } else if far > zero {
+            Some(far)
+        } else {
+            None
+        }
+    }
 
     pub fn intersect_sphere(ray: &Ray) -> Option<f64> {
         let (o, d) = (ray.origin, ray.dir);
@@ -242,26 +255,27 @@ fn f64_formulas_match_the_replaced_code_bit_for_bit() {
             ray.dir.length_squared(),
             radius * radius,
             Receding::Dismiss,
-        );
+        )
+        .get();
         if !same(computed_a, old::intersect_ball(&ray, center, radius), bits) {
             moved += 1;
         }
         let pairs = [
-            (intersect_sphere(&ray), old::intersect_sphere(&ray)),
+            (intersect_sphere(&ray).get(), old::intersect_sphere(&ray)),
             (
-                intersect_sphere_textbook(&ray),
+                intersect_sphere_textbook(&ray).get(),
                 old::intersect_sphere_textbook(&ray),
             ),
             (
-                intersect_ball(&ray, center, radius),
+                intersect_ball(&ray, center, radius * radius).get(),
                 old::intersect_ball(&ray, center, radius),
             ),
             (
-                intersect_ball_textbook(&ray, center, radius),
+                intersect_ball_textbook(&ray, center, radius * radius).get(),
                 old::intersect_ball_textbook(&ray, center, radius),
             ),
             (
-                intersect_plane_world(&ray, point, normal),
+                intersect_plane_world(&ray, point, normal).get(),
                 old::intersect_plane_world(&ray, point, normal),
             ),
         ];
@@ -329,4 +343,67 @@ fn f32_formulas_match_the_replaced_code_bit_for_bit() {
         });
     }
     tally.assert_both();
+}
+
+/// Four rays in lanes give, lane by lane, what each gives alone: the same
+/// root bit for bit, found in the same lanes (the lanes' early outs drop
+/// only the lanes they concern).
+#[test]
+fn lanes_match_one_ray_at_a_time() {
+    let mut random = Random(0x5eed_0003);
+    let mut found = [0u32; 2];
+    for case in 0..CASES / 4 {
+        let rays: [Ray; 4] = std::array::from_fn(|_| Ray::new(random.vector(), random.direction()));
+        let centers: [DVec3; 4] = std::array::from_fn(|i| {
+            if (case + i) % 3 == 0 {
+                rays[i].at(random.scalar().abs()) + random.vector() * 0.25
+            } else {
+                random.vector()
+            }
+        });
+        let r2 = random.scalar().powi(2);
+        let (point, normal) = (random.vector(), random.direction());
+        let lanes = Ray::new(
+            F64x4::vector_from_fn(|i| rays[i].origin),
+            F64x4::vector_from_fn(|i| rays[i].dir),
+        );
+        let center = F64x4::vector_from_fn(|i| centers[i]);
+        let (splat_r2, splat_point, splat_normal) = (
+            F64x4::splat(r2),
+            F64x4::splat_vector(point),
+            F64x4::splat_vector(normal),
+        );
+        for i in 0..4 {
+            let ray = &rays[i];
+            let pairs = [
+                (intersect_sphere(&lanes), intersect_sphere(ray)),
+                (
+                    intersect_sphere_textbook(&lanes),
+                    intersect_sphere_textbook(ray),
+                ),
+                (
+                    intersect_ball(&lanes, center, splat_r2),
+                    intersect_ball(ray, centers[i], r2),
+                ),
+                (
+                    intersect_ball_textbook(&lanes, center, splat_r2),
+                    intersect_ball_textbook(ray, centers[i], r2),
+                ),
+                (
+                    intersect_plane_world(&lanes, splat_point, splat_normal),
+                    intersect_plane_world(ray, point, normal),
+                ),
+            ];
+            for (k, (lane, one)) in pairs.into_iter().enumerate() {
+                let lane = lane.found.lane(i).then(|| lane.t.lane(i));
+                assert_eq!(
+                    lane.map(f64::to_bits),
+                    one.get().map(f64::to_bits),
+                    "case {case} lane {i} formula {k}: {ray:?}"
+                );
+                found[usize::from(lane.is_some())] += 1;
+            }
+        }
+    }
+    assert!(found[0] > 1000 && found[1] > 1000, "{found:?}");
 }

@@ -16,7 +16,10 @@
 //!   pick) prepares nothing again.
 
 use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
-use crate::geometry::{Aabb, Bvh, Primitive, Primitive32, Ray, Ray32};
+use crate::geometry::{
+    Aabb, Bvh, DVec3x4, F64x4, Found, Lanes, Mask, Mask4, Primitive, Primitive32, Ray, Ray32, Real,
+    Search, Vector,
+};
 use crate::scene::{Camera, Scene};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color, reflect};
 use glam::DVec3;
@@ -112,18 +115,119 @@ enum Candidates<'a> {
     Only(&'a [usize]),
 }
 
-/// The geometry of a method: how a ray is held, what it hits, the hit
-/// point and normal, and the reflected ray. Shading (f64) stays in
+/// The nearest hit found so far by each lane of a packet of rays.
+#[derive(Debug, Clone, Copy)]
+struct Hits<L: Lanes> {
+    /// World distance (infinity where nothing was found).
+    t: L,
+    /// Index of the object in the scene's object list (exact in f64).
+    object: L,
+    /// Which primitive: bounded k as k, plane k as −1 − k.
+    primitive: L,
+    found: L::Mask,
+}
+
+impl<L: Lanes> Hits<L> {
+    fn none() -> Hits<L> {
+        Hits {
+            t: L::splat(f64::INFINITY),
+            object: L::ZERO,
+            primitive: L::ZERO,
+            found: !L::Mask::ALL,
+        }
+    }
+
+    /// Keeps `hit` of `object`'s primitive where it is nearer; ties go to
+    /// the object listed first in the scene.
+    #[inline(always)]
+    fn consider(&mut self, hit: Found<L>, object: usize, primitive: f64) {
+        if !hit.found.any() {
+            return;
+        }
+        let rank = L::splat(object as f64);
+        let nearer = hit.t.lt(self.t) | (hit.t.eq(self.t) & rank.lt(self.object));
+        let better = hit.found & (!self.found | nearer);
+        if better.any() {
+            self.t = L::select(better, hit.t, self.t);
+            self.object = L::select(better, rank, self.object);
+            self.primitive = L::select(better, L::splat(primitive), self.primitive);
+            self.found = self.found | better;
+        }
+    }
+
+    /// Lane i's hit (where one was found).
+    fn lane(&self, i: usize) -> Hit {
+        let p = self.primitive.lane(i);
+        Hit {
+            t: self.t.lane(i),
+            object: self.object.lane(i) as usize,
+            primitive: if p >= 0.0 {
+                PrimitiveRef::Bounded(p as usize)
+            } else {
+                PrimitiveRef::Plane((-1.0 - p) as usize)
+            },
+        }
+    }
+}
+
+/// A packet's search through the BVH: each lane keeps its nearest hit.
+struct BvhSearch<'a, L: Lanes, P, I: Fn(&P) -> Found<L>> {
+    hits: &'a mut Hits<L>,
+    bounded: &'a [P],
+    objects: &'a [usize],
+    intersect: I,
+}
+
+impl<L: Lanes, P, I: Fn(&P) -> Found<L>> Search<L> for BvhSearch<'_, L, P, I> {
+    #[inline(always)]
+    fn t_max(&self) -> L {
+        self.hits.t
+    }
+
+    #[inline(always)]
+    fn test(&mut self, k: usize, lanes: L::Mask) {
+        let hit = (self.intersect)(&self.bounded[k]);
+        let hit = Found {
+            t: hit.t,
+            found: hit.found & lanes,
+        };
+        self.hits.consider(hit, self.objects[k], k as f64);
+    }
+}
+
+/// The geometry of a method, for a packet of rays traced side by side in
+/// its lanes ([`Lanes`]): how the rays are held, what they hit, the hit
+/// points and normals, and the reflected rays. Shading (f64) stays in
 /// [`Prepared::trace`].
 trait Kernel {
-    type Ray: Copy;
-    fn primary(&self, ray: Ray) -> Self::Ray;
-    fn nearest(&self, p: &Prepared, ray: &Self::Ray, among: Candidates) -> Option<Hit>;
-    /// The hit point M, the shading normal N (turned to face the ray) and V.
-    fn surface(&self, p: &Prepared, ray: &Self::Ray, hit: &Hit) -> SurfacePoint;
-    /// The reflected ray R leaving `point`, offset off the surface.
-    fn reflected(&self, point: &SurfacePoint) -> Self::Ray;
+    type L: Lanes;
+    type Rays: Copy;
+    fn primary(&self, rays: Ray<Vectors<Self>>) -> Self::Rays;
+    /// The nearest hits of the `alive` lanes.
+    fn nearest(
+        &self,
+        p: &Prepared,
+        rays: &Self::Rays,
+        alive: Alive<Self>,
+        among: Candidates,
+    ) -> Hits<Self::L>;
+    /// The hit points M, the shading normals N (turned to face the ray)
+    /// and V, of the `alive` lanes.
+    fn surface(
+        &self,
+        p: &Prepared,
+        rays: &Self::Rays,
+        hits: &Hits<Self::L>,
+        alive: Alive<Self>,
+    ) -> SurfacePoint<Vectors<Self>>;
+    /// The reflected rays R leaving `point`, offset off the surface.
+    fn reflected(&self, point: &SurfacePoint<Vectors<Self>>) -> Self::Rays;
 }
+
+/// A kernel's vectors (one per lane).
+type Vectors<K> = <<K as Kernel>::L as Lanes>::Vector;
+/// A kernel's lanes still tracing.
+type Alive<K> = <<K as Kernel>::L as Real>::Mask;
 
 /// Work that runs with the kernel of the prepared scene's method
 /// ([`Prepared::with_kernel`]): generic over it, so each kernel's trace
@@ -143,7 +247,15 @@ struct PixelAt {
 impl WithKernel for PixelAt {
     type Output = [u8; 3];
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> [u8; 3] {
-        p.pixel_among(kernel, self.i, self.j, Candidates::All, &mut 0)
+        let mut out = [[0; 3]; MAX_WIDTH];
+        p.pixels(
+            kernel,
+            &[(self.i, self.j)],
+            Candidates::All,
+            &mut 0,
+            &mut out,
+        );
+        out[0]
     }
 }
 
@@ -161,64 +273,108 @@ impl WithKernel for TileInto<'_> {
     }
 }
 
+/// The most lanes a kernel traces together.
+const MAX_WIDTH: usize = 4;
+
 const OFFSET_CONTRACT: u8 = 0;
 const OFFSET_FIXED: u8 = 1;
 const OFFSET_NONE: u8 = 2;
 
-/// f64 geometry: the reference (stable test, contract offset) and its
-/// study variants.
+/// f64 geometry, four rays at a time: the reference (stable test,
+/// contract offset) and its study variants.
 struct Exact<const TEXTBOOK: bool, const OFFSET: u8> {
     fixed: f64,
 }
 
 impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> {
-    type Ray = Ray;
+    type L = F64x4;
+    type Rays = Ray<DVec3x4>;
 
     #[inline]
-    fn primary(&self, ray: Ray) -> Ray {
-        ray
+    fn primary(&self, rays: Ray<DVec3x4>) -> Ray<DVec3x4> {
+        rays
     }
 
     #[inline]
-    fn nearest(&self, p: &Prepared, ray: &Ray, among: Candidates) -> Option<Hit> {
-        p.nearest_with(ray, among, &p.world.bounded, &p.world.planes, |q| {
-            q.intersect::<TEXTBOOK>(ray)
+    fn nearest(
+        &self,
+        p: &Prepared,
+        rays: &Ray<DVec3x4>,
+        alive: Mask4,
+        among: Candidates,
+    ) -> Hits<F64x4> {
+        p.nearest_with(rays, alive, among, &p.world.bounded, &p.world.planes, |q| {
+            q.intersect::<TEXTBOOK, F64x4>(rays)
         })
     }
 
     #[inline]
-    fn surface(&self, p: &Prepared, ray: &Ray, hit: &Hit) -> SurfacePoint {
-        let m = ray.at(hit.t);
-        // Shading normal N: the geometric normal turned to face the ray.
-        let mut n = p.normal(ray, hit);
-        if n.dot(ray.dir) > 0.0 {
-            n = -n;
+    fn surface(
+        &self,
+        p: &Prepared,
+        rays: &Ray<DVec3x4>,
+        hits: &Hits<F64x4>,
+        alive: Mask4,
+    ) -> SurfacePoint<DVec3x4> {
+        let m = rays.at(hits.t);
+        // The geometric normal: from the centre for a ball (computed in
+        // the lanes), given for a plane, through the matrix for an
+        // ellipsoid (one lane at a time).
+        let mut centers = [DVec3::ZERO; MAX_WIDTH];
+        let mut given = [DVec3::ZERO; MAX_WIDTH];
+        let mut ball = [false; MAX_WIDTH];
+        for i in (0..MAX_WIDTH).filter(|&i| alive.lane(i)) {
+            let hit = hits.lane(i);
+            let primitive = match hit.primitive {
+                PrimitiveRef::Bounded(k) => &p.world.bounded[k],
+                PrimitiveRef::Plane(k) => &p.world.planes[k],
+            };
+            match primitive {
+                Primitive::Ball { center, .. } => (centers[i], ball[i]) = (*center, true),
+                Primitive::Plane { normal, .. } => given[i] = *normal,
+                Primitive::Ellipsoid(_) => {
+                    let ray = Ray::new(
+                        F64x4::vector_lane(rays.origin, i),
+                        F64x4::vector_lane(rays.dir, i),
+                    );
+                    given[i] = primitive.normal_at(&ray, hit.t);
+                }
+            }
         }
-        SurfacePoint { m, n, v: -ray.dir }
+        let from_center = (m - F64x4::vector_from_fn(|i| centers[i])).normalize();
+        let n = DVec3x4::select(
+            Mask4::from_fn(|i| ball[i]),
+            from_center,
+            F64x4::vector_from_fn(|i| given[i]),
+        );
+        // Shading normal N: the geometric normal turned to face the ray.
+        let n = DVec3x4::select(n.dot(rays.dir).gt(F64x4::ZERO), -n, n);
+        SurfacePoint { m, n, v: -rays.dir }
     }
 
     #[inline]
-    fn reflected(&self, point: &SurfacePoint) -> Ray {
+    fn reflected(&self, point: &SurfacePoint<DVec3x4>) -> Ray<DVec3x4> {
         let SurfacePoint { m, n, v } = *point;
         // Reflected ray R from just off the surface (contract section 5).
         let epsilon = match OFFSET {
-            OFFSET_CONTRACT => 1e-9 + 1e-12 * m.length(),
-            OFFSET_FIXED => self.fixed,
-            _ => 0.0,
+            OFFSET_CONTRACT => F64x4::splat(1e-9) + F64x4::splat(1e-12) * m.length(),
+            OFFSET_FIXED => F64x4::splat(self.fixed),
+            _ => F64x4::ZERO,
         };
-        Ray::new(m + epsilon * n, reflect(n, v).normalize())
+        Ray::new(m + n.scaled(epsilon), reflect(n, v).normalize())
     }
 }
 
-/// f32 geometry: the ray, the intersections, the hit point, the normal and
-/// the reflected ray in single precision (the BVH's box tests read the
-/// same ray widened to f64, exactly).
+/// f32 geometry, one ray at a time: the ray, the intersections, the hit
+/// point, the normal and the reflected ray in single precision (the BVH's
+/// box tests read the same ray widened to f64, exactly).
 struct Single<const TEXTBOOK: bool> {
     offset: Offset,
 }
 
 impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
-    type Ray = Ray32;
+    type L = f64;
+    type Rays = Ray32;
 
     #[inline]
     fn primary(&self, ray: Ray) -> Ray32 {
@@ -226,18 +382,26 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
     }
 
     #[inline]
-    fn nearest(&self, p: &Prepared, ray: &Ray32, among: Candidates) -> Option<Hit> {
+    fn nearest(&self, p: &Prepared, ray: &Ray32, alive: bool, among: Candidates) -> Hits<f64> {
         p.nearest_with(
             &ray.to_f64(),
+            alive,
             among,
             &p.world.bounded32,
             &p.world.planes32,
-            |q| q.intersect::<TEXTBOOK>(ray).map(f64::from),
+            |q| match q.intersect::<TEXTBOOK>(ray) {
+                Some(t) => Found {
+                    t: f64::from(t),
+                    found: true,
+                },
+                None => Found::none(),
+            },
         )
     }
 
     #[inline]
-    fn surface(&self, p: &Prepared, ray: &Ray32, hit: &Hit) -> SurfacePoint {
+    fn surface(&self, p: &Prepared, ray: &Ray32, hits: &Hits<f64>, _: bool) -> SurfacePoint {
+        let hit = hits.lane(0);
         // t came from f32: the narrowing is exact.
         let t = hit.t as f32;
         let m = ray.at(t);
@@ -264,7 +428,7 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
             Offset::Fixed(e) => e as f32,
             Offset::None => 0.0,
         };
-        Ray32::new(m + epsilon * n, (2.0 * n.dot(v) * n - v).normalize())
+        Ray32::new(m + epsilon * n, reflect(n, v).normalize())
     }
 }
 
@@ -439,139 +603,145 @@ impl Prepared {
     /// The nearest hit with t > 0 in world distance, if any. Ties go to the
     /// object listed first in the scene.
     pub fn nearest_hit(&self, ray: &Ray) -> Option<Hit> {
-        self.nearest_with(
+        let hits = self.nearest_with::<f64, _>(
             ray,
+            true,
             Candidates::All,
             &self.world.bounded,
             &self.world.planes,
-            |p| p.intersect::<false>(ray),
-        )
+            |p| p.intersect::<false, f64>(ray),
+        );
+        hits.found.then(|| hits.lane(0))
     }
 
-    /// The nearest hit among `bounded` and `planes` (the f64 primitives or
-    /// their f32 copies, in the same order), `intersect` testing one; `ray`
-    /// serves the BVH's box tests.
+    /// The nearest hits of the `alive` lanes of `rays` among `bounded` and
+    /// `planes` (the f64 primitives or their f32 copies, in the same
+    /// order), `intersect` testing one for every lane; `rays` serves the
+    /// BVH's box tests.
     #[inline]
-    fn nearest_with<P>(
+    fn nearest_with<L: Lanes, P>(
         &self,
-        ray: &Ray,
+        rays: &Ray<L::Vector>,
+        alive: L::Mask,
         candidates: Candidates,
         bounded: &[P],
         planes: &[P],
-        intersect: impl Fn(&P) -> Option<f64>,
-    ) -> Option<Hit> {
-        let mut best: Option<Hit> = None;
-        let consider = |best: &mut Option<Hit>, t: f64, object: usize, primitive| {
-            if best.is_none_or(|b| t < b.t || (t == b.t && object < b.object)) {
-                *best = Some(Hit {
-                    t,
-                    object,
-                    primitive,
-                });
-            }
+        intersect: impl Fn(&P) -> Found<L>,
+    ) -> Hits<L> {
+        let mut hits = Hits::none();
+        let of_alive = |hit: Found<L>| Found {
+            t: hit.t,
+            found: hit.found & alive,
         };
         for (k, plane) in planes.iter().enumerate() {
-            if let Some(t) = intersect(plane) {
-                consider(
-                    &mut best,
-                    t,
-                    self.world.plane_objects[k],
-                    PrimitiveRef::Plane(k),
-                );
-            }
+            hits.consider(
+                of_alive(intersect(plane)),
+                self.world.plane_objects[k],
+                -1.0 - k as f64,
+            );
         }
         match (&self.world.bvh, candidates) {
             (_, Candidates::Only(list)) => {
                 for &k in list {
-                    if let Some(t) = intersect(&bounded[k]) {
-                        consider(
-                            &mut best,
-                            t,
-                            self.world.bounded_objects[k],
-                            PrimitiveRef::Bounded(k),
-                        );
-                    }
-                }
-            }
-            (Some(bvh), Candidates::All) => {
-                let t_max = best.map_or(f64::INFINITY, |b| b.t);
-                // Ties between spheres go to the object listed first, as
-                // in a plain scan; a tie with a plane is settled below.
-                let rank = |k: usize| self.world.bounded_objects[k];
-                if let Some((t, k)) = bvh.nearest(ray, t_max, |k| intersect(&bounded[k]), rank) {
-                    consider(
-                        &mut best,
-                        t,
+                    hits.consider(
+                        of_alive(intersect(&bounded[k])),
                         self.world.bounded_objects[k],
-                        PrimitiveRef::Bounded(k),
+                        k as f64,
                     );
                 }
             }
+            (Some(bvh), Candidates::All) => {
+                let mut search = BvhSearch {
+                    hits: &mut hits,
+                    bounded,
+                    objects: &self.world.bounded_objects,
+                    intersect,
+                };
+                bvh.nearest(rays, alive, &mut search);
+            }
             (None, Candidates::All) => {
                 for (k, primitive) in bounded.iter().enumerate() {
-                    if let Some(t) = intersect(primitive) {
-                        consider(
-                            &mut best,
-                            t,
-                            self.world.bounded_objects[k],
-                            PrimitiveRef::Bounded(k),
-                        );
-                    }
+                    hits.consider(
+                        of_alive(intersect(primitive)),
+                        self.world.bounded_objects[k],
+                        k as f64,
+                    );
                 }
             }
         }
-        best
+        hits
     }
 
-    /// The unit geometric normal at a hit.
-    fn normal(&self, ray: &Ray, hit: &Hit) -> DVec3 {
-        match hit.primitive {
-            PrimitiveRef::Bounded(k) => self.world.bounded[k].normal_at(ray, hit.t),
-            PrimitiveRef::Plane(k) => self.world.planes[k].normal_at(ray, hit.t),
-        }
-    }
-
-    /// The colour of a primary ray, following whitted reflections as a loop.
-    /// `exact_stop`: end the chain once the rest cannot change the 8-bit
-    /// value of this ray's colour.
-    /// `rays` counts the rays traced.
+    /// The colours of a packet of primary rays (the `alive` lanes),
+    /// following whitted reflections as a loop; a lane leaves the loop
+    /// when its chain ends. `exact_stop`: end a chain once the rest cannot
+    /// change the 8-bit value of its colour. `rays` counts the rays traced.
     fn trace<K: Kernel>(
         &self,
         kernel: &K,
-        primary: Ray,
+        primary: Ray<Vectors<K>>,
+        alive: Alive<K>,
         candidates: Candidates,
         exact_stop: bool,
         rays: &mut u64,
-    ) -> Color {
-        let mut color = Color::ZERO;
+    ) -> Vectors<K> {
+        let world = &*self.world;
+        let mut color = K::L::splat_vector(Color::ZERO);
         // Product of the ks of the surfaces met so far.
-        let mut weight = 1.0;
+        let mut weight = K::L::ONE;
+        let mut alive = alive;
         let mut ray = kernel.primary(primary);
-        for bounce in 0..=self.world.depth {
+        for bounce in 0..=world.depth {
             let among = if bounce == 0 {
                 candidates
             } else {
                 Candidates::All
             };
-            *rays += 1;
-            let Some(hit) = kernel.nearest(self, &ray, among) else {
-                break; // a miss is black
-            };
-            let surface = &self.world.surfaces[hit.object];
-            let point = kernel.surface(self, &ray, &hit);
-            let local = local_color(
-                self.world.illumination,
-                surface.color,
-                &surface.material,
-                &self.world.lights,
-                &point,
-            );
-            color += weight * local;
-            weight *= surface.material.ks;
-            if bounce == self.world.depth || weight == 0.0 {
+            *rays += u64::from(alive.count());
+            let hits = kernel.nearest(self, &ray, alive, among);
+            // A miss is black: its lane is done.
+            alive = alive & hits.found;
+            if !alive.any() {
                 break;
             }
-            if exact_stop && self.rest_is_invisible(color, weight, self.world.depth - bounce) {
+            // The surface each lane hit.
+            let surface = |i: usize| {
+                let object = if alive.lane(i) {
+                    hits.object.lane(i) as usize
+                } else {
+                    0
+                };
+                &world.surfaces[object]
+            };
+            let c = K::L::vector_from_fn(|i| surface(i).color);
+            let coefficient = |f: fn(&Material) -> f64| K::L::from_fn(|i| f(&surface(i).material));
+            let material = Material {
+                ka: coefficient(|m| m.ka),
+                kd: coefficient(|m| m.kd),
+                ks: coefficient(|m| m.ks),
+                m: coefficient(|m| m.m),
+            };
+            let point = kernel.surface(self, &ray, &hits, alive);
+            let local = local_color(world.illumination, c, &material, &world.lights, &point);
+            color = <Vectors<K>>::select(alive, color + local.scaled(weight), color);
+            weight = K::L::select(alive, weight * material.ks, weight);
+            if bounce == world.depth {
+                break;
+            }
+            alive = alive & !weight.eq(K::L::ZERO);
+            if exact_stop && alive.any() {
+                let levels = world.depth - bounce;
+                let invisible = <Alive<K>>::from_fn(|i| {
+                    alive.lane(i)
+                        && self.rest_is_invisible(
+                            K::L::vector_lane(color, i),
+                            weight.lane(i),
+                            levels,
+                        )
+                });
+                alive = alive & !invisible;
+            }
+            if !alive.any() {
                 break;
             }
             ray = kernel.reflected(&point);
@@ -629,41 +799,81 @@ impl Prepared {
         self.with_kernel(PixelAt { i, j })
     }
 
-    fn pixel_among<K: Kernel>(
+    /// The 8-bit colours of up to a packet's width of pixels into `out`:
+    /// with one ray per pixel, one lane per pixel; supersampled, each
+    /// pixel's samples in lanes, summed in the order of the grid.
+    fn pixels<K: Kernel>(
         &self,
         kernel: &K,
-        i: u32,
-        j: u32,
+        pixels: &[(u32, u32)],
         candidates: Candidates,
         rays: &mut u64,
-    ) -> [u8; 3] {
-        let (x, y) = (f64::from(i), f64::from(j));
+        out: &mut [[u8; 3]; MAX_WIDTH],
+    ) {
+        let width = K::L::WIDTH;
+        debug_assert!(!pixels.is_empty() && pixels.len() <= width && width <= MAX_WIDTH);
+        let to_8bit_color = |c: DVec3| [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
+        // A packet of camera rays through image points; lanes past the
+        // last point repeat it and stay dark.
+        let packet = |points: &[(f64, f64)]| {
+            let rays: [Ray; MAX_WIDTH] = std::array::from_fn(|i| {
+                let (x, y) = points[i.min(points.len() - 1)];
+                self.camera.ray(x, y)
+            });
+            (
+                Ray::new(
+                    K::L::vector_from_fn(|i| rays[i].origin),
+                    K::L::vector_from_fn(|i| rays[i].dir),
+                ),
+                <Alive<K>>::from_fn(|i| i < points.len()),
+            )
+        };
         if self.aa == 1 {
-            let ray = self.camera.ray(x + 0.5, y + 0.5);
-            let c = self.trace(kernel, ray, candidates, self.world.early_stop, rays);
-            return [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
+            let mut points = [(0.0, 0.0); MAX_WIDTH];
+            for (point, &(i, j)) in points.iter_mut().zip(pixels) {
+                *point = (f64::from(i) + 0.5, f64::from(j) + 0.5);
+            }
+            let (primary, alive) = packet(&points[..pixels.len()]);
+            let c = self.trace(
+                kernel,
+                primary,
+                alive,
+                candidates,
+                self.world.early_stop,
+                rays,
+            );
+            for (k, pixel) in out.iter_mut().take(pixels.len()).enumerate() {
+                *pixel = to_8bit_color(K::L::vector_lane(c, k));
+            }
+            return;
         }
         // Supersampled: a sample's own rounding says nothing about the
         // mean's, so every chain runs to its end.
         let n = f64::from(self.aa);
-        let mut sum = DVec3::ZERO;
-        for b in 0..self.aa {
-            for a in 0..self.aa {
-                let ray = self
-                    .camera
-                    .ray(x + (f64::from(a) + 0.5) / n, y + (f64::from(b) + 0.5) / n);
-                sum += self
-                    .trace(kernel, ray, candidates, false, rays)
-                    .clamp(DVec3::ZERO, DVec3::ONE);
+        let mut samples = Vec::with_capacity((self.aa * self.aa) as usize);
+        for (pixel, &(i, j)) in out.iter_mut().zip(pixels) {
+            let (x, y) = (f64::from(i), f64::from(j));
+            samples.clear();
+            for b in 0..self.aa {
+                for a in 0..self.aa {
+                    samples.push((x + (f64::from(a) + 0.5) / n, y + (f64::from(b) + 0.5) / n));
+                }
             }
+            let mut sum = DVec3::ZERO;
+            for chunk in samples.chunks(width) {
+                let (primary, alive) = packet(chunk);
+                let c = self.trace(kernel, primary, alive, candidates, false, rays);
+                for k in 0..chunk.len() {
+                    sum += K::L::vector_lane(c, k).clamp(DVec3::ZERO, DVec3::ONE);
+                }
+            }
+            *pixel = to_8bit_color(sum / (n * n));
         }
-        let c = sum / (n * n);
-        [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)]
     }
 
     /// Renders one tile as row-major RGB8 into `out` (cleared first),
-    /// checking `cancel` before every pixel. Returns the number of rays
-    /// traced, or `None` when cancelled.
+    /// checking `cancel` before every packet of pixels. Returns the number
+    /// of rays traced, or `None` when cancelled.
     pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> Option<u64> {
         self.with_kernel(TileInto { tile, cancel, out })
     }
@@ -676,12 +886,12 @@ impl Prepared {
         out: &mut Vec<u8>,
     ) -> Option<u64> {
         out.clear();
+        out.resize(tile.width as usize * tile.height as usize * 3, 0);
         let candidates = self.tile_candidates(tile);
         let candidates = match &candidates {
             Some(list) => {
                 if list.is_empty() && self.world.planes.is_empty() {
                     // Nothing can be hit from this tile: every ray misses.
-                    out.resize(tile.width as usize * tile.height as usize * 3, 0);
                     return (!cancel.is_cancelled()).then_some(0);
                 }
                 Candidates::Only(list)
@@ -689,34 +899,34 @@ impl Prepared {
             None => Candidates::All,
         };
         let mut rays = 0;
-        if self.world.draft {
-            // One pixel in four: the top-left of each 2×2 block of the
-            // tile is traced, the other three copy it.
-            for j in tile.y..tile.y + tile.height {
-                for i in tile.x..tile.x + tile.width {
-                    if cancel.is_cancelled() {
-                        return None;
-                    }
-                    let (di, dj) = ((i - tile.x) & !1, (j - tile.y) & !1);
-                    if (di, dj) == (i - tile.x, j - tile.y) {
-                        out.extend_from_slice(
-                            &self.pixel_among(kernel, i, j, candidates, &mut rays),
-                        );
-                    } else {
-                        let at = (dj as usize * tile.width as usize + di as usize) * 3;
-                        let source = [out[at], out[at + 1], out[at + 2]];
-                        out.extend_from_slice(&source);
-                    }
-                }
+        // Draft: one pixel in four, the top-left of each 2×2 block of the
+        // tile, is traced; the other three copy it.
+        let step = if self.world.draft { 2 } else { 1 };
+        let row_bytes = tile.width as usize * 3;
+        let mut traced = [[0u8; 3]; MAX_WIDTH];
+        let mut row: Vec<(u32, u32)> = Vec::with_capacity(tile.width as usize);
+        for (dj, j) in (tile.y..tile.y + tile.height).enumerate() {
+            let line = dj * row_bytes;
+            if dj % step != 0 {
+                // A draft's odd row: the row above.
+                out.copy_within(line - row_bytes..line, line);
+                continue;
             }
-            return Some(rays);
-        }
-        for j in tile.y..tile.y + tile.height {
-            for i in tile.x..tile.x + tile.width {
+            row.clear();
+            row.extend((tile.x..tile.x + tile.width).step_by(step).map(|i| (i, j)));
+            for packet in row.chunks(K::L::WIDTH) {
                 if cancel.is_cancelled() {
                     return None;
                 }
-                out.extend_from_slice(&self.pixel_among(kernel, i, j, candidates, &mut rays));
+                self.pixels(kernel, packet, candidates, &mut rays, &mut traced);
+                for (&(i, _), rgb) in packet.iter().zip(&traced) {
+                    let at = line + (i - tile.x) as usize * 3;
+                    out[at..at + 3].copy_from_slice(rgb);
+                    if step == 2 && i + 1 < tile.x + tile.width {
+                        // A draft's odd column: the pixel on its left.
+                        out[at + 3..at + 6].copy_from_slice(rgb);
+                    }
+                }
             }
         }
         Some(rays)

@@ -3,17 +3,18 @@ use crate::math::Vec3;
 /// A linear RGB colour; components are ≥ 0 and may exceed 1.
 pub type Color = Vec3;
 
-/// Phong material coefficients (contract section 5).
+/// Phong material coefficients (contract section 5); with lanes
+/// (`Material<F64x4>`), those of the surface each lane hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Material {
+pub struct Material<R = f64> {
     /// Ambient coefficient.
-    pub ka: f64,
+    pub ka: R,
     /// Diffuse coefficient.
-    pub kd: f64,
+    pub kd: R,
     /// Specular (and, for `whitted`, reflection) coefficient.
-    pub ks: f64,
+    pub ks: R,
     /// Specular exponent (shininess).
-    pub m: f64,
+    pub m: R,
 }
 
 impl Default for Material {

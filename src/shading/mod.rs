@@ -27,31 +27,35 @@ pub use light::Light;
 pub use material::{Color, Material};
 pub use model::{Illumination, Model};
 
+use crate::geometry::{Lanes, Mask, Real, Vector};
 use glam::DVec3;
 
-/// What one hit point needs to be shaded.
+/// What one hit point needs to be shaded (per lane, with lanes).
 #[derive(Debug, Clone, Copy)]
-pub struct SurfacePoint {
+pub struct SurfacePoint<V = DVec3> {
     /// The hit point M, world space.
-    pub m: DVec3,
+    pub m: V,
     /// Unit shading normal N, facing the incoming ray.
-    pub n: DVec3,
+    pub n: V,
     /// Unit vector V from M back toward the ray's origin.
-    pub v: DVec3,
+    pub v: V,
 }
 
 /// The colour of a hit without the reflected term: the `ambient`,
-/// `lambert` or `phong` formula (`whitted` uses `phong` here).
-pub fn local_color(
+/// `lambert` or `phong` formula (`whitted` uses `phong` here). One hit, or
+/// one per lane (each lane with its surface's C and material): a lane
+/// computes what the hit alone would, bit for bit.
+#[inline]
+pub fn local_color<L: Lanes>(
     illumination: Illumination,
-    c: Color,
-    material: &Material,
+    c: L::Vector,
+    material: &Material<L>,
     lights: &[Light],
-    p: &SurfacePoint,
-) -> Color {
+    p: &SurfacePoint<L::Vector>,
+) -> L::Vector {
     let Material { ka, kd, ks, m } = *material;
     // Ambient term: ka C.
-    let mut i = ka * c;
+    let mut i = c.scaled(ka);
     let specular = match illumination {
         Illumination::Ambient => return i,
         Illumination::Lambert => false,
@@ -60,40 +64,88 @@ pub fn local_color(
     let (n, v) = (p.n, p.v);
     for light in lights {
         // L: unit vector toward the light; cos θ = N · L.
-        let l = (light.position - p.m).normalize();
+        let l = (L::splat_vector(light.position) - p.m).normalize();
         let cos_theta = n.dot(l);
-        if cos_theta.is_nan() || cos_theta <= 0.0 {
-            continue; // the light is behind the surface
+        // Lit: the light is in front of the surface.
+        let lit = !(cos_theta.is_nan() | cos_theta.le(L::ZERO));
+        if !lit.any() {
+            continue;
         }
         let mut k = kd * cos_theta;
         if specular {
             // R: L mirrored about N; cos α = R · V.
-            let r = 2.0 * cos_theta * n - l;
+            let r = n.scaled(L::TWO * cos_theta) - l;
             let cos_alpha = r.dot(v);
-            if cos_alpha > 0.0 {
-                k += ks * specular_power(cos_alpha, m);
+            let highlight = cos_alpha.gt(L::ZERO);
+            if highlight.any() {
+                k = L::select(highlight, k + ks * specular_power(cos_alpha, m), k);
             }
         }
-        i += k * light.color;
+        i = L::Vector::select(lit, i + L::splat_vector(light.color).scaled(k), i);
     }
     i
 }
 
-/// (cos α)^m. Whole exponents (the usual case) go through `powi`, several
-/// times cheaper than `powf`; both are within an ulp or two of the exact
-/// power, far below an 8-bit step.
+/// Largest whole exponent raised by multiplications.
+const MAX_WHOLE_POWER: f64 = 1024.0;
+
+/// (cos α)^m per lane. A whole exponent (the usual case) is raised by
+/// binary exponentiation, exactly as `f64::powi` does it (the standard
+/// library's `__powidf2`: square, multiply where a bit is set, invert for
+/// a negative power), several times cheaper than `powf`; both are within
+/// an ulp or two of the exact power, far below an 8-bit step. Other
+/// exponents go through `powf`, one lane at a time.
 #[inline]
-fn specular_power(cos_alpha: f64, m: f64) -> f64 {
-    if m.fract() == 0.0 && m <= 1024.0 {
-        cos_alpha.powi(m as i32)
+fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
+    debug_assert!(L::WIDTH <= 4);
+    let whole = |i: usize| {
+        let m = m.lane(i);
+        m.fract() == 0.0 && m <= MAX_WHOLE_POWER
+    };
+    // The exponent as powi takes it (an i32), its magnitude's bits (0 for
+    // the lanes that are not whole: their result is replaced).
+    let exponent = |i: usize| if whole(i) { m.lane(i) as i32 } else { 0 };
+    let mut bits: [u32; 4] = std::array::from_fn(|i| {
+        if i < L::WIDTH {
+            exponent(i).unsigned_abs()
+        } else {
+            0
+        }
+    });
+    let (mut power, mut a) = (L::ONE, cos_alpha);
+    loop {
+        let odd = L::Mask::from_fn(|i| bits[i] & 1 != 0);
+        if odd.any() {
+            power = L::select(odd, power * a, power);
+        }
+        bits = bits.map(|b| b >> 1);
+        if bits.iter().all(|&b| b == 0) {
+            break;
+        }
+        a = a * a;
+    }
+    let negative = L::Mask::from_fn(|i| exponent(i) < 0);
+    if negative.any() {
+        power = L::select(negative, L::ONE / power, power);
+    }
+    if (0..L::WIDTH).all(whole) {
+        power
     } else {
-        cos_alpha.powf(m)
+        L::from_fn(|i| {
+            if whole(i) {
+                power.lane(i)
+            } else {
+                cos_alpha.lane(i).powf(m.lane(i))
+            }
+        })
     }
 }
 
-/// Mirror direction R = 2 (N · V) N − V of the ray arriving along −V.
-pub fn reflect(n: DVec3, v: DVec3) -> DVec3 {
-    2.0 * n.dot(v) * n - v
+/// Mirror direction R = 2 (N · V) N − V of the ray arriving along −V (per
+/// lane, in any precision).
+#[inline(always)]
+pub fn reflect<V: Vector>(n: V, v: V) -> V {
+    n.scaled(V::Real::TWO * n.dot(v)) - v
 }
 
 #[cfg(test)]
@@ -125,7 +177,7 @@ mod tests {
     #[test]
     fn ambient_is_ka_times_c() {
         let c = DVec3::new(1.0, 0.5, 0.0);
-        let i = local_color(
+        let i = local_color::<f64>(
             Illumination::Ambient,
             c,
             &MAT,
@@ -140,9 +192,10 @@ mod tests {
         // L at 45° in the y-z plane: cos θ = √½.
         let s = std::f64::consts::FRAC_1_SQRT_2;
         let lights = [light_at(DVec3::new(0.0, -1.0, -1.0))];
-        let lambert = local_color(Illumination::Lambert, DVec3::ONE, &MAT, &lights, &point());
+        let lambert =
+            local_color::<f64>(Illumination::Lambert, DVec3::ONE, &MAT, &lights, &point());
         assert!((lambert - DVec3::splat(0.2 + 0.5 * s)).abs().max_element() < 1e-15);
-        let phong = local_color(Illumination::Phong, DVec3::ONE, &MAT, &lights, &point());
+        let phong = local_color::<f64>(Illumination::Phong, DVec3::ONE, &MAT, &lights, &point());
         // N = (0,0,-1), L = (0,-s,-s): R = 2s N − L = (0, s, -s), so cos α = R · V = s.
         let expected = 0.2 + 0.5 * s + 0.4 * s.powf(3.0);
         assert!((phong - DVec3::splat(expected)).abs().max_element() < 1e-15);
@@ -151,7 +204,7 @@ mod tests {
     #[test]
     fn lights_behind_the_surface_add_nothing() {
         let lights = [light_at(DVec3::new(0.0, 0.0, 5.0))];
-        let i = local_color(Illumination::Phong, DVec3::ONE, &MAT, &lights, &point());
+        let i = local_color::<f64>(Illumination::Phong, DVec3::ONE, &MAT, &lights, &point());
         assert_eq!(i, DVec3::splat(0.2));
     }
 
@@ -160,5 +213,40 @@ mod tests {
         let v = DVec3::new(1.0, 0.0, -1.0).normalize();
         let r = reflect(DVec3::NEG_Z, v);
         assert!((r - DVec3::new(-1.0, 0.0, -1.0).normalize()).length() < 1e-15);
+    }
+}
+
+#[cfg(test)]
+mod power {
+    use super::*;
+    use crate::geometry::F64x4;
+
+    /// The binary exponentiation is `f64::powi`, bit for bit, for every
+    /// whole exponent it takes, one value or four lanes (mixed with
+    /// exponents that go through `powf`).
+    #[test]
+    fn whole_powers_are_powi_bit_for_bit() {
+        let mut x = 0.123_456_789_f64;
+        for m in (-1100..=1024).chain([i32::MIN, -100_000]) {
+            for _ in 0..8 {
+                x = (x * 3.7 + 0.31).fract();
+                let expected = x.powi(m);
+                let m = f64::from(m);
+                assert_eq!(
+                    specular_power(x, m).to_bits(),
+                    expected.to_bits(),
+                    "{x}^{m}"
+                );
+                let lanes = specular_power(
+                    F64x4::from_fn(|i| x + i as f64 * 0.01),
+                    F64x4::from_fn(|i| if i == 1 { m + 0.5 } else { m }),
+                );
+                for i in [0, 2, 3] {
+                    let x = x + i as f64 * 0.01;
+                    assert_eq!(lanes.lane(i).to_bits(), x.powi(m as i32).to_bits());
+                }
+                assert_eq!(lanes.lane(1).to_bits(), (x + 0.01).powf(m + 0.5).to_bits());
+            }
+        }
     }
 }
