@@ -153,7 +153,7 @@ impl Bvh {
     /// nearest hit so far. A node is entered by the lanes that reach it;
     /// the primitives are tested for those lanes only, so each lane finds
     /// what it would find alone.
-    #[inline]
+    #[inline(always)]
     pub fn nearest<L: Lanes>(
         &self,
         ray: &Ray<L::Vector>,

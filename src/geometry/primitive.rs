@@ -106,7 +106,7 @@ impl Primitive {
 
     /// The unit geometric normal at the point `ray.at(t)` (not yet turned
     /// to face the ray).
-    #[inline]
+    #[inline(always)]
     pub fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
         match self {
             Primitive::Ball { center, .. } => (ray.at(t) - *center).normalize(),

@@ -1,6 +1,6 @@
 //! Primary rays of the pinhole camera (contract section 1).
 
-use crate::geometry::Ray;
+use crate::geometry::{Lanes, Ray, Vector};
 use crate::scene::Camera;
 use glam::{DAffine3, DVec3};
 
@@ -40,10 +40,25 @@ impl CameraRays {
     /// top-left corner of the image: pixel (i, j) has its centre at
     /// (i + 0.5, j + 0.5).
     pub fn ray(&self, x: f64, y: f64) -> Ray {
-        // Screen point in camera space, then world space.
-        let sx = (x - f64::from(self.width) / 2.0) * self.s;
-        let sy = (y - f64::from(self.height) / 2.0) * self.s;
-        let p = self.to_world.transform_point3(DVec3::new(sx, sy, 0.0));
-        Ray::new(self.eye, (p - self.eye).normalize())
+        self.rays::<f64>(x, y)
+    }
+
+    /// The rays through image points (x, y), one per lane: each lane's is
+    /// [`CameraRays::ray`] of its point, bit for bit (glam's
+    /// `transform_point3` and `normalize`, spelled out per lane).
+    #[inline(always)]
+    pub fn rays<L: Lanes>(&self, x: L, y: L) -> Ray<L::Vector> {
+        // Screen point in camera space.
+        let sx = (x - L::splat(f64::from(self.width) / 2.0)) * L::splat(self.s);
+        let sy = (y - L::splat(f64::from(self.height) / 2.0)) * L::splat(self.s);
+        // Then world space: M (sx, sy, 0) + T.
+        let m = &self.to_world.matrix3;
+        let axis = L::splat_vector;
+        let p = axis(m.x_axis).scaled(sx)
+            + axis(m.y_axis).scaled(sy)
+            + axis(m.z_axis).scaled(L::ZERO)
+            + axis(self.to_world.translation);
+        let eye = axis(self.eye);
+        Ray::new(eye, (p - eye).normalize())
     }
 }

@@ -128,6 +128,7 @@ struct Hits<L: Lanes> {
 }
 
 impl<L: Lanes> Hits<L> {
+    #[inline(always)]
     fn none() -> Hits<L> {
         Hits {
             t: L::splat(f64::INFINITY),
@@ -156,6 +157,7 @@ impl<L: Lanes> Hits<L> {
     }
 
     /// Lane i's hit (where one was found).
+    #[inline(always)]
     fn lane(&self, i: usize) -> Hit {
         let p = self.primitive.lane(i);
         Hit {
@@ -268,6 +270,7 @@ struct TileInto<'a> {
 
 impl WithKernel for TileInto<'_> {
     type Output = Option<u64>;
+    #[inline(always)]
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Option<u64> {
         p.tile_into(kernel, self.tile, self.cancel, self.out)
     }
@@ -290,12 +293,12 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
     type L = F64x4;
     type Rays = Ray<DVec3x4>;
 
-    #[inline]
+    #[inline(always)]
     fn primary(&self, rays: Ray<DVec3x4>) -> Ray<DVec3x4> {
         rays
     }
 
-    #[inline]
+    #[inline(always)]
     fn nearest(
         &self,
         p: &Prepared,
@@ -308,7 +311,7 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
         })
     }
 
-    #[inline]
+    #[inline(always)]
     fn surface(
         &self,
         p: &Prepared,
@@ -352,7 +355,7 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
         SurfacePoint { m, n, v: -rays.dir }
     }
 
-    #[inline]
+    #[inline(always)]
     fn reflected(&self, point: &SurfacePoint<DVec3x4>) -> Ray<DVec3x4> {
         let SurfacePoint { m, n, v } = *point;
         // Reflected ray R from just off the surface (contract section 5).
@@ -376,12 +379,12 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
     type L = f64;
     type Rays = Ray32;
 
-    #[inline]
+    #[inline(always)]
     fn primary(&self, ray: Ray) -> Ray32 {
         Ray32::from_f64(&ray)
     }
 
-    #[inline]
+    #[inline(always)]
     fn nearest(&self, p: &Prepared, ray: &Ray32, alive: bool, among: Candidates) -> Hits<f64> {
         p.nearest_with(
             &ray.to_f64(),
@@ -399,7 +402,7 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
         )
     }
 
-    #[inline]
+    #[inline(always)]
     fn surface(&self, p: &Prepared, ray: &Ray32, hits: &Hits<f64>, _: bool) -> SurfacePoint {
         let hit = hits.lane(0);
         // t came from f32: the narrowing is exact.
@@ -419,7 +422,7 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
         }
     }
 
-    #[inline]
+    #[inline(always)]
     fn reflected(&self, point: &SurfacePoint) -> Ray32 {
         // The point's vectors hold f32 values: the narrowing is exact.
         let (m, n, v) = (point.m.as_vec3(), point.n.as_vec3(), point.v.as_vec3());
@@ -618,7 +621,7 @@ impl Prepared {
     /// `planes` (the f64 primitives or their f32 copies, in the same
     /// order), `intersect` testing one for every lane; `rays` serves the
     /// BVH's box tests.
-    #[inline]
+    #[inline(always)]
     fn nearest_with<L: Lanes, P>(
         &self,
         rays: &Ray<L::Vector>,
@@ -676,6 +679,7 @@ impl Prepared {
     /// following whitted reflections as a loop; a lane leaves the loop
     /// when its chain ends. `exact_stop`: end a chain once the rest cannot
     /// change the 8-bit value of its colour. `rays` counts the rays traced.
+    #[inline(always)]
     fn trace<K: Kernel>(
         &self,
         kernel: &K,
@@ -753,6 +757,7 @@ impl Prepared {
     /// `weight · max_ks^k · max_local`, leave every channel's 8-bit value
     /// where it is. Every term is ≥ 0, so the final colour lies between
     /// `color` and `color + bound`; equal rounding at both ends settles it.
+    #[inline(always)]
     fn rest_is_invisible(&self, color: Color, weight: f64, levels: u32) -> bool {
         let Some(&series) = self.world.tail.get(levels as usize) else {
             return false;
@@ -766,6 +771,7 @@ impl Prepared {
     /// Runs `work` with the kernel of the method's choices, each dispatched
     /// once, one choice at a time: the sphere test, the precision, then
     /// (f64) the offset.
+    #[inline(always)]
     fn with_kernel<W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.sphere {
             SphereTest::Stable => self.with_precision::<false, W>(work),
@@ -773,6 +779,7 @@ impl Prepared {
         }
     }
 
+    #[inline(always)]
     fn with_precision<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.precision {
             Precision::F64 => self.with_offset::<TEXTBOOK, W>(work),
@@ -785,6 +792,7 @@ impl Prepared {
         }
     }
 
+    #[inline(always)]
     fn with_offset<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.offset {
             Offset::Contract => work.run(self, &Exact::<TEXTBOOK, OFFSET_CONTRACT> { fixed: 0.0 }),
@@ -802,6 +810,7 @@ impl Prepared {
     /// The 8-bit colours of up to a packet's width of pixels into `out`:
     /// with one ray per pixel, one lane per pixel; supersampled, each
     /// pixel's samples in lanes, summed in the order of the grid.
+    #[inline(always)]
     fn pixels<K: Kernel>(
         &self,
         kernel: &K,
@@ -816,15 +825,10 @@ impl Prepared {
         // A packet of camera rays through image points; lanes past the
         // last point repeat it and stay dark.
         let packet = |points: &[(f64, f64)]| {
-            let rays: [Ray; MAX_WIDTH] = std::array::from_fn(|i| {
-                let (x, y) = points[i.min(points.len() - 1)];
-                self.camera.ray(x, y)
-            });
+            let point = |i: usize| points[i.min(points.len() - 1)];
             (
-                Ray::new(
-                    K::L::vector_from_fn(|i| rays[i].origin),
-                    K::L::vector_from_fn(|i| rays[i].dir),
-                ),
+                self.camera
+                    .rays(K::L::from_fn(|i| point(i).0), K::L::from_fn(|i| point(i).1)),
                 <Alive<K>>::from_fn(|i| i < points.len()),
             )
         };
@@ -878,6 +882,7 @@ impl Prepared {
         self.with_kernel(TileInto { tile, cancel, out })
     }
 
+    #[inline(always)]
     fn tile_into<K: Kernel>(
         &self,
         kernel: &K,

@@ -45,7 +45,7 @@ pub struct SurfacePoint<V = DVec3> {
 /// `lambert` or `phong` formula (`whitted` uses `phong` here). One hit, or
 /// one per lane (each lane with its surface's C and material): a lane
 /// computes what the hit alone would, bit for bit.
-#[inline]
+#[inline(always)]
 pub fn local_color<L: Lanes>(
     illumination: Illumination,
     c: L::Vector,
@@ -95,12 +95,18 @@ const MAX_WHOLE_POWER: f64 = 1024.0;
 /// a negative power), several times cheaper than `powf`; both are within
 /// an ulp or two of the exact power, far below an 8-bit step. Other
 /// exponents go through `powf`, one lane at a time.
-#[inline]
+#[inline(always)]
 fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
     debug_assert!(L::WIDTH <= 4);
     let whole = |i: usize| {
         let m = m.lane(i);
-        m.fract() == 0.0 && m <= MAX_WHOLE_POWER
+        // m.fract() == 0, without a call to trunc where it fits an i32.
+        let fraction_free = if m >= -2_147_483_648.0 {
+            f64::from(m as i32) == m
+        } else {
+            m.fract() == 0.0
+        };
+        fraction_free && m <= MAX_WHOLE_POWER
     };
     // The exponent as powi takes it (an i32), its magnitude's bits (0 for
     // the lanes that are not whole: their result is replaced).
