@@ -42,8 +42,6 @@ impl Aabb {
     /// enter it before their `t_max` (the slab test, in glam's min/max).
     #[inline(always)]
     fn entry<L: Lanes>(&self, origin: &[L; 3], inv_dir: &[L; 3], t_max: L) -> (L, L::Mask) {
-        let min = |a: L, b: L| L::select(a.lt(b), a, b);
-        let max = |a: L, b: L| L::select(a.gt(b), a, b);
         let (mut near, mut far) = (L::ZERO, L::ZERO);
         for axis in 0..3 {
             let t1 = (L::splat(self.min[axis]) - origin[axis]) * inv_dir[axis];
@@ -61,6 +59,18 @@ impl Aabb {
         let far = L::select(far.lt(t_max), far, t_max);
         (near, near.le(far))
     }
+}
+
+/// glam's min: `a` where `a < b`, else `b` (per lane).
+#[inline(always)]
+fn min<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.lt(b), a, b)
+}
+
+/// glam's max: `a` where `a > b`, else `b` (per lane).
+#[inline(always)]
+fn max<L: Lanes>(a: L, b: L) -> L {
+    L::select(a.gt(b), a, b)
 }
 
 /// What [`Bvh::nearest`] asks of the search it serves: the distance each
@@ -161,7 +171,8 @@ impl Bvh {
         search: &mut impl Search<L>,
     ) {
         let origin = L::components(ray.origin);
-        let inv_dir = L::components(ray.dir).map(|d| L::ONE / d);
+        let [dx, dy, dz] = L::components(ray.dir);
+        let inv_dir = [L::ONE / dx, L::ONE / dy, L::ONE / dz];
         let mut stack = [(0u32, alive); STACK];
         let mut top = 0;
         let mut node = &self.nodes[0];

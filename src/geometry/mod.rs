@@ -18,6 +18,8 @@
 //! planes. They answer per lane ([`Found`]); the BVH walks a packet's
 //! lanes together ([`Bvh::nearest`]).
 
+#[cfg(target_arch = "x86_64")]
+mod avx;
 mod bvh;
 mod plane;
 mod precision;
@@ -28,9 +30,11 @@ mod sphere;
 #[cfg(test)]
 mod unchanged;
 
+#[cfg(target_arch = "x86_64")]
+pub use avx::{Avx2, Avx4, AvxMask, Vectorized};
 pub use bvh::{Aabb, Bvh, Search};
 pub use plane::{intersect_plane_world, plane_hit};
-pub use precision::{DVec3x4, F64x4, Lanes, Mask, Mask4, Real, Vector};
+pub use precision::{DVec3x4, F64x4, Lanes, Mask, Mask4, Real, Vec3x4, Vector};
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
 pub use single::{Primitive32, Ray32};

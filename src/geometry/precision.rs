@@ -1,6 +1,7 @@
 //! The precision and width a formula runs in: one f64 (the reference), one
 //! f32 (the study's "f32 everywhere" method) or four f64 lanes side by side
-//! ([`F64x4`], the packets the renderer traces). The intersection and
+//! (the packets the renderer traces: [`F64x4`] in SSE2 registers, or
+//! [`super::Avx4`] in an AVX register where the processor has AVX2). The intersection and
 //! shading formulas are written once, generic over [`Real`] and [`Vector`],
 //! and each instance runs exactly the operations they spell out: every
 //! method here is the one glam or the standard library already provides
@@ -78,7 +79,7 @@ pub trait Real:
     fn select(mask: Self::Mask, if_true: Self, if_false: Self) -> Self;
 }
 
-/// A 3-vector of a [`Real`]: `DVec3`, `Vec3` or [`DVec3x4`].
+/// A 3-vector of a [`Real`]: `DVec3`, `Vec3` or lanes of them ([`Vec3x4`]).
 pub trait Vector: Copy + Add<Output = Self> + Sub<Output = Self> + Neg<Output = Self> {
     type Real: Real;
     fn dot(self, other: Self) -> Self::Real;
@@ -187,13 +188,17 @@ pub struct F64x4(pub f64x4);
 #[derive(Debug, Clone, Copy)]
 pub struct Mask4(f64x4);
 
-/// A 3-vector of four lanes: four `DVec3`s, one per lane.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct DVec3x4 {
-    pub x: F64x4,
-    pub y: F64x4,
-    pub z: F64x4,
+/// A 3-vector of lanes (one `DVec3` per lane): x, y and z each in lanes
+/// of `L` ([`F64x4`], or [`super::Avx4`] on the AVX path).
+#[derive(Debug, Clone, Copy)]
+pub struct Vec3x4<L> {
+    pub x: L,
+    pub y: L,
+    pub z: L,
 }
+
+/// Four `DVec3`s in [`F64x4`] lanes.
+pub type DVec3x4 = Vec3x4<F64x4>;
 
 const ALL_BITS: f64x4 = f64x4::splat(f64::from_bits(u64::MAX));
 
@@ -299,11 +304,11 @@ impl Real for F64x4 {
     }
 }
 
-impl Add for DVec3x4 {
-    type Output = DVec3x4;
+impl<L: Real> Add for Vec3x4<L> {
+    type Output = Vec3x4<L>;
     #[inline(always)]
-    fn add(self, o: DVec3x4) -> DVec3x4 {
-        DVec3x4 {
+    fn add(self, o: Vec3x4<L>) -> Vec3x4<L> {
+        Vec3x4 {
             x: self.x + o.x,
             y: self.y + o.y,
             z: self.z + o.z,
@@ -311,11 +316,11 @@ impl Add for DVec3x4 {
     }
 }
 
-impl Sub for DVec3x4 {
-    type Output = DVec3x4;
+impl<L: Real> Sub for Vec3x4<L> {
+    type Output = Vec3x4<L>;
     #[inline(always)]
-    fn sub(self, o: DVec3x4) -> DVec3x4 {
-        DVec3x4 {
+    fn sub(self, o: Vec3x4<L>) -> Vec3x4<L> {
+        Vec3x4 {
             x: self.x - o.x,
             y: self.y - o.y,
             z: self.z - o.z,
@@ -323,11 +328,11 @@ impl Sub for DVec3x4 {
     }
 }
 
-impl Neg for DVec3x4 {
-    type Output = DVec3x4;
+impl<L: Real> Neg for Vec3x4<L> {
+    type Output = Vec3x4<L>;
     #[inline(always)]
-    fn neg(self) -> DVec3x4 {
-        DVec3x4 {
+    fn neg(self) -> Vec3x4<L> {
+        Vec3x4 {
             x: -self.x,
             y: -self.y,
             z: -self.z,
@@ -335,39 +340,39 @@ impl Neg for DVec3x4 {
     }
 }
 
-impl Vector for DVec3x4 {
-    type Real = F64x4;
+impl<L: Real> Vector for Vec3x4<L> {
+    type Real = L;
     #[inline(always)]
-    fn dot(self, o: DVec3x4) -> F64x4 {
+    fn dot(self, o: Vec3x4<L>) -> L {
         // glam's order: (x x') + (y y') + (z z').
         (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
     }
     #[inline(always)]
-    fn length_squared(self) -> F64x4 {
+    fn length_squared(self) -> L {
         self.dot(self)
     }
     #[inline(always)]
-    fn length(self) -> F64x4 {
+    fn length(self) -> L {
         self.dot(self).sqrt()
     }
     #[inline(always)]
-    fn normalize(self) -> DVec3x4 {
-        self.scaled(F64x4::ONE / self.length())
+    fn normalize(self) -> Vec3x4<L> {
+        self.scaled(L::ONE / self.length())
     }
     #[inline(always)]
-    fn scaled(self, s: F64x4) -> DVec3x4 {
-        DVec3x4 {
+    fn scaled(self, s: L) -> Vec3x4<L> {
+        Vec3x4 {
             x: s * self.x,
             y: s * self.y,
             z: s * self.z,
         }
     }
     #[inline(always)]
-    fn select(mask: Mask4, if_true: DVec3x4, if_false: DVec3x4) -> DVec3x4 {
-        DVec3x4 {
-            x: F64x4::select(mask, if_true.x, if_false.x),
-            y: F64x4::select(mask, if_true.y, if_false.y),
-            z: F64x4::select(mask, if_true.z, if_false.z),
+    fn select(mask: L::Mask, if_true: Vec3x4<L>, if_false: Vec3x4<L>) -> Vec3x4<L> {
+        Vec3x4 {
+            x: L::select(mask, if_true.x, if_false.x),
+            y: L::select(mask, if_true.y, if_false.y),
+            z: L::select(mask, if_true.z, if_false.z),
         }
     }
 }
@@ -422,47 +427,66 @@ impl Lanes for f64 {
     }
 }
 
-impl Lanes for F64x4 {
-    type Vector = DVec3x4;
-    const WIDTH: usize = 4;
-    #[inline(always)]
-    fn splat(x: f64) -> F64x4 {
-        F64x4(f64x4::splat(x))
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> f64 {
-        self.0.as_array()[i]
-    }
-    #[inline(always)]
-    fn from_fn(mut f: impl FnMut(usize) -> f64) -> F64x4 {
-        F64x4(f64x4::new([f(0), f(1), f(2), f(3)]))
-    }
-    #[inline(always)]
-    fn splat_vector(v: DVec3) -> DVec3x4 {
-        DVec3x4 {
-            x: Self::splat(v.x),
-            y: Self::splat(v.y),
-            z: Self::splat(v.z),
+/// [`Lanes`] for a four-lane type with `splat`, `lane` and `from_array`.
+macro_rules! four_lanes {
+    ($t:ty) => {
+        impl $crate::geometry::Lanes for $t {
+            type Vector = $crate::geometry::Vec3x4<$t>;
+            const WIDTH: usize = 4;
+            #[inline(always)]
+            fn splat(x: f64) -> $t {
+                <$t>::from_array([x; 4])
+            }
+            #[inline(always)]
+            fn lane(self, i: usize) -> f64 {
+                self.to_array()[i]
+            }
+            #[inline(always)]
+            fn from_fn(mut f: impl FnMut(usize) -> f64) -> $t {
+                <$t>::from_array([f(0), f(1), f(2), f(3)])
+            }
+            #[inline(always)]
+            fn splat_vector(v: glam::DVec3) -> Self::Vector {
+                $crate::geometry::Vec3x4 {
+                    x: Self::splat(v.x),
+                    y: Self::splat(v.y),
+                    z: Self::splat(v.z),
+                }
+            }
+            #[inline(always)]
+            fn vector_lane(v: Self::Vector, i: usize) -> glam::DVec3 {
+                glam::DVec3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i))
+            }
+            #[inline(always)]
+            fn vector_from_fn(mut f: impl FnMut(usize) -> glam::DVec3) -> Self::Vector {
+                let v = [f(0), f(1), f(2), f(3)];
+                $crate::geometry::Vec3x4 {
+                    x: Self::from_fn(|i| v[i].x),
+                    y: Self::from_fn(|i| v[i].y),
+                    z: Self::from_fn(|i| v[i].z),
+                }
+            }
+            #[inline(always)]
+            fn components(v: Self::Vector) -> [$t; 3] {
+                [v.x, v.y, v.z]
+            }
         }
+    };
+}
+pub(super) use four_lanes;
+
+impl F64x4 {
+    #[inline(always)]
+    fn from_array(a: [f64; 4]) -> F64x4 {
+        F64x4(f64x4::new(a))
     }
     #[inline(always)]
-    fn vector_lane(v: DVec3x4, i: usize) -> DVec3 {
-        DVec3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i))
-    }
-    #[inline(always)]
-    fn vector_from_fn(mut f: impl FnMut(usize) -> DVec3) -> DVec3x4 {
-        let v = [f(0), f(1), f(2), f(3)];
-        DVec3x4 {
-            x: Self::from_fn(|i| v[i].x),
-            y: Self::from_fn(|i| v[i].y),
-            z: Self::from_fn(|i| v[i].z),
-        }
-    }
-    #[inline(always)]
-    fn components(v: DVec3x4) -> [F64x4; 3] {
-        [v.x, v.y, v.z]
+    fn to_array(self) -> [f64; 4] {
+        self.0.to_array()
     }
 }
+
+four_lanes!(F64x4);
 
 #[cfg(test)]
 mod tests {

@@ -93,6 +93,17 @@ impl<R: Real> Found<R> {
     }
 }
 
+impl<R: Real> Found<R> {
+    /// Only what `lanes` found.
+    #[inline(always)]
+    pub fn of(self, lanes: R::Mask) -> Found<R> {
+        Found {
+            t: self.t,
+            found: self.found & lanes,
+        }
+    }
+}
+
 impl<R: Real<Mask = bool>> Found<R> {
     /// The root of a single ray, if any.
     #[inline(always)]

@@ -8,6 +8,13 @@
 //! - Primary rays of a tile only test the spheres that can be inside the
 //!   tile's frustum (four planes through the eye); a tile with none of them
 //!   and no plane is black without a single ray.
+//! - Rays are traced in packets of four, side by side in SIMD lanes (a
+//!   tile row four pixels at a time, a pixel's samples four at a time): in
+//!   AVX2 registers where the processor has them ([`Avx4`], picked at run
+//!   time), else in pairs of SSE2 registers ([`F64x4`]). Every formula is
+//!   the scalar one per lane, so the image is the same bit for bit; a lane
+//!   leaves the packet when its chain ends. The f32 study method traces
+//!   one ray at a time.
 //! - Shading data (colour, material) sits apart, read once per hit.
 //! - Whitted chains stop as soon as nothing the rest of the chain could add
 //!   can change the pixel's 8-bit value (exact: the image is unchanged).
@@ -17,12 +24,14 @@
 
 use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
 use crate::geometry::{
-    Aabb, Bvh, DVec3x4, F64x4, Found, Lanes, Mask, Mask4, Primitive, Primitive32, Ray, Ray32, Real,
-    Search, Vector,
+    Aabb, Bvh, F64x4, Found, Lanes, Mask, Primitive, Primitive32, Ray, Ray32, Real, Search, Vector,
 };
+#[cfg(target_arch = "x86_64")]
+use crate::geometry::{Avx2, Avx4, Vectorized};
 use crate::scene::{Camera, Scene};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color, reflect};
 use glam::DVec3;
+use std::marker::PhantomData;
 use std::sync::Arc;
 
 /// With fewer bounded primitives than this, a linear scan beats the BVH.
@@ -172,15 +181,48 @@ impl<L: Lanes> Hits<L> {
     }
 }
 
+/// A kernel's intersection test of its rays against one primitive `P`.
+/// (A trait rather than a closure: the AVX path needs it inlined, and
+/// only functions can be marked `#[inline(always)]`.)
+trait Test<P, L: Lanes> {
+    fn test(&self, primitive: &P) -> Found<L>;
+}
+
+/// The f64 rays of a packet, against f64 primitives.
+struct TestExact<'a, const TEXTBOOK: bool, L: Lanes>(&'a Ray<L::Vector>);
+
+impl<const TEXTBOOK: bool, L: Lanes> Test<Primitive, L> for TestExact<'_, TEXTBOOK, L> {
+    #[inline(always)]
+    fn test(&self, primitive: &Primitive) -> Found<L> {
+        primitive.intersect::<TEXTBOOK, L>(self.0)
+    }
+}
+
+/// An f32 ray against f32 primitives.
+struct TestSingle<'a, const TEXTBOOK: bool>(&'a Ray32);
+
+impl<const TEXTBOOK: bool> Test<Primitive32, f64> for TestSingle<'_, TEXTBOOK> {
+    #[inline(always)]
+    fn test(&self, primitive: &Primitive32) -> Found<f64> {
+        match primitive.intersect::<TEXTBOOK>(self.0) {
+            Some(t) => Found {
+                t: f64::from(t),
+                found: true,
+            },
+            None => Found::none(),
+        }
+    }
+}
+
 /// A packet's search through the BVH: each lane keeps its nearest hit.
-struct BvhSearch<'a, L: Lanes, P, I: Fn(&P) -> Found<L>> {
+struct BvhSearch<'a, L: Lanes, P, I: Test<P, L>> {
     hits: &'a mut Hits<L>,
     bounded: &'a [P],
     objects: &'a [usize],
-    intersect: I,
+    intersect: &'a I,
 }
 
-impl<L: Lanes, P, I: Fn(&P) -> Found<L>> Search<L> for BvhSearch<'_, L, P, I> {
+impl<L: Lanes, P, I: Test<P, L>> Search<L> for BvhSearch<'_, L, P, I> {
     #[inline(always)]
     fn t_max(&self) -> L {
         self.hits.t
@@ -188,12 +230,8 @@ impl<L: Lanes, P, I: Fn(&P) -> Found<L>> Search<L> for BvhSearch<'_, L, P, I> {
 
     #[inline(always)]
     fn test(&mut self, k: usize, lanes: L::Mask) {
-        let hit = (self.intersect)(&self.bounded[k]);
-        let hit = Found {
-            t: hit.t,
-            found: hit.found & lanes,
-        };
-        self.hits.consider(hit, self.objects[k], k as f64);
+        let hit = self.intersect.test(&self.bounded[k]);
+        self.hits.consider(hit.of(lanes), self.objects[k], k as f64);
     }
 }
 
@@ -248,6 +286,7 @@ struct PixelAt {
 
 impl WithKernel for PixelAt {
     type Output = [u8; 3];
+    #[inline(always)]
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> [u8; 3] {
         let mut out = [[0; 3]; MAX_WIDTH];
         p.pixels(
@@ -276,6 +315,23 @@ impl WithKernel for TileInto<'_> {
     }
 }
 
+/// Work run with a kernel in AVX lanes ([`Avx2::run`]).
+#[cfg(target_arch = "x86_64")]
+struct OnAvx<'a, W, K> {
+    work: W,
+    prepared: &'a Prepared,
+    kernel: K,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl<W: WithKernel, K: Kernel> Vectorized for OnAvx<'_, W, K> {
+    type Output = W::Output;
+    #[inline(always)]
+    fn run(self) -> W::Output {
+        self.work.run(self.prepared, &self.kernel)
+    }
+}
+
 /// The most lanes a kernel traces together.
 const MAX_WIDTH: usize = 4;
 
@@ -283,18 +339,29 @@ const OFFSET_CONTRACT: u8 = 0;
 const OFFSET_FIXED: u8 = 1;
 const OFFSET_NONE: u8 = 2;
 
-/// f64 geometry, four rays at a time: the reference (stable test,
-/// contract offset) and its study variants.
-struct Exact<const TEXTBOOK: bool, const OFFSET: u8> {
+/// f64 geometry, four rays at a time in the lanes of `L` ([`F64x4`], or
+/// [`crate::geometry::Avx4`] where the processor has AVX2): the reference
+/// (stable test, contract offset) and its study variants.
+struct Exact<const TEXTBOOK: bool, const OFFSET: u8, L> {
     fixed: f64,
+    lanes: PhantomData<L>,
 }
 
-impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> {
-    type L = F64x4;
-    type Rays = Ray<DVec3x4>;
+impl<const TEXTBOOK: bool, const OFFSET: u8, L> Exact<TEXTBOOK, OFFSET, L> {
+    fn new(fixed: f64) -> Self {
+        Exact {
+            fixed,
+            lanes: PhantomData,
+        }
+    }
+}
+
+impl<const TEXTBOOK: bool, const OFFSET: u8, L: Lanes> Kernel for Exact<TEXTBOOK, OFFSET, L> {
+    type L = L;
+    type Rays = Ray<L::Vector>;
 
     #[inline(always)]
-    fn primary(&self, rays: Ray<DVec3x4>) -> Ray<DVec3x4> {
+    fn primary(&self, rays: Ray<L::Vector>) -> Ray<L::Vector> {
         rays
     }
 
@@ -302,23 +369,28 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
     fn nearest(
         &self,
         p: &Prepared,
-        rays: &Ray<DVec3x4>,
-        alive: Mask4,
+        rays: &Ray<L::Vector>,
+        alive: L::Mask,
         among: Candidates,
-    ) -> Hits<F64x4> {
-        p.nearest_with(rays, alive, among, &p.world.bounded, &p.world.planes, |q| {
-            q.intersect::<TEXTBOOK, F64x4>(rays)
-        })
+    ) -> Hits<L> {
+        p.nearest_with(
+            rays,
+            alive,
+            among,
+            &p.world.bounded,
+            &p.world.planes,
+            &TestExact::<TEXTBOOK, L>(rays),
+        )
     }
 
     #[inline(always)]
     fn surface(
         &self,
         p: &Prepared,
-        rays: &Ray<DVec3x4>,
-        hits: &Hits<F64x4>,
-        alive: Mask4,
-    ) -> SurfacePoint<DVec3x4> {
+        rays: &Ray<L::Vector>,
+        hits: &Hits<L>,
+        alive: L::Mask,
+    ) -> SurfacePoint<L::Vector> {
         let m = rays.at(hits.t);
         // The geometric normal: from the centre for a ball (computed in
         // the lanes), given for a plane, through the matrix for an
@@ -336,33 +408,30 @@ impl<const TEXTBOOK: bool, const OFFSET: u8> Kernel for Exact<TEXTBOOK, OFFSET> 
                 Primitive::Ball { center, .. } => (centers[i], ball[i]) = (*center, true),
                 Primitive::Plane { normal, .. } => given[i] = *normal,
                 Primitive::Ellipsoid(_) => {
-                    let ray = Ray::new(
-                        F64x4::vector_lane(rays.origin, i),
-                        F64x4::vector_lane(rays.dir, i),
-                    );
+                    let ray = Ray::new(L::vector_lane(rays.origin, i), L::vector_lane(rays.dir, i));
                     given[i] = primitive.normal_at(&ray, hit.t);
                 }
             }
         }
-        let from_center = (m - F64x4::vector_from_fn(|i| centers[i])).normalize();
-        let n = DVec3x4::select(
-            Mask4::from_fn(|i| ball[i]),
+        let from_center = (m - L::vector_from_fn(|i| centers[i])).normalize();
+        let n = L::Vector::select(
+            L::Mask::from_fn(|i| ball[i]),
             from_center,
-            F64x4::vector_from_fn(|i| given[i]),
+            L::vector_from_fn(|i| given[i]),
         );
         // Shading normal N: the geometric normal turned to face the ray.
-        let n = DVec3x4::select(n.dot(rays.dir).gt(F64x4::ZERO), -n, n);
+        let n = L::Vector::select(n.dot(rays.dir).gt(L::ZERO), -n, n);
         SurfacePoint { m, n, v: -rays.dir }
     }
 
     #[inline(always)]
-    fn reflected(&self, point: &SurfacePoint<DVec3x4>) -> Ray<DVec3x4> {
+    fn reflected(&self, point: &SurfacePoint<L::Vector>) -> Ray<L::Vector> {
         let SurfacePoint { m, n, v } = *point;
         // Reflected ray R from just off the surface (contract section 5).
         let epsilon = match OFFSET {
-            OFFSET_CONTRACT => F64x4::splat(1e-9) + F64x4::splat(1e-12) * m.length(),
-            OFFSET_FIXED => F64x4::splat(self.fixed),
-            _ => F64x4::ZERO,
+            OFFSET_CONTRACT => L::splat(1e-9) + L::splat(1e-12) * m.length(),
+            OFFSET_FIXED => L::splat(self.fixed),
+            _ => L::ZERO,
         };
         Ray::new(m + n.scaled(epsilon), reflect(n, v).normalize())
     }
@@ -392,13 +461,7 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
             among,
             &p.world.bounded32,
             &p.world.planes32,
-            |q| match q.intersect::<TEXTBOOK>(ray) {
-                Some(t) => Found {
-                    t: f64::from(t),
-                    found: true,
-                },
-                None => Found::none(),
-            },
+            &TestSingle::<TEXTBOOK>(ray),
         )
     }
 
@@ -612,7 +675,7 @@ impl Prepared {
             Candidates::All,
             &self.world.bounded,
             &self.world.planes,
-            |p| p.intersect::<false, f64>(ray),
+            &TestExact::<false, f64>(ray),
         );
         hits.found.then(|| hits.lane(0))
     }
@@ -629,16 +692,12 @@ impl Prepared {
         candidates: Candidates,
         bounded: &[P],
         planes: &[P],
-        intersect: impl Fn(&P) -> Found<L>,
+        intersect: &impl Test<P, L>,
     ) -> Hits<L> {
         let mut hits = Hits::none();
-        let of_alive = |hit: Found<L>| Found {
-            t: hit.t,
-            found: hit.found & alive,
-        };
         for (k, plane) in planes.iter().enumerate() {
             hits.consider(
-                of_alive(intersect(plane)),
+                intersect.test(plane).of(alive),
                 self.world.plane_objects[k],
                 -1.0 - k as f64,
             );
@@ -647,7 +706,7 @@ impl Prepared {
             (_, Candidates::Only(list)) => {
                 for &k in list {
                     hits.consider(
-                        of_alive(intersect(&bounded[k])),
+                        intersect.test(&bounded[k]).of(alive),
                         self.world.bounded_objects[k],
                         k as f64,
                     );
@@ -665,7 +724,7 @@ impl Prepared {
             (None, Candidates::All) => {
                 for (k, primitive) in bounded.iter().enumerate() {
                     hits.consider(
-                        of_alive(intersect(primitive)),
+                        intersect.test(primitive).of(alive),
                         self.world.bounded_objects[k],
                         k as f64,
                     );
@@ -709,21 +768,20 @@ impl Prepared {
                 break;
             }
             // The surface each lane hit.
-            let surface = |i: usize| {
-                let object = if alive.lane(i) {
+            let surfaces: [&Surface; MAX_WIDTH] = std::array::from_fn(|i| {
+                let object = if i < K::L::WIDTH && alive.lane(i) {
                     hits.object.lane(i) as usize
                 } else {
                     0
                 };
                 &world.surfaces[object]
-            };
-            let c = K::L::vector_from_fn(|i| surface(i).color);
-            let coefficient = |f: fn(&Material) -> f64| K::L::from_fn(|i| f(&surface(i).material));
+            });
+            let c = K::L::vector_from_fn(|i| surfaces[i].color);
             let material = Material {
-                ka: coefficient(|m| m.ka),
-                kd: coefficient(|m| m.kd),
-                ks: coefficient(|m| m.ks),
-                m: coefficient(|m| m.m),
+                ka: K::L::from_fn(|i| surfaces[i].material.ka),
+                kd: K::L::from_fn(|i| surfaces[i].material.kd),
+                ks: K::L::from_fn(|i| surfaces[i].material.ks),
+                m: K::L::from_fn(|i| surfaces[i].material.m),
             };
             let point = kernel.surface(self, &ray, &hits, alive);
             let local = local_color(world.illumination, c, &material, &world.lights, &point);
@@ -735,15 +793,16 @@ impl Prepared {
             alive = alive & !weight.eq(K::L::ZERO);
             if exact_stop && alive.any() {
                 let levels = world.depth - bounce;
-                let invisible = <Alive<K>>::from_fn(|i| {
-                    alive.lane(i)
+                let mut invisible = [false; MAX_WIDTH];
+                for (i, lane) in invisible.iter_mut().enumerate().take(K::L::WIDTH) {
+                    *lane = alive.lane(i)
                         && self.rest_is_invisible(
                             K::L::vector_lane(color, i),
                             weight.lane(i),
                             levels,
-                        )
-                });
-                alive = alive & !invisible;
+                        );
+                }
+                alive = alive & !<Alive<K>>::from_fn(|i| invisible[i]);
             }
             if !alive.any() {
                 break;
@@ -795,10 +854,30 @@ impl Prepared {
     #[inline(always)]
     fn with_offset<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.offset {
-            Offset::Contract => work.run(self, &Exact::<TEXTBOOK, OFFSET_CONTRACT> { fixed: 0.0 }),
-            Offset::Fixed(fixed) => work.run(self, &Exact::<TEXTBOOK, OFFSET_FIXED> { fixed }),
-            Offset::None => work.run(self, &Exact::<TEXTBOOK, OFFSET_NONE> { fixed: 0.0 }),
+            Offset::Contract => self.with_lanes::<TEXTBOOK, OFFSET_CONTRACT, W>(work, 0.0),
+            Offset::Fixed(fixed) => self.with_lanes::<TEXTBOOK, OFFSET_FIXED, W>(work, fixed),
+            Offset::None => self.with_lanes::<TEXTBOOK, OFFSET_NONE, W>(work, 0.0),
         }
+    }
+
+    /// The f64 kernel in the widest lanes the processor has: AVX2
+    /// registers where it has them (the work compiled for AVX2), else SSE2
+    /// pairs. Both give the same image, bit for bit.
+    #[inline(always)]
+    fn with_lanes<const TEXTBOOK: bool, const OFFSET: u8, W: WithKernel>(
+        &self,
+        work: W,
+        fixed: f64,
+    ) -> W::Output {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx2) = Avx2::detect() {
+            return avx2.run(OnAvx {
+                work,
+                prepared: self,
+                kernel: Exact::<TEXTBOOK, OFFSET, Avx4>::new(fixed),
+            });
+        }
+        work.run(self, &Exact::<TEXTBOOK, OFFSET, F64x4>::new(fixed))
     }
 
     /// The 8-bit colour of pixel (i, j): one ray through its centre, or the
@@ -822,22 +901,12 @@ impl Prepared {
         let width = K::L::WIDTH;
         debug_assert!(!pixels.is_empty() && pixels.len() <= width && width <= MAX_WIDTH);
         let to_8bit_color = |c: DVec3| [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
-        // A packet of camera rays through image points; lanes past the
-        // last point repeat it and stay dark.
-        let packet = |points: &[(f64, f64)]| {
-            let point = |i: usize| points[i.min(points.len() - 1)];
-            (
-                self.camera
-                    .rays(K::L::from_fn(|i| point(i).0), K::L::from_fn(|i| point(i).1)),
-                <Alive<K>>::from_fn(|i| i < points.len()),
-            )
-        };
         if self.aa == 1 {
             let mut points = [(0.0, 0.0); MAX_WIDTH];
             for (point, &(i, j)) in points.iter_mut().zip(pixels) {
                 *point = (f64::from(i) + 0.5, f64::from(j) + 0.5);
             }
-            let (primary, alive) = packet(&points[..pixels.len()]);
+            let (primary, alive) = self.packet::<K>(&points[..pixels.len()]);
             let c = self.trace(
                 kernel,
                 primary,
@@ -865,7 +934,7 @@ impl Prepared {
             }
             let mut sum = DVec3::ZERO;
             for chunk in samples.chunks(width) {
-                let (primary, alive) = packet(chunk);
+                let (primary, alive) = self.packet::<K>(chunk);
                 let c = self.trace(kernel, primary, alive, candidates, false, rays);
                 for k in 0..chunk.len() {
                     sum += K::L::vector_lane(c, k).clamp(DVec3::ZERO, DVec3::ONE);
@@ -873,6 +942,18 @@ impl Prepared {
             }
             *pixel = to_8bit_color(sum / (n * n));
         }
+    }
+
+    /// A packet of camera rays through image points (at most a packet's
+    /// width); lanes past the last point repeat it and stay dark.
+    #[inline(always)]
+    fn packet<K: Kernel>(&self, points: &[(f64, f64)]) -> (Ray<Vectors<K>>, Alive<K>) {
+        let last = points.len() - 1;
+        let rays = self.camera.rays(
+            K::L::from_fn(|i| points[i.min(last)].0),
+            K::L::from_fn(|i| points[i.min(last)].1),
+        );
+        (rays, <Alive<K>>::from_fn(|i| i <= last))
     }
 
     /// Renders one tile as row-major RGB8 into `out` (cleared first),
