@@ -179,6 +179,10 @@ impl Real for Avx4 {
     const TWO: Avx4 = Avx4(splat_const(2.0));
     const FOUR: Avx4 = Avx4(splat_const(4.0));
     #[inline(always)]
+    fn from_f64(x: f64) -> Avx4 {
+        Avx4(avx!(_mm256_set1_pd(x)))
+    }
+    #[inline(always)]
     fn sqrt(self) -> Avx4 {
         Avx4(avx!(_mm256_sqrt_pd(self.0)))
     }

@@ -66,6 +66,8 @@ pub trait Real:
     const ONE: Self;
     const TWO: Self;
     const FOUR: Self;
+    /// The value nearest `x` in this precision (in every lane).
+    fn from_f64(x: f64) -> Self;
     fn sqrt(self) -> Self;
     /// `self`'s magnitude with `sign`'s sign.
     fn copysign(self, sign: Self) -> Self;
@@ -101,6 +103,11 @@ macro_rules! real {
             const ONE: $t = 1.0;
             const TWO: $t = 2.0;
             const FOUR: $t = 4.0;
+            #[inline(always)]
+            #[allow(clippy::cast_possible_truncation)]
+            fn from_f64(x: f64) -> $t {
+                x as $t
+            }
             #[inline(always)]
             fn sqrt(self) -> $t {
                 <$t>::sqrt(self)
@@ -264,6 +271,10 @@ impl Real for F64x4 {
     const ONE: F64x4 = F64x4(f64x4::splat(1.0));
     const TWO: F64x4 = F64x4(f64x4::splat(2.0));
     const FOUR: F64x4 = F64x4(f64x4::splat(4.0));
+    #[inline(always)]
+    fn from_f64(x: f64) -> F64x4 {
+        F64x4(f64x4::splat(x))
+    }
     #[inline(always)]
     fn sqrt(self) -> F64x4 {
         F64x4(self.0.sqrt())

@@ -84,13 +84,14 @@ impl Primitive {
             }
             Primitive::Ellipsoid(e) => {
                 // Each lane's ray mapped to object space on its own.
+                let (mut origins, mut dirs) = ([DVec3::ZERO; 4], [DVec3::ZERO; 4]);
+                for i in 0..L::WIDTH {
+                    origins[i] = e.to_object.transform_point3(L::vector_lane(ray.origin, i));
+                    dirs[i] = e.to_object.transform_vector3(L::vector_lane(ray.dir, i));
+                }
                 let local = Ray::new(
-                    L::vector_from_fn(|i| {
-                        e.to_object.transform_point3(L::vector_lane(ray.origin, i))
-                    }),
-                    L::vector_from_fn(|i| {
-                        e.to_object.transform_vector3(L::vector_lane(ray.dir, i))
-                    }),
+                    L::vector_from_fn(|i| origins[i]),
+                    L::vector_from_fn(|i| dirs[i]),
                 );
                 if TEXTBOOK {
                     intersect_sphere_textbook(&local)

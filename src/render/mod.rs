@@ -25,7 +25,9 @@ pub use prepared::{Hit, Prepared, prepare};
 pub use progress::{Progress, time_left};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
 
+use crate::geometry::{Ray, Real, Vector};
 use crate::scene::Scene;
+use crate::shading::{SurfacePoint, reflect};
 use image::RgbImage;
 use rayon::prelude::*;
 
@@ -76,6 +78,22 @@ pub enum Offset {
 
 // The fixed ε is never NaN (the study's methods are constants).
 impl Eq for Offset {}
+
+impl Offset {
+    /// The reflected ray R leaving hit point M along the mirror of V about
+    /// N, from ε off the surface (contract section 5), in the precision
+    /// (and lanes) of the point.
+    #[inline(always)]
+    pub fn reflected<V: Vector>(self, point: &SurfacePoint<V>) -> Ray<V> {
+        let SurfacePoint { m, n, v } = *point;
+        let epsilon = match self {
+            Offset::Contract => V::Real::from_f64(1e-9) + V::Real::from_f64(1e-12) * m.length(),
+            Offset::Fixed(epsilon) => V::Real::from_f64(epsilon),
+            Offset::None => V::Real::ZERO,
+        };
+        Ray::new(m + n.scaled(epsilon), reflect(n, v).normalize())
+    }
+}
 
 /// How to render. `RenderOptions::default()` gives the contract's image:
 /// one ray through each pixel centre, f64 throughout, with every exact

@@ -29,7 +29,7 @@ use crate::geometry::{
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Vectorized};
 use crate::scene::{Camera, Scene};
-use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color, reflect};
+use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color};
 use glam::DVec3;
 use std::marker::PhantomData;
 use std::sync::Arc;
@@ -335,28 +335,24 @@ impl<W: WithKernel, K: Kernel> Vectorized for OnAvx<'_, W, K> {
 /// The most lanes a kernel traces together.
 const MAX_WIDTH: usize = 4;
 
-const OFFSET_CONTRACT: u8 = 0;
-const OFFSET_FIXED: u8 = 1;
-const OFFSET_NONE: u8 = 2;
-
 /// f64 geometry, four rays at a time in the lanes of `L` ([`F64x4`], or
 /// [`crate::geometry::Avx4`] where the processor has AVX2): the reference
 /// (stable test, contract offset) and its study variants.
-struct Exact<const TEXTBOOK: bool, const OFFSET: u8, L> {
-    fixed: f64,
+struct Exact<const TEXTBOOK: bool, L> {
+    offset: Offset,
     lanes: PhantomData<L>,
 }
 
-impl<const TEXTBOOK: bool, const OFFSET: u8, L> Exact<TEXTBOOK, OFFSET, L> {
-    fn new(fixed: f64) -> Self {
+impl<const TEXTBOOK: bool, L> Exact<TEXTBOOK, L> {
+    fn new(offset: Offset) -> Self {
         Exact {
-            fixed,
+            offset,
             lanes: PhantomData,
         }
     }
 }
 
-impl<const TEXTBOOK: bool, const OFFSET: u8, L: Lanes> Kernel for Exact<TEXTBOOK, OFFSET, L> {
+impl<const TEXTBOOK: bool, L: Lanes> Kernel for Exact<TEXTBOOK, L> {
     type L = L;
     type Rays = Ray<L::Vector>;
 
@@ -398,7 +394,10 @@ impl<const TEXTBOOK: bool, const OFFSET: u8, L: Lanes> Kernel for Exact<TEXTBOOK
         let mut centers = [DVec3::ZERO; MAX_WIDTH];
         let mut given = [DVec3::ZERO; MAX_WIDTH];
         let mut ball = [false; MAX_WIDTH];
-        for i in (0..MAX_WIDTH).filter(|&i| alive.lane(i)) {
+        for i in 0..L::WIDTH {
+            if !alive.lane(i) {
+                continue;
+            }
             let hit = hits.lane(i);
             let primitive = match hit.primitive {
                 PrimitiveRef::Bounded(k) => &p.world.bounded[k],
@@ -426,14 +425,7 @@ impl<const TEXTBOOK: bool, const OFFSET: u8, L: Lanes> Kernel for Exact<TEXTBOOK
 
     #[inline(always)]
     fn reflected(&self, point: &SurfacePoint<L::Vector>) -> Ray<L::Vector> {
-        let SurfacePoint { m, n, v } = *point;
-        // Reflected ray R from just off the surface (contract section 5).
-        let epsilon = match OFFSET {
-            OFFSET_CONTRACT => L::splat(1e-9) + L::splat(1e-12) * m.length(),
-            OFFSET_FIXED => L::splat(self.fixed),
-            _ => L::ZERO,
-        };
-        Ray::new(m + n.scaled(epsilon), reflect(n, v).normalize())
+        self.offset.reflected(point)
     }
 }
 
@@ -488,13 +480,13 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
     #[inline(always)]
     fn reflected(&self, point: &SurfacePoint) -> Ray32 {
         // The point's vectors hold f32 values: the narrowing is exact.
-        let (m, n, v) = (point.m.as_vec3(), point.n.as_vec3(), point.v.as_vec3());
-        let epsilon = match self.offset {
-            Offset::Contract => 1e-9 + 1e-12 * m.length(),
-            Offset::Fixed(e) => e as f32,
-            Offset::None => 0.0,
+        let point = SurfacePoint {
+            m: point.m.as_vec3(),
+            n: point.n.as_vec3(),
+            v: point.v.as_vec3(),
         };
-        Ray32::new(m + epsilon * n, reflect(n, v).normalize())
+        let ray = self.offset.reflected(&point);
+        Ray32::new(ray.origin, ray.dir)
     }
 }
 
@@ -768,14 +760,14 @@ impl Prepared {
                 break;
             }
             // The surface each lane hit.
-            let surfaces: [&Surface; MAX_WIDTH] = std::array::from_fn(|i| {
-                let object = if i < K::L::WIDTH && alive.lane(i) {
-                    hits.object.lane(i) as usize
-                } else {
-                    0
-                };
-                &world.surfaces[object]
-            });
+            // (A plain loop: a closure here could be left out of line,
+            // and the lanes' instructions in it with it.)
+            let mut surfaces = [&world.surfaces[0]; MAX_WIDTH];
+            for (i, surface) in surfaces.iter_mut().enumerate().take(K::L::WIDTH) {
+                if alive.lane(i) {
+                    *surface = &world.surfaces[hits.object.lane(i) as usize];
+                }
+            }
             let c = K::L::vector_from_fn(|i| surfaces[i].color);
             let material = Material {
                 ka: K::L::from_fn(|i| surfaces[i].material.ka),
@@ -829,7 +821,7 @@ impl Prepared {
 
     /// Runs `work` with the kernel of the method's choices, each dispatched
     /// once, one choice at a time: the sphere test, the precision, then
-    /// (f64) the offset.
+    /// (f64) the widest lanes.
     #[inline(always)]
     fn with_kernel<W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.sphere {
@@ -841,7 +833,7 @@ impl Prepared {
     #[inline(always)]
     fn with_precision<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.precision {
-            Precision::F64 => self.with_offset::<TEXTBOOK, W>(work),
+            Precision::F64 => self.with_lanes::<TEXTBOOK, W>(work),
             Precision::F32 => work.run(
                 self,
                 &Single::<TEXTBOOK> {
@@ -851,33 +843,21 @@ impl Prepared {
         }
     }
 
-    #[inline(always)]
-    fn with_offset<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
-        match self.world.offset {
-            Offset::Contract => self.with_lanes::<TEXTBOOK, OFFSET_CONTRACT, W>(work, 0.0),
-            Offset::Fixed(fixed) => self.with_lanes::<TEXTBOOK, OFFSET_FIXED, W>(work, fixed),
-            Offset::None => self.with_lanes::<TEXTBOOK, OFFSET_NONE, W>(work, 0.0),
-        }
-    }
-
     /// The f64 kernel in the widest lanes the processor has: AVX2
     /// registers where it has them (the work compiled for AVX2), else SSE2
     /// pairs. Both give the same image, bit for bit.
     #[inline(always)]
-    fn with_lanes<const TEXTBOOK: bool, const OFFSET: u8, W: WithKernel>(
-        &self,
-        work: W,
-        fixed: f64,
-    ) -> W::Output {
+    fn with_lanes<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
+        let offset = self.world.offset;
         #[cfg(target_arch = "x86_64")]
         if let Some(avx2) = Avx2::detect() {
             return avx2.run(OnAvx {
                 work,
                 prepared: self,
-                kernel: Exact::<TEXTBOOK, OFFSET, Avx4>::new(fixed),
+                kernel: Exact::<TEXTBOOK, Avx4>::new(offset),
             });
         }
-        work.run(self, &Exact::<TEXTBOOK, OFFSET, F64x4>::new(fixed))
+        work.run(self, &Exact::<TEXTBOOK, F64x4>::new(offset))
     }
 
     /// The 8-bit colour of pixel (i, j): one ray through its centre, or the

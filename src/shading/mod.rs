@@ -98,26 +98,27 @@ const MAX_WHOLE_POWER: f64 = 1024.0;
 #[inline(always)]
 fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
     debug_assert!(L::WIDTH <= 4);
-    let whole = |i: usize| {
-        let m = m.lane(i);
+    // The lanes as plain values first (closures below stay scalar).
+    let (mut ms, mut xs) = ([0.0; 4], [0.0; 4]);
+    for i in 0..L::WIDTH {
+        (ms[i], xs[i]) = (m.lane(i), cos_alpha.lane(i));
+    }
+    let mut whole = [false; 4];
+    let mut exponent = [0i32; 4];
+    for i in 0..L::WIDTH {
+        let m = ms[i];
         // m.fract() == 0, without a call to trunc where it fits an i32.
         let fraction_free = if m >= -2_147_483_648.0 {
             f64::from(m as i32) == m
         } else {
             m.fract() == 0.0
         };
-        fraction_free && m <= MAX_WHOLE_POWER
-    };
-    // The exponent as powi takes it (an i32), its magnitude's bits (0 for
-    // the lanes that are not whole: their result is replaced).
-    let exponent = |i: usize| if whole(i) { m.lane(i) as i32 } else { 0 };
-    let mut bits: [u32; 4] = std::array::from_fn(|i| {
-        if i < L::WIDTH {
-            exponent(i).unsigned_abs()
-        } else {
-            0
-        }
-    });
+        whole[i] = fraction_free && m <= MAX_WHOLE_POWER;
+        // The exponent as powi takes it (0 for the lanes that are not
+        // whole: their result is replaced).
+        exponent[i] = if whole[i] { m as i32 } else { 0 };
+    }
+    let mut bits = exponent.map(i32::unsigned_abs);
     let (mut power, mut a) = (L::ONE, cos_alpha);
     loop {
         let odd = L::Mask::from_fn(|i| bits[i] & 1 != 0);
@@ -125,26 +126,27 @@ fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
             power = L::select(odd, power * a, power);
         }
         bits = bits.map(|b| b >> 1);
-        if bits.iter().all(|&b| b == 0) {
+        if bits == [0; 4] {
             break;
         }
         a = a * a;
     }
-    let negative = L::Mask::from_fn(|i| exponent(i) < 0);
+    let negative = L::Mask::from_fn(|i| exponent[i] < 0);
     if negative.any() {
         power = L::select(negative, L::ONE / power, power);
     }
-    if (0..L::WIDTH).all(whole) {
-        power
-    } else {
-        L::from_fn(|i| {
-            if whole(i) {
-                power.lane(i)
-            } else {
-                cos_alpha.lane(i).powf(m.lane(i))
-            }
-        })
+    if whole[..L::WIDTH].iter().all(|&w| w) {
+        return power;
     }
+    let mut powers = [0.0; 4];
+    for (i, p) in powers.iter_mut().enumerate().take(L::WIDTH) {
+        *p = if whole[i] {
+            power.lane(i)
+        } else {
+            xs[i].powf(ms[i])
+        };
+    }
+    L::from_fn(|i| powers[i])
 }
 
 /// Mirror direction R = 2 (N · V) N − V of the ray arriving along −V (per
