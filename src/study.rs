@@ -32,13 +32,21 @@ pub enum StudyError {
     Cancelled,
 }
 
-/// Renders, or says the study was cancelled.
+/// Renders on `pool` (the study's, built once), or says the study was
+/// cancelled.
 fn render_or_stop(
     scene: &Scene,
     options: &RenderOptions,
+    pool: &RenderPool,
     cancel: &Cancel,
-) -> Result<(RgbImage, render::RenderStats), StudyError> {
-    render::render_cancellable(scene, options, cancel)?.ok_or(StudyError::Cancelled)
+) -> Result<RgbImage, StudyError> {
+    let options = RenderOptions {
+        // The pool's threads.
+        threads: None,
+        ..options.clone()
+    };
+    let done = pool.install(|| render::render_cancellable(scene, &options, cancel))?;
+    Ok(done.ok_or(StudyError::Cancelled)?.0)
 }
 
 /// A method: a name (the CSV's `method` column) and how it renders.
@@ -216,29 +224,21 @@ pub struct References {
 }
 
 impl References {
-    /// Renders the references `methods` need (with `threads` threads,
-    /// `None` for one per core), unless cancelled.
+    /// Renders the references `methods` need on `pool` (the one the
+    /// methods are timed on), unless cancelled.
     pub fn new(
         scene: &Scene,
         methods: &[Method],
-        threads: Option<usize>,
+        pool: &RenderPool,
         cancel: &Cancel,
     ) -> Result<References, StudyError> {
-        let (default, _) = render_or_stop(
-            scene,
-            &RenderOptions {
-                threads,
-                ..RenderOptions::reference()
-            },
-            cancel,
-        )?;
+        let default = render_or_stop(scene, &RenderOptions::reference(), pool, cancel)?;
         let supersampled = if methods.iter().any(Method::supersamples) {
             let options = RenderOptions {
-                threads,
                 aa: MAX_AA,
                 ..RenderOptions::default()
             };
-            Some(render_or_stop(scene, &options, cancel)?.0)
+            Some(render_or_stop(scene, &options, pool, cancel)?)
         } else {
             None
         };
@@ -346,7 +346,7 @@ pub fn run(
     let mut rows = Vec::new();
     let pool = RenderPool::new(threads)?;
     for scene in scenes {
-        let references = References::new(&scene.scene, methods, threads, cancel)?;
+        let references = References::new(&scene.scene, methods, &pool, cancel)?;
         for method in methods {
             let reference = references.for_method(method);
             let (row, image) = measure_image(scene, method, reference, runs, &pool, cancel)?;

@@ -139,7 +139,8 @@ fn draft_and_depth_cut_trace_fewer_rays() {
 fn anti_aliasing_is_measured_against_the_supersampled_reference() {
     let s = scene("example");
     let methods = study::methods();
-    let refs = study::References::new(&s.scene, &methods, None, &render::Cancel::never()).unwrap();
+    let pool = rayoflight::measure::RenderPool::new(None).unwrap();
+    let refs = study::References::new(&s.scene, &methods, &pool, &render::Cancel::never()).unwrap();
     let supersampled = refs.supersampled.as_ref().unwrap();
     let aa4 = method("aa4");
     assert!(std::ptr::eq(refs.for_method(&aa4), supersampled));

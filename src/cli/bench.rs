@@ -116,6 +116,23 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         out(&scene_line(&row));
         rows.push(row);
     }
+    // The median of the scenes' ratios to POV-Ray (the upper middle one
+    // for an even count).
+    let mut ratios: Vec<f64> = rows
+        .iter()
+        .filter_map(|r| {
+            r.pov
+                .as_ref()
+                .map(|p| p.median.as_secs_f64() / r.median.as_secs_f64())
+        })
+        .collect();
+    ratios.sort_by(f64::total_cmp);
+    if let Some(median) = ratios.get(ratios.len() / 2) {
+        let lowest = ratios[0];
+        out(&format!(
+            "median ratio to POV-Ray {median:.1}x, lowest {lowest:.1}x\n"
+        ));
+    }
 
     out("\nThread scaling (ms, and speed-up over 1 thread)\n");
     out(&format!("{:<14}", "scene"));
