@@ -31,10 +31,10 @@ mod sphere;
 mod unchanged;
 
 #[cfg(target_arch = "x86_64")]
-pub use avx::{Avx2, Avx4, AvxMask, Vectorized};
+pub use avx::{Avx2, Avx4, Avx8, Avx8Mask, Avx512, AvxMask, Vectorized};
 pub use bvh::{Aabb, Bvh, Search};
 pub use plane::{intersect_plane_world, plane_hit};
-pub use precision::{DVec3x4, F64x4, Lanes, Mask, Mask4, Real, Vec3x4, Vector};
+pub use precision::{DVec3x4, F64x4, Lanes, MAX_LANES, Mask, Mask4, Real, Vec3x4, Vector};
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
 pub use single::{Primitive32, Ray32};

@@ -438,15 +438,18 @@ impl Lanes for f64 {
     }
 }
 
-/// [`Lanes`] for a four-lane type with `splat`, `lane` and `from_array`.
+/// The most lanes a [`Lanes`] type has (AVX-512's eight).
+pub const MAX_LANES: usize = 8;
+
+/// [`Lanes`] for a type of `$n` lanes with `from_array` and `to_array`.
 macro_rules! four_lanes {
-    ($t:ty) => {
+    ($t:ty, $n:literal) => {
         impl $crate::geometry::Lanes for $t {
             type Vector = $crate::geometry::Vec3x4<$t>;
-            const WIDTH: usize = 4;
+            const WIDTH: usize = $n;
             #[inline(always)]
             fn splat(x: f64) -> $t {
-                <$t>::from_array([x; 4])
+                <$t>::from_array([x; $n])
             }
             #[inline(always)]
             fn lane(self, i: usize) -> f64 {
@@ -454,7 +457,13 @@ macro_rules! four_lanes {
             }
             #[inline(always)]
             fn from_fn(mut f: impl FnMut(usize) -> f64) -> $t {
-                <$t>::from_array([f(0), f(1), f(2), f(3)])
+                // A loop, not std::array::from_fn: the hot path must stay
+                // inlined (see geometry::avx).
+                let mut a = [0.0; $n];
+                for (i, x) in a.iter_mut().enumerate() {
+                    *x = f(i);
+                }
+                <$t>::from_array(a)
             }
             #[inline(always)]
             fn splat_vector(v: glam::DVec3) -> Self::Vector {
@@ -470,11 +479,15 @@ macro_rules! four_lanes {
             }
             #[inline(always)]
             fn vector_from_fn(mut f: impl FnMut(usize) -> glam::DVec3) -> Self::Vector {
-                let v = [f(0), f(1), f(2), f(3)];
+                let (mut x, mut y, mut z) = ([0.0; $n], [0.0; $n], [0.0; $n]);
+                for i in 0..$n {
+                    let v = f(i);
+                    (x[i], y[i], z[i]) = (v.x, v.y, v.z);
+                }
                 $crate::geometry::Vec3x4 {
-                    x: Self::from_fn(|i| v[i].x),
-                    y: Self::from_fn(|i| v[i].y),
-                    z: Self::from_fn(|i| v[i].z),
+                    x: <$t>::from_array(x),
+                    y: <$t>::from_array(y),
+                    z: <$t>::from_array(z),
                 }
             }
             #[inline(always)]
@@ -497,7 +510,7 @@ impl F64x4 {
     }
 }
 
-four_lanes!(F64x4);
+four_lanes!(F64x4, 4);
 
 #[cfg(test)]
 mod tests {

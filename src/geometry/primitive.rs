@@ -10,8 +10,8 @@
 //!   normal.
 
 use super::{
-    Aabb, Found, Lanes, Ray, intersect_ball, intersect_ball_textbook, intersect_plane_world,
-    intersect_sphere, intersect_sphere_textbook,
+    Aabb, Found, Lanes, MAX_LANES, Ray, intersect_ball, intersect_ball_textbook,
+    intersect_plane_world, intersect_sphere, intersect_sphere_textbook,
 };
 use crate::math::Transform;
 use crate::scene::Shape;
@@ -84,7 +84,7 @@ impl Primitive {
             }
             Primitive::Ellipsoid(e) => {
                 // Each lane's ray mapped to object space on its own.
-                let (mut origins, mut dirs) = ([DVec3::ZERO; 4], [DVec3::ZERO; 4]);
+                let (mut origins, mut dirs) = ([DVec3::ZERO; MAX_LANES], [DVec3::ZERO; MAX_LANES]);
                 for i in 0..L::WIDTH {
                     origins[i] = e.to_object.transform_point3(L::vector_lane(ray.origin, i));
                     dirs[i] = e.to_object.transform_vector3(L::vector_lane(ray.dir, i));

@@ -24,10 +24,11 @@
 
 use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
 use crate::geometry::{
-    Aabb, Bvh, F64x4, Found, Lanes, Mask, Primitive, Primitive32, Ray, Ray32, Real, Search, Vector,
+    Aabb, Bvh, F64x4, Found, Lanes, MAX_LANES, Mask, Primitive, Primitive32, Ray, Ray32, Real,
+    Search, Vector,
 };
 #[cfg(target_arch = "x86_64")]
-use crate::geometry::{Avx2, Avx4, Vectorized};
+use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
 use crate::scene::{Camera, Scene};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color};
 use glam::DVec3;
@@ -333,7 +334,7 @@ impl<W: WithKernel, K: Kernel> Vectorized for OnAvx<'_, W, K> {
 }
 
 /// The most lanes a kernel traces together.
-const MAX_WIDTH: usize = 4;
+const MAX_WIDTH: usize = MAX_LANES;
 
 /// f64 geometry, four rays at a time in the lanes of `L` ([`F64x4`], or
 /// [`crate::geometry::Avx4`] where the processor has AVX2): the reference
@@ -849,6 +850,14 @@ impl Prepared {
     #[inline(always)]
     fn with_lanes<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         let offset = self.world.offset;
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx512) = Avx512::detect() {
+            return avx512.run(OnAvx {
+                work,
+                prepared: self,
+                kernel: Exact::<TEXTBOOK, Avx8>::new(offset),
+            });
+        }
         #[cfg(target_arch = "x86_64")]
         if let Some(avx2) = Avx2::detect() {
             return avx2.run(OnAvx {

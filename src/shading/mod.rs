@@ -27,7 +27,7 @@ pub use light::Light;
 pub use material::{Color, Material};
 pub use model::{Illumination, Model};
 
-use crate::geometry::{Lanes, Mask, Real, Vector};
+use crate::geometry::{Lanes, MAX_LANES, Mask, Real, Vector};
 use glam::DVec3;
 
 /// What one hit point needs to be shaded (per lane, with lanes).
@@ -97,14 +97,13 @@ const MAX_WHOLE_POWER: f64 = 1024.0;
 /// exponents go through `powf`, one lane at a time.
 #[inline(always)]
 fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
-    debug_assert!(L::WIDTH <= 4);
     // The lanes as plain values first (closures below stay scalar).
-    let (mut ms, mut xs) = ([0.0; 4], [0.0; 4]);
+    let (mut ms, mut xs) = ([0.0; MAX_LANES], [0.0; MAX_LANES]);
     for i in 0..L::WIDTH {
         (ms[i], xs[i]) = (m.lane(i), cos_alpha.lane(i));
     }
-    let mut whole = [false; 4];
-    let mut exponent = [0i32; 4];
+    let mut whole = [false; MAX_LANES];
+    let mut exponent = [0i32; MAX_LANES];
     for i in 0..L::WIDTH {
         let m = ms[i];
         // m.fract() == 0, without a call to trunc where it fits an i32.
@@ -118,27 +117,55 @@ fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
         // whole: their result is replaced).
         exponent[i] = if whole[i] { m as i32 } else { 0 };
     }
-    let mut bits = exponent.map(i32::unsigned_abs);
     let (mut power, mut a) = (L::ONE, cos_alpha);
-    loop {
-        let odd = L::Mask::from_fn(|i| bits[i] & 1 != 0);
-        if odd.any() {
-            power = L::select(odd, power * a, power);
+    let first = exponent[0];
+    if exponent[1..L::WIDTH].iter().all(|&e| e == first) {
+        // One exponent for every lane (the lanes hit one surface, as
+        // they mostly do): the scalar loop, on every lane at once.
+        let mut bits = first.unsigned_abs();
+        loop {
+            if bits & 1 != 0 {
+                power = power * a;
+            }
+            bits >>= 1;
+            if bits == 0 {
+                break;
+            }
+            a = a * a;
         }
-        bits = bits.map(|b| b >> 1);
-        if bits == [0; 4] {
-            break;
+        if first < 0 {
+            power = L::ONE / power;
         }
-        a = a * a;
-    }
-    let negative = L::Mask::from_fn(|i| exponent[i] < 0);
-    if negative.any() {
-        power = L::select(negative, L::ONE / power, power);
+    } else {
+        // Each lane multiplies where its own exponent has a bit set.
+        let mut bits = [0u32; MAX_LANES];
+        for i in 0..L::WIDTH {
+            bits[i] = exponent[i].unsigned_abs();
+        }
+        loop {
+            let odd = L::Mask::from_fn(|i| bits[i] & 1 != 0);
+            if odd.any() {
+                power = L::select(odd, power * a, power);
+            }
+            let mut left = 0;
+            for b in &mut bits[..L::WIDTH] {
+                *b >>= 1;
+                left |= *b;
+            }
+            if left == 0 {
+                break;
+            }
+            a = a * a;
+        }
+        let negative = L::Mask::from_fn(|i| exponent[i] < 0);
+        if negative.any() {
+            power = L::select(negative, L::ONE / power, power);
+        }
     }
     if whole[..L::WIDTH].iter().all(|&w| w) {
         return power;
     }
-    let mut powers = [0.0; 4];
+    let mut powers = [0.0; MAX_LANES];
     for (i, p) in powers.iter_mut().enumerate().take(L::WIDTH) {
         *p = if whole[i] {
             power.lane(i)
