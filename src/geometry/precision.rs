@@ -512,67 +512,77 @@ impl F64x4 {
 
 four_lanes!(F64x4, 4);
 
+/// Checks that every operation of the lanes `L` gives, in each lane, what
+/// the f64 operation gives, bit for bit, NaN, infinities, signed zeros and
+/// subnormals included (20 000 random and special pairs). Used by the
+/// tests of each lane type.
+#[cfg(test)]
+pub(super) fn check_lanes<L: Lanes>() {
+    let specials = [
+        0.0,
+        -0.0,
+        1.0,
+        -1.5,
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::MIN_POSITIVE / 3.0,
+        1e300,
+        -2.5e-310,
+        std::f64::consts::PI,
+    ];
+    let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
+    let mut next = || {
+        seed ^= seed << 13;
+        seed ^= seed >> 7;
+        seed ^= seed << 17;
+        let pick = (seed % 16) as usize;
+        if pick < specials.len() {
+            specials[pick]
+        } else {
+            f64::from_bits(seed >> 2) * if seed & 1 == 0 { 1.0 } else { -1.0 }
+        }
+    };
+    for _ in 0..20_000 {
+        let a: [f64; MAX_LANES] = std::array::from_fn(|_| next());
+        let b: [f64; MAX_LANES] = std::array::from_fn(|_| next());
+        let (x, y) = (L::from_fn(|i| a[i]), L::from_fn(|i| b[i]));
+        for i in 0..L::WIDTH {
+            let (p, q) = (a[i], b[i]);
+            let same = |lanes: L, scalar: f64| {
+                assert_eq!(lanes.lane(i).to_bits(), scalar.to_bits(), "{p} {q}")
+            };
+            same(x + y, p + q);
+            same(x - y, p - q);
+            same(x * y, p * q);
+            same(x / y, p / q);
+            same(-x, -p);
+            same(x.sqrt(), p.sqrt());
+            same(Real::copysign(x, y), p.copysign(q));
+            same(L::from_f64(p), p);
+            same(L::select(x.lt(y), x, y), if p < q { p } else { q });
+            assert_eq!(x.le(y).lane(i), p <= q);
+            assert_eq!(x.gt(y).lane(i), p > q);
+            assert_eq!(Real::eq(x, y).lane(i), p == q);
+            assert_eq!(Real::is_nan(x).lane(i), p.is_nan());
+            assert_eq!(Real::is_finite(x).lane(i), p.is_finite());
+            // NaN: neither less nor, negated, "greater or equal".
+            assert_eq!(
+                (!x.lt(y)).lane(i),
+                p.partial_cmp(&q) != Some(std::cmp::Ordering::Less)
+            );
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Each lane operation gives what the f64 operation gives, bit for bit,
-    /// NaN, infinities, signed zeros and subnormals included.
+    /// The SSE2 lanes compute what f64 computes (see [`check_lanes`]).
     #[test]
     fn lanes_compute_what_f64_computes() {
-        let specials = [
-            0.0,
-            -0.0,
-            1.0,
-            -1.5,
-            f64::NAN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::MIN_POSITIVE / 3.0,
-            1e300,
-            -2.5e-310,
-            std::f64::consts::PI,
-        ];
-        let mut seed = 0x9E37_79B9_7F4A_7C15_u64;
-        let mut next = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            let pick = (seed % 16) as usize;
-            if pick < specials.len() {
-                specials[pick]
-            } else {
-                f64::from_bits(seed >> 2) * if seed & 1 == 0 { 1.0 } else { -1.0 }
-            }
-        };
-        for _ in 0..20_000 {
-            let a: [f64; 4] = std::array::from_fn(|_| next());
-            let b: [f64; 4] = std::array::from_fn(|_| next());
-            let (x, y) = (F64x4::from_fn(|i| a[i]), F64x4::from_fn(|i| b[i]));
-            for i in 0..4 {
-                let (p, q) = (a[i], b[i]);
-                let same = |lanes: F64x4, scalar: f64| {
-                    assert_eq!(lanes.lane(i).to_bits(), scalar.to_bits(), "{p} {q}")
-                };
-                same(x + y, p + q);
-                same(x - y, p - q);
-                same(x * y, p * q);
-                same(x / y, p / q);
-                same(-x, -p);
-                same(x.sqrt(), p.sqrt());
-                same(Real::copysign(x, y), p.copysign(q));
-                same(F64x4::select(x.lt(y), x, y), if p < q { p } else { q });
-                assert_eq!(x.le(y).lane(i), p <= q);
-                assert_eq!(x.gt(y).lane(i), p > q);
-                assert_eq!(Real::eq(x, y).lane(i), p == q);
-                assert_eq!(Real::is_nan(x).lane(i), p.is_nan());
-                assert_eq!(Real::is_finite(x).lane(i), p.is_finite());
-                // NaN: neither less nor not-less-is-greater-or-equal.
-                assert_eq!(
-                    (!x.lt(y)).lane(i),
-                    p.partial_cmp(&q) != Some(std::cmp::Ordering::Less)
-                );
-            }
-        }
+        check_lanes::<F64x4>();
+        check_lanes::<f64>();
     }
 }
