@@ -206,7 +206,10 @@ fn objects_editor(ui: &mut Ui, form: &mut Form<'_>, doc: &Document, selection: &
                 continue;
             };
             let is_selected = selection.object == Some(object);
-            let button = egui::Button::selectable(is_selected, doc.object_label(object));
+            // The label at the left, like a list's rows (a grow after it
+            // takes the rest of the row's width).
+            let button =
+                egui::Button::selectable(is_selected, doc.object_label(object)).right_text(());
             if ui
                 .add_sized([ui.available_width(), row_height], button)
                 .clicked()
