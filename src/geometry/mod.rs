@@ -13,7 +13,8 @@
 //!
 //! Each intersection formula is written once, generic over the precision
 //! and width ([`Vector`]: f64, f32 for the study's [`Primitive32`], or four
-//! f64 lanes for the renderer's packets of rays), so they cannot drift:
+//! or eight f64 lanes for the renderer's packets of rays), so they cannot
+//! drift:
 //! [`stable_roots`] and [`textbook_roots`] for spheres, [`plane_hit`] for
 //! planes. They answer per lane ([`Found`]); the BVH walks a packet's
 //! lanes together ([`Bvh::nearest`]).

@@ -1,7 +1,8 @@
 //! The precision and width a formula runs in: one f64 (the reference), one
-//! f32 (the study's "f32 everywhere" method) or four f64 lanes side by side
-//! (the packets the renderer traces: [`F64x4`] in SSE2 registers, or
-//! [`super::Avx4`] in an AVX register where the processor has AVX2). The intersection and
+//! f32 (the study's "f32 everywhere" method) or f64 lanes side by side (the
+//! packets the renderer traces: four in SSE2 registers, [`F64x4`]; four in
+//! an AVX register or eight in an AVX-512 one, [`super::Avx4`] and
+//! [`super::Avx8`], where the processor has them). The intersection and
 //! shading formulas are written once, generic over [`Real`] and [`Vector`],
 //! and each instance runs exactly the operations they spell out: every
 //! method here is the one glam or the standard library already provides
@@ -186,8 +187,9 @@ real!(f32);
 vector!(DVec3, f64);
 vector!(Vec3, f32);
 
-/// Four f64 lanes (the `wide` crate's `f64x4`: AVX registers where the
-/// build targets them, pairs of SSE2 registers on baseline x86-64).
+/// Four f64 lanes (the `wide` crate's `f64x4`: pairs of SSE2 registers on
+/// baseline x86-64, the build this project makes; the AVX lanes are
+/// [`super::Avx4`], chosen at run time).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct F64x4(pub f64x4);
 
@@ -196,7 +198,7 @@ pub struct F64x4(pub f64x4);
 pub struct Mask4(f64x4);
 
 /// A 3-vector of lanes (one `DVec3` per lane): x, y and z each in lanes
-/// of `L` ([`F64x4`], or [`super::Avx4`] on the AVX path).
+/// of `L` ([`F64x4`], [`super::Avx4`] or [`super::Avx8`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Vec3x4<L> {
     pub x: L,
@@ -389,8 +391,9 @@ impl<L: Real> Vector for Vec3x4<L> {
 }
 
 /// f64 lanes the renderer traces side by side: one `f64` (the picks, the
-/// study's f32 method) or four ([`F64x4`]: the tiles). A lane's values
-/// come from and go back to plain `f64` and `DVec3`.
+/// study's f32 method), four ([`F64x4`], [`super::Avx4`]) or eight
+/// ([`super::Avx8`]): the tiles. A lane's values come from and go back to
+/// plain `f64` and `DVec3`.
 pub trait Lanes: Real {
     type Vector: Vector<Real = Self>;
     /// Lanes traced together.

@@ -8,10 +8,11 @@
 //! - Primary rays of a tile only test the spheres that can be inside the
 //!   tile's frustum (four planes through the eye); a tile with none of them
 //!   and no plane is black without a single ray.
-//! - Rays are traced in packets of four, side by side in SIMD lanes (a
-//!   tile row four pixels at a time, a pixel's samples four at a time): in
-//!   AVX2 registers where the processor has them ([`Avx4`], picked at run
-//!   time), else in pairs of SSE2 registers ([`F64x4`]). Every formula is
+//! - Rays are traced in packets, side by side in SIMD lanes (a tile row a
+//!   packet's width of pixels at a time, a pixel's samples likewise), in
+//!   the widest lanes the processor has, picked at run time: eight in an
+//!   AVX-512 register ([`Avx8`]), four in an AVX2 one ([`Avx4`]), else four
+//!   in a pair of SSE2 registers ([`F64x4`]). Every formula is
 //!   the scalar one per lane, so the image is the same bit for bit; a lane
 //!   leaves the packet when its chain ends. The f32 study method traces
 //!   one ray at a time.
@@ -336,8 +337,8 @@ impl<W: WithKernel, K: Kernel> Vectorized for OnAvx<'_, W, K> {
 /// The most lanes a kernel traces together.
 const MAX_WIDTH: usize = MAX_LANES;
 
-/// f64 geometry, four rays at a time in the lanes of `L` ([`F64x4`], or
-/// [`crate::geometry::Avx4`] where the processor has AVX2): the reference
+/// f64 geometry, a packet of rays at a time in the lanes of `L` ([`F64x4`],
+/// [`Avx4`] or [`Avx8`]): the reference
 /// (stable test, contract offset) and its study variants.
 struct Exact<const TEXTBOOK: bool, L> {
     offset: Offset,
