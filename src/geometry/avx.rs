@@ -34,6 +34,25 @@ macro_rules! avx {
     };
 }
 
+/// The widest lanes a run may take, narrowest first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+enum Width {
+    Baseline,
+    Avx2,
+    Avx512,
+}
+
+/// The widest lanes `RAYOFLIGHT_SIMD` allows (`baseline` or `avx2`; unset
+/// or anything else: the widest the processor has). Read by each
+/// `detect` once.
+fn asked_for() -> Width {
+    match std::env::var_os("RAYOFLIGHT_SIMD") {
+        Some(v) if v == "baseline" => Width::Baseline,
+        Some(v) if v == "avx2" => Width::Avx2,
+        _ => Width::Avx512,
+    }
+}
+
 /// Proof that this processor has AVX2: made only by [`Avx2::detect`].
 #[derive(Debug, Clone, Copy)]
 pub struct Avx2(());
@@ -43,10 +62,8 @@ impl Avx2 {
     /// `baseline` (which keeps the SSE2 lanes, to compare them).
     pub fn detect() -> Option<Avx2> {
         static FOUND: OnceLock<bool> = OnceLock::new();
-        let found = *FOUND.get_or_init(|| {
-            let baseline = std::env::var_os("RAYOFLIGHT_SIMD").is_some_and(|v| v == "baseline");
-            !baseline && is_x86_feature_detected!("avx2")
-        });
+        let found =
+            *FOUND.get_or_init(|| asked_for() >= Width::Avx2 && is_x86_feature_detected!("avx2"));
         found.then_some(Avx2(()))
     }
 
@@ -230,22 +247,14 @@ impl Not for AvxMask {
 impl Mask for AvxMask {
     const ALL: AvxMask = AvxMask(ALL_BITS);
     #[inline(always)]
-    fn any(self) -> bool {
-        avx!(_mm256_movemask_pd(self.0)) != 0
-    }
-    #[inline(always)]
-    fn count(self) -> u32 {
-        avx!(_mm256_movemask_pd(self.0)).count_ones()
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> bool {
-        avx!(_mm256_movemask_pd(self.0)) & (1 << i) != 0
-    }
-    #[inline(always)]
     fn from_fn(mut f: impl FnMut(usize) -> bool) -> AvxMask {
         let flag = |set: bool| if set { f64::from_bits(u64::MAX) } else { 0.0 };
         let a = [flag(f(0)), flag(f(1)), flag(f(2)), flag(f(3))];
         AvxMask(avx!(_mm256_loadu_pd(a.as_ptr())))
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        avx!(_mm256_movemask_pd(self.0)) as u32
     }
 }
 
@@ -260,9 +269,9 @@ impl Avx512 {
     pub fn detect() -> Option<Avx512> {
         static FOUND: OnceLock<bool> = OnceLock::new();
         let found = *FOUND.get_or_init(|| {
-            let narrower =
-                std::env::var_os("RAYOFLIGHT_SIMD").is_some_and(|v| v == "baseline" || v == "avx2");
-            !narrower && is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("avx512dq")
+            asked_for() >= Width::Avx512
+                && is_x86_feature_detected!("avx512f")
+                && is_x86_feature_detected!("avx512dq")
         });
         found.then_some(Avx512(()))
     }
@@ -329,24 +338,20 @@ impl Not for Avx8Mask {
 impl Mask for Avx8Mask {
     const ALL: Avx8Mask = Avx8Mask(u8::MAX);
     #[inline(always)]
-    fn any(self) -> bool {
-        self.0 != 0
-    }
-    #[inline(always)]
-    fn count(self) -> u32 {
-        self.0.count_ones()
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> bool {
-        self.0 & (1 << i) != 0
-    }
-    #[inline(always)]
     fn from_fn(mut f: impl FnMut(usize) -> bool) -> Avx8Mask {
         let mut bits = 0u8;
         for i in 0..8 {
             bits |= u8::from(f(i)) << i;
         }
         Avx8Mask(bits)
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        u32::from(self.0)
+    }
+    #[inline(always)]
+    fn from_bits(bits: u32) -> Avx8Mask {
+        Avx8Mask(bits as u8)
     }
 }
 

@@ -173,7 +173,9 @@ impl Bvh {
         let origin = L::components(ray.origin);
         let [dx, dy, dz] = L::components(ray.dir);
         let inv_dir = [L::ONE / dx, L::ONE / dy, L::ONE / dz];
-        let mut stack = [(0u32, alive); STACK];
+        // Pending nodes, each with the lanes that reached it (as bits: the
+        // stack stays 1 KiB whatever the lanes' registers).
+        let mut stack = [(0u32, 0u32); STACK];
         let mut top = 0;
         let mut node = &self.nodes[0];
         let mut lanes = alive & node.bounds.entry(&origin, &inv_dir, search.t_max()).1;
@@ -203,7 +205,7 @@ impl Bvh {
                         } else {
                             ((r, in_r), (l, in_l))
                         };
-                        stack[top] = (far.0 as u32, far.1);
+                        stack[top] = (far.0 as u32, far.1.bits());
                         top += 1;
                         (node, lanes) = (&self.nodes[near.0], near.1);
                         continue;
@@ -228,7 +230,8 @@ impl Bvh {
                 top -= 1;
                 let (index, waiting) = stack[top];
                 let candidate = &self.nodes[index as usize];
-                let enter = waiting & candidate.bounds.entry(&origin, &inv_dir, search.t_max()).1;
+                let enter = L::Mask::from_bits(waiting)
+                    & candidate.bounds.entry(&origin, &inv_dir, search.t_max()).1;
                 if enter.any() {
                     (node, lanes) = (candidate, enter);
                     break;

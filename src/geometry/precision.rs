@@ -23,33 +23,41 @@ pub trait Mask:
 {
     /// Every lane set.
     const ALL: Self;
-    /// Whether any lane is set.
-    fn any(self) -> bool;
-    /// Lanes set.
-    fn count(self) -> u32;
-    /// Lane i's flag.
-    fn lane(self, i: usize) -> bool;
     /// Lanes set where `f(i)`.
     fn from_fn(f: impl FnMut(usize) -> bool) -> Self;
+    /// The flags as bits, lane i in bit i (a small copy to keep).
+    fn bits(self) -> u32;
+    /// Whether any lane is set.
+    #[inline(always)]
+    fn any(self) -> bool {
+        self.bits() != 0
+    }
+    /// Lanes set.
+    #[inline(always)]
+    fn count(self) -> u32 {
+        self.bits().count_ones()
+    }
+    /// Lane i's flag.
+    #[inline(always)]
+    fn lane(self, i: usize) -> bool {
+        self.bits() >> i & 1 != 0
+    }
+    /// The mask of [`Mask::bits`].
+    #[inline(always)]
+    fn from_bits(bits: u32) -> Self {
+        Self::from_fn(|i| bits >> i & 1 != 0)
+    }
 }
 
 impl Mask for bool {
     const ALL: bool = true;
     #[inline(always)]
-    fn any(self) -> bool {
-        self
-    }
-    #[inline(always)]
-    fn count(self) -> u32 {
-        u32::from(self)
-    }
-    #[inline(always)]
-    fn lane(self, _: usize) -> bool {
-        self
-    }
-    #[inline(always)]
     fn from_fn(mut f: impl FnMut(usize) -> bool) -> bool {
         f(0)
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        u32::from(self)
     }
 }
 
@@ -249,21 +257,13 @@ impl Not for Mask4 {
 impl Mask for Mask4 {
     const ALL: Mask4 = Mask4(ALL_BITS);
     #[inline(always)]
-    fn any(self) -> bool {
-        self.0.any()
-    }
-    #[inline(always)]
-    fn count(self) -> u32 {
-        self.0.to_bitmask().count_ones()
-    }
-    #[inline(always)]
-    fn lane(self, i: usize) -> bool {
-        self.0.to_bitmask() & (1 << i) != 0
-    }
-    #[inline(always)]
     fn from_fn(mut f: impl FnMut(usize) -> bool) -> Mask4 {
         let flag = |set: bool| if set { f64::from_bits(u64::MAX) } else { 0.0 };
         Mask4(f64x4::new([flag(f(0)), flag(f(1)), flag(f(2)), flag(f(3))]))
+    }
+    #[inline(always)]
+    fn bits(self) -> u32 {
+        self.0.to_bitmask()
     }
 }
 

@@ -290,7 +290,7 @@ impl WithKernel for PixelAt {
     type Output = [u8; 3];
     #[inline(always)]
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> [u8; 3] {
-        let mut out = [[0; 3]; MAX_WIDTH];
+        let mut out = [[0; 3]; MAX_LANES];
         p.pixels(
             kernel,
             &[(self.i, self.j)],
@@ -333,9 +333,6 @@ impl<W: WithKernel, K: Kernel> Vectorized for OnAvx<'_, W, K> {
         self.work.run(self.prepared, &self.kernel)
     }
 }
-
-/// The most lanes a kernel traces together.
-const MAX_WIDTH: usize = MAX_LANES;
 
 /// f64 geometry, a packet of rays at a time in the lanes of `L` ([`F64x4`],
 /// [`Avx4`] or [`Avx8`]): the reference
@@ -393,9 +390,9 @@ impl<const TEXTBOOK: bool, L: Lanes> Kernel for Exact<TEXTBOOK, L> {
         // The geometric normal: from the centre for a ball (computed in
         // the lanes), given for a plane, through the matrix for an
         // ellipsoid (one lane at a time).
-        let mut centers = [DVec3::ZERO; MAX_WIDTH];
-        let mut given = [DVec3::ZERO; MAX_WIDTH];
-        let mut ball = [false; MAX_WIDTH];
+        let mut centers = [DVec3::ZERO; MAX_LANES];
+        let mut given = [DVec3::ZERO; MAX_LANES];
+        let mut ball = [false; MAX_LANES];
         for i in 0..L::WIDTH {
             if !alive.lane(i) {
                 continue;
@@ -764,7 +761,7 @@ impl Prepared {
             // The surface each lane hit.
             // (A plain loop: a closure here could be left out of line,
             // and the lanes' instructions in it with it.)
-            let mut surfaces = [&world.surfaces[0]; MAX_WIDTH];
+            let mut surfaces = [&world.surfaces[0]; MAX_LANES];
             for (i, surface) in surfaces.iter_mut().enumerate().take(K::L::WIDTH) {
                 if alive.lane(i) {
                     *surface = &world.surfaces[hits.object.lane(i) as usize];
@@ -787,7 +784,7 @@ impl Prepared {
             alive = alive & !weight.eq(K::L::ZERO);
             if exact_stop && alive.any() {
                 let levels = world.depth - bounce;
-                let mut invisible = [false; MAX_WIDTH];
+                let mut invisible = [false; MAX_LANES];
                 for (i, lane) in invisible.iter_mut().enumerate().take(K::L::WIDTH) {
                     *lane = alive.lane(i)
                         && self.rest_is_invisible(
@@ -845,9 +842,10 @@ impl Prepared {
         }
     }
 
-    /// The f64 kernel in the widest lanes the processor has: AVX2
-    /// registers where it has them (the work compiled for AVX2), else SSE2
-    /// pairs. Both give the same image, bit for bit.
+    /// The f64 kernel in the widest lanes the processor has: eight in an
+    /// AVX-512 register, four in an AVX2 one (the work compiled for that
+    /// feature), else four in SSE2 pairs. All give the same image, bit for
+    /// bit.
     #[inline(always)]
     fn with_lanes<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         let offset = self.world.offset;
@@ -886,13 +884,13 @@ impl Prepared {
         pixels: &[(u32, u32)],
         candidates: Candidates,
         rays: &mut u64,
-        out: &mut [[u8; 3]; MAX_WIDTH],
+        out: &mut [[u8; 3]; MAX_LANES],
     ) {
         let width = K::L::WIDTH;
-        debug_assert!(!pixels.is_empty() && pixels.len() <= width && width <= MAX_WIDTH);
+        debug_assert!(!pixels.is_empty() && pixels.len() <= width && width <= MAX_LANES);
         let to_8bit_color = |c: DVec3| [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
         if self.aa == 1 {
-            let mut points = [(0.0, 0.0); MAX_WIDTH];
+            let mut points = [(0.0, 0.0); MAX_LANES];
             for (point, &(i, j)) in points.iter_mut().zip(pixels) {
                 *point = (f64::from(i) + 0.5, f64::from(j) + 0.5);
             }
@@ -911,22 +909,22 @@ impl Prepared {
             return;
         }
         // Supersampled: a sample's own rounding says nothing about the
-        // mean's, so every chain runs to its end.
-        let n = f64::from(self.aa);
-        let mut samples = Vec::with_capacity((self.aa * self.aa) as usize);
+        // mean's, so every chain runs to its end. The grid's samples in
+        // reading order, a packet's width at a time.
+        let (aa, n) = (self.aa as usize, f64::from(self.aa));
+        let mut points = [(0.0, 0.0); MAX_LANES];
         for (pixel, &(i, j)) in out.iter_mut().zip(pixels) {
             let (x, y) = (f64::from(i), f64::from(j));
-            samples.clear();
-            for b in 0..self.aa {
-                for a in 0..self.aa {
-                    samples.push((x + (f64::from(a) + 0.5) / n, y + (f64::from(b) + 0.5) / n));
-                }
-            }
             let mut sum = DVec3::ZERO;
-            for chunk in samples.chunks(width) {
-                let (primary, alive) = self.packet::<K>(chunk);
+            for first in (0..aa * aa).step_by(width) {
+                let count = width.min(aa * aa - first);
+                for (k, point) in points.iter_mut().take(count).enumerate() {
+                    let (a, b) = ((first + k) % aa, (first + k) / aa);
+                    *point = (x + (a as f64 + 0.5) / n, y + (b as f64 + 0.5) / n);
+                }
+                let (primary, alive) = self.packet::<K>(&points[..count]);
                 let c = self.trace(kernel, primary, alive, candidates, false, rays);
-                for k in 0..chunk.len() {
+                for k in 0..count {
                     sum += K::L::vector_lane(c, k).clamp(DVec3::ZERO, DVec3::ONE);
                 }
             }
@@ -979,7 +977,7 @@ impl Prepared {
         // tile, is traced; the other three copy it.
         let step = if self.world.draft { 2 } else { 1 };
         let row_bytes = tile.width as usize * 3;
-        let mut traced = [[0u8; 3]; MAX_WIDTH];
+        let mut traced = [[0u8; 3]; MAX_LANES];
         let mut row: Vec<(u32, u32)> = Vec::with_capacity(tile.width as usize);
         for (dj, j) in (tile.y..tile.y + tile.height).enumerate() {
             let line = dj * row_bytes;

@@ -117,50 +117,30 @@ fn specular_power<L: Lanes>(cos_alpha: L, m: L) -> L {
         // whole: their result is replaced).
         exponent[i] = if whole[i] { m as i32 } else { 0 };
     }
+    // Each lane multiplies where its own exponent has a bit set.
     let (mut power, mut a) = (L::ONE, cos_alpha);
-    let first = exponent[0];
-    if exponent[1..L::WIDTH].iter().all(|&e| e == first) {
-        // One exponent for every lane (the lanes hit one surface, as
-        // they mostly do): the scalar loop, on every lane at once.
-        let mut bits = first.unsigned_abs();
-        loop {
-            if bits & 1 != 0 {
-                power = power * a;
-            }
-            bits >>= 1;
-            if bits == 0 {
-                break;
-            }
-            a = a * a;
+    let mut bits = [0u32; MAX_LANES];
+    for i in 0..L::WIDTH {
+        bits[i] = exponent[i].unsigned_abs();
+    }
+    loop {
+        let odd = L::Mask::from_fn(|i| bits[i] & 1 != 0);
+        if odd.any() {
+            power = L::select(odd, power * a, power);
         }
-        if first < 0 {
-            power = L::ONE / power;
+        let mut left = 0;
+        for b in &mut bits[..L::WIDTH] {
+            *b >>= 1;
+            left |= *b;
         }
-    } else {
-        // Each lane multiplies where its own exponent has a bit set.
-        let mut bits = [0u32; MAX_LANES];
-        for i in 0..L::WIDTH {
-            bits[i] = exponent[i].unsigned_abs();
+        if left == 0 {
+            break;
         }
-        loop {
-            let odd = L::Mask::from_fn(|i| bits[i] & 1 != 0);
-            if odd.any() {
-                power = L::select(odd, power * a, power);
-            }
-            let mut left = 0;
-            for b in &mut bits[..L::WIDTH] {
-                *b >>= 1;
-                left |= *b;
-            }
-            if left == 0 {
-                break;
-            }
-            a = a * a;
-        }
-        let negative = L::Mask::from_fn(|i| exponent[i] < 0);
-        if negative.any() {
-            power = L::select(negative, L::ONE / power, power);
-        }
+        a = a * a;
+    }
+    let negative = L::Mask::from_fn(|i| exponent[i] < 0);
+    if negative.any() {
+        power = L::select(negative, L::ONE / power, power);
     }
     if whole[..L::WIDTH].iter().all(|&w| w) {
         return power;
