@@ -15,7 +15,9 @@
 //!   ([`BuiltinScene`]; the lists are [`crate::bench::SCENES`] and
 //!   [`crate::study::SCENES`]).
 
-use crate::render::{self, Cancel, Progress, RenderError, RenderOptions, RenderStats};
+use crate::render::{
+    self, Cancel, Pass, PassImage, Progress, RenderError, RenderOptions, RenderStats,
+};
 use crate::request::RenderRequest;
 use crate::scene::{self, LoadError, Scene};
 use image::RgbImage;
@@ -86,10 +88,10 @@ impl RenderPool {
     }
 }
 
-/// A render and how long it took.
+/// A render (the image, or a [`PassImage`]) and how long it took.
 #[derive(Debug, Clone)]
-pub struct Timed {
-    pub image: RgbImage,
+pub struct Timed<I = RgbImage> {
+    pub image: I,
     pub stats: RenderStats,
     /// Render time, as the module docs define it.
     pub elapsed: Duration,
@@ -105,13 +107,40 @@ pub fn render_timed(
     cancel: &Cancel,
     progress: &Progress,
 ) -> Result<Option<Timed>, RenderError> {
+    timed(scene, request, pool, |options| {
+        render::render_watched(scene, options, cancel, progress)
+    })
+}
+
+/// Renders one pass of `scene` ([`render::render_pass`]) and times it as
+/// [`render_timed`] does.
+pub fn pass_timed(
+    scene: &Scene,
+    request: &RenderRequest,
+    pass: Pass,
+    pool: &RenderPool,
+    cancel: &Cancel,
+    progress: &Progress,
+) -> Result<Option<Timed<PassImage>>, RenderError> {
+    timed(scene, request, pool, |options| {
+        render::render_pass(scene, options, pass, cancel, progress)
+    })
+}
+
+/// Times `render` with the request's options for `scene` on `pool`.
+fn timed<I: Send>(
+    scene: &Scene,
+    request: &RenderRequest,
+    pool: &RenderPool,
+    render: impl FnOnce(&RenderOptions) -> Result<Option<(I, RenderStats)>, RenderError> + Send,
+) -> Result<Option<Timed<I>>, RenderError> {
     let start = Instant::now();
     let options = RenderOptions {
         // The pool is the caller's, built before the clock started.
         threads: None,
         ..request.options(scene)
     };
-    let done = pool.install(|| render::render_watched(scene, &options, cancel, progress))?;
+    let done = pool.install(|| render(&options))?;
     Ok(done.map(|(image, stats)| Timed {
         image,
         stats,

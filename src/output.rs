@@ -3,6 +3,7 @@
 //! into place), so a failure never leaves a partial file nor touches an
 //! existing one.
 
+use crate::render::PassImage;
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageFormat, RgbImage};
 use std::io::{BufWriter, Write};
@@ -28,6 +29,7 @@ pub const SUPPORTED: &[(&str, ImageFormat)] = &[
     ("tiff", ImageFormat::Tiff),
     ("qoi", ImageFormat::Qoi),
     ("webp", ImageFormat::WebP),
+    ("exr", ImageFormat::OpenExr),
 ];
 
 /// Why an image or file could not be written.
@@ -237,10 +239,32 @@ pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
     write_atomic(path, &encoded)
 }
 
-/// The image encoded in memory (JPEG at [`JPEG_QUALITY`]).
+/// Writes a render pass atomically: unclamped 32-bit floats in an EXR
+/// (each value the pass's f64 rounded once), else its 8-bit picture
+/// ([`PassImage::to_rgb8`]) in the format of the extension.
+pub fn save_pass(pass: &PassImage, path: &Path) -> Result<(), OutputError> {
+    if format_for(path)? != ImageFormat::OpenExr {
+        return save(&pass.to_rgb8(), path);
+    }
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    pass.to_rgb32f()
+        .write_to(&mut bytes, ImageFormat::OpenExr)
+        .map_err(|source| OutputError::Encode {
+            path: path.to_owned(),
+            source,
+        })?;
+    write_atomic(path, bytes.get_ref())
+}
+
+/// The image encoded in memory (JPEG at [`JPEG_QUALITY`]; an 8-bit image
+/// in EXR as floats, each channel value / 255).
 pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::ImageError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
-    if format == ImageFormat::Jpeg {
+    if format == ImageFormat::OpenExr {
+        image::DynamicImage::ImageRgb8(image.clone())
+            .into_rgb32f()
+            .write_to(&mut bytes, format)?;
+    } else if format == ImageFormat::Jpeg {
         image.write_with_encoder(JpegEncoder::new_with_quality(&mut bytes, JPEG_QUALITY))?;
     } else if format == ImageFormat::Gif {
         return encode_gif(image);

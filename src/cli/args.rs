@@ -13,6 +13,8 @@
 use super::edit::{self, EditArg};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use rayoflight::render::Pass;
+use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::EditError;
 use rayoflight::study::{self, Method};
 use std::ffi::OsString;
@@ -20,7 +22,9 @@ use std::path::{Path, PathBuf};
 
 pub const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
-                  [--threads N] [--aa N] [--method NAME] [--no-gui] [--quiet]
+                  [--pass NAME] [--threads N] [--aa N] [--method NAME]
+                  [--no-gui] [--quiet]
+       rayoflight explain scene.xml X Y [--json] [--set PATH=VALUE]… [--aa N] [--method NAME]
        rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]… [-out FILE]
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
@@ -37,8 +41,13 @@ model) to an image.
 
 Options:
   -out, --out FILE   image to write; the format follows the extension
-                     (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp).
+                     (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp,
+                     exr: 32-bit floats, unclamped).
                      Default: the scene's path with the extension .png
+  --pass NAME        write one render pass instead of the image: final
+                     (default), ambient, diffuse, specular, reflection (the
+                     camera ray's terms; in .exr they add up to final),
+                     normal, depth, object
   -time, --time      print the render time (prepare + trace) as 'render: N ns'
   --set PATH=VALUE   render with a value changed (object[2].material.ka=0.5),
                      in memory only: the scene file is not written.
@@ -54,6 +63,11 @@ Options:
   -V, --version      the version
 
 Subcommands:
+  explain            why pixel X Y (from the top left, 0-based) has its
+                     colour: each bounce's object, t, M, N, each light's
+                     cos θ and cos α, the terms ka·C, Σ I·kd·cos θ,
+                     Σ I·ks·cos^m α and ks·Ir, where the chain ended, and
+                     the 8-bit value; --json for one JSON object
   edit               change values of a scene file, add or remove elements,
                      keeping every other byte: --set PATH=VALUE, --remove
                      PATH, --add sphere|plane|light, applied in the order
@@ -90,6 +104,8 @@ pub enum Command {
     },
     /// `plan scene.xml`: print what `auto` decides for the scene.
     Plan { scene: PathBuf },
+    /// `explain scene.xml X Y [--json]`.
+    Explain(ExplainArgs),
     /// `edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]…`.
     Edit(EditArgs),
     /// `bench [--threads N] [--runs K] [--csv FILE] [--no-pov]`.
@@ -113,6 +129,21 @@ pub struct RenderArgs {
     pub edits: Vec<EditArg>,
     /// `--quiet`: no progress bar.
     pub quiet: bool,
+    /// `--pass`: what to write (default: the image).
+    pub pass: Pass,
+}
+
+/// `rayoflight explain`: which pixel of which render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplainArgs {
+    pub scene: PathBuf,
+    pub x: u32,
+    pub y: u32,
+    pub json: bool,
+    /// The render's method and anti-aliasing (threads do not matter).
+    pub request: RenderRequest,
+    /// `--set`: values changed in memory first, in order.
+    pub edits: Vec<EditArg>,
 }
 
 /// `rayoflight edit`: what to change in a scene file, and where to write it.
@@ -138,6 +169,7 @@ impl RenderArgs {
             || self.aa.is_some()
             || self.method.is_some()
             || !self.edits.is_empty()
+            || self.pass != Pass::Final
     }
 }
 
@@ -203,6 +235,8 @@ struct RenderFlags {
     /// No progress bar on stderr.
     #[arg(short, long)]
     quiet: bool,
+    #[arg(long, value_name = "NAME", value_parser = pass)]
+    pass: Option<Pass>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -223,6 +257,20 @@ enum Sub {
         /// The scene file.
         scene: PathBuf,
     },
+    /// Why a pixel has its colour: its ray tree, term by term.
+    ///
+    /// For each bounce: the ray, the object hit (its number as in the
+    /// app's panel), t, the hit point M and normal N, for each light
+    /// cos θ and cos α, and the terms ka·C, Σ I·kd·cos θ, Σ I·ks·cos^m α
+    /// and ks·Ir; then where the chain ended (a miss, the depth, ks = 0,
+    /// or the early stop and its bound), the unclamped sum and the 8-bit
+    /// value, which is the pixel of `rayoflight scene.xml` with the same
+    /// --set, --aa and --method.
+    #[command(
+        override_usage = "rayoflight explain scene.xml X Y [--json] [--set PATH=VALUE]… \
+                                [--aa N] [--method NAME]"
+    )]
+    Explain(ExplainFlags),
     /// Time the bench scenes, against POV-Ray when it is installed.
     ///
     /// Also thread scaling, cost against object count and peak memory.
@@ -248,6 +296,31 @@ enum Sub {
     /// given. Prints a table on stdout and writes DIR/study.csv, the chart
     /// DIR/study.png and a picture of each failure. See docs/study.md.
     Study(StudyFlags),
+}
+
+#[derive(Args, Debug)]
+struct ExplainFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// The pixel's column, 0 at the left.
+    #[arg(value_name = "X")]
+    x: u32,
+    /// The pixel's row, 0 at the top.
+    #[arg(value_name = "Y")]
+    y: u32,
+    /// Print one JSON object: "rgb8", "rgb", "hits" (each with "object",
+    /// 1-based or null for a miss, "t", "point", "normal", "terms").
+    #[arg(long)]
+    json: bool,
+    /// Explain the render with this value changed, in memory only.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
+    /// N×N rays per pixel, 1 to 16 (each ray's tree is shown).
+    #[arg(long, value_name = "N", value_parser = aa)]
+    aa: Option<u32>,
+    /// The study method the render uses instead of auto.
+    #[arg(long, value_name = "NAME", value_parser = method)]
+    method: Option<Method>,
 }
 
 #[derive(Args, Debug)]
@@ -339,6 +412,13 @@ fn path_value(text: &str) -> Result<(String, String), String> {
         .ok_or_else(|| "expects PATH=VALUE, such as object[1].material.ka=0.5".to_owned())
 }
 
+fn pass(text: &str) -> Result<Pass, String> {
+    Pass::named(text).ok_or_else(|| {
+        let names: Vec<_> = Pass::ALL.iter().map(|p| p.name()).collect();
+        format!("expects one of {}", names.join(", "))
+    })
+}
+
 fn method(text: &str) -> Result<Method, String> {
     study::method(text).ok_or_else(|| {
         let names: Vec<_> = study::methods().iter().map(|m| m.name).collect();
@@ -376,6 +456,21 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         None => Command::Render(render_args(cli.render)?),
         Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
         Some(Sub::Plan { scene }) => Command::Plan { scene },
+        Some(Sub::Explain(e)) => {
+            let given = e.set.into_iter().map(|(p, v)| Given::Set(p, v));
+            Command::Explain(ExplainArgs {
+                edits: edit_args(given.collect(), &e.scene)?,
+                scene: e.scene,
+                x: e.x,
+                y: e.y,
+                json: e.json,
+                request: RenderRequest {
+                    method: e.method,
+                    aa: e.aa,
+                    threads: None,
+                },
+            })
+        }
         Some(Sub::Edit(e)) => {
             let matches = matches
                 .subcommand_matches("edit")
@@ -432,6 +527,7 @@ fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
         method: r.method,
         edits,
         quiet: r.quiet,
+        pass: r.pass.unwrap_or_default(),
     })
 }
 
@@ -508,7 +604,7 @@ fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
 }
 
 /// The subcommands' names, as clap derives them from `Sub`.
-const SUBCOMMANDS: [&str; 5] = ["export-pov", "plan", "bench", "edit", "study"];
+const SUBCOMMANDS: [&str; 6] = ["export-pov", "plan", "explain", "bench", "edit", "study"];
 
 /// The subcommand the arguments run, if any: only the first argument can
 /// name one (`args_conflicts_with_subcommands`).

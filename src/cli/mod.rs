@@ -6,10 +6,12 @@
 mod args;
 mod bench;
 mod edit;
+mod explain;
 mod progress;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
+use rayoflight::render::Pass;
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
@@ -70,6 +72,7 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
         }
         Command::ExportPov { scene, out } => export_pov(&scene, out),
         Command::Edit(args) => edit_scene(&args),
+        Command::Explain(args) => explain::run(&args),
         Command::Plan { scene } => {
             let scene = scene::load(&scene).map_err(fail)?;
             for d in render::auto(&scene).decisions {
@@ -126,15 +129,33 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     // Render time as the bench and the study measure it (rayoflight::measure).
     let pool = measure::RenderPool::new(r.threads).map_err(fail)?;
     let counted = render::Progress::default();
-    let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
-        measure::render_timed(scene, &request, &pool, &render::Cancel::never(), &counted)
-    });
-    let timed = rendered
-        .map_err(fail)?
-        .ok_or_else(|| Failure::Error("the render was cancelled".to_owned()))?;
-    output::save(&timed.image, &out).map_err(fail)?;
+    let never = render::Cancel::never();
+    let cancelled = || Failure::Error("the render was cancelled".to_owned());
+    // A pass, or any EXR (floats, unclamped), comes from the passes'
+    // render; the plain image from the image's.
+    let exr = output::format_for(&out).map_err(fail)? == image::ImageFormat::OpenExr;
+    let elapsed = if r.pass != Pass::Final || exr {
+        let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
+            measure::pass_timed(scene, &request, r.pass, &pool, &never, &counted)
+        });
+        let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
+        output::save_pass(&timed.image, &out).map_err(fail)?;
+        if let Some((near, far)) = timed.image.depth_range()
+            && !exr
+        {
+            eprintln!("depth: t from {near} (light) to {far} (dark)");
+        }
+        timed.elapsed
+    } else {
+        let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
+            measure::render_timed(scene, &request, &pool, &never, &counted)
+        });
+        let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
+        output::save(&timed.image, &out).map_err(fail)?;
+        timed.elapsed
+    };
     if r.time {
-        print_line(&format!("render: {} ns", timed.elapsed.as_nanos()));
+        print_line(&format!("render: {} ns", elapsed.as_nanos()));
     }
     Ok(())
 }

@@ -12,15 +12,19 @@
 
 mod auto;
 mod camera;
+pub mod explain;
 mod ids;
 pub mod navigate;
+mod pass;
 mod prepared;
 mod progress;
 mod tile;
 
 pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
+pub use explain::Explanation;
 pub use ids::{ObjectIds, object_ids};
+pub use pass::{Pass, PassImage, Texel, f32_keeping_level, object_color, render_pass};
 pub use prepared::{Hit, Prepared, prepare};
 pub use progress::{Progress, time_left};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
@@ -225,15 +229,24 @@ pub fn render_watched(
     cancel: &Cancel,
     progress: &Progress,
 ) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
+    in_pool(options, || render_all(scene, options, cancel, progress))
+}
+
+/// Checks `options` and runs `work` in their thread pool (rayon's global
+/// one when they name no thread count).
+fn in_pool<R: Send>(
+    options: &RenderOptions,
+    work: impl FnOnce() -> R + Send,
+) -> Result<R, RenderError> {
     options.validate()?;
     match options.threads {
-        None => Ok(render_all(scene, options, cancel, progress)),
+        None => Ok(work()),
         Some(threads) => {
             let pool = rayon::ThreadPoolBuilder::new()
                 .num_threads(threads)
                 .build()
                 .map_err(|source| RenderError::ThreadPool { threads, source })?;
-            Ok(pool.install(|| render_all(scene, options, cancel, progress)))
+            Ok(pool.install(work))
         }
     }
 }
@@ -246,23 +259,24 @@ fn render_all(
 ) -> Option<(RgbImage, RenderStats)> {
     let prepared = prepare(scene, options);
     let mut image = RgbImage::new(prepared.width(), prepared.height());
-    let rays = trace_tiles(&prepared, cancel, progress, Some(&mut image), |_, _| {})?;
+    let rays = trace_tiles(&prepared, cancel, progress, Some(&mut *image), |_, _| {})?;
     Some((image, RenderStats { rays }))
 }
 
 /// The tile loop every front end shares (the CLI's render, the study, the
-/// app's worker): bands of [`TILE_SIZE`] rows spread over the current
-/// rayon pool, each traced tile by tile (so each tile culls once). Each
-/// finished tile is copied into `image` when one is given (its rows in
-/// place, no lock) and handed to `finished` (on a render thread), and
-/// counted in `progress`. Returns the rays traced, or `None` once `cancel`
-/// is set.
-pub fn trace_tiles(
+/// app's worker, the passes): bands of [`TILE_SIZE`] rows spread over the
+/// current rayon pool, each traced tile by tile (so each tile culls once).
+/// Each finished tile (three texels a pixel, row-major: 8-bit channels of
+/// the image, or f64 values of the prepared view's [`Pass`]) is copied
+/// into `image` when one is given (its rows in place, no lock) and handed
+/// to `finished` (on a render thread), and counted in `progress`. Returns
+/// the rays traced, or `None` once `cancel` is set.
+pub fn trace_tiles<T: Texel>(
     prepared: &Prepared,
     cancel: &Cancel,
     progress: &Progress,
-    image: Option<&mut RgbImage>,
-    finished: impl Fn(&Tile, &[u8]) + Sync,
+    image: Option<&mut [T]>,
+    finished: impl Fn(&Tile, &[T]) + Sync,
 ) -> Option<u64> {
     use rayon::iter::Either;
     let (width, height) = (prepared.width(), prepared.height());
@@ -282,7 +296,7 @@ pub fn trace_tiles(
     };
     bands
         .enumerate()
-        .map(|(band, mut rows): (usize, Option<&mut [u8]>)| {
+        .map(|(band, mut rows): (usize, Option<&mut [T]>)| {
             let y = band as u32 * TILE_SIZE;
             let band_height = TILE_SIZE.min(height - y);
             let mut pixels = Vec::new();

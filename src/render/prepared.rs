@@ -23,7 +23,10 @@
 //!   same scene ([`Prepared::with_view`]: a coarse pass, a moved camera, a
 //!   pick) prepares nothing again.
 
-use super::{CameraRays, Cancel, Offset, Precision, RenderOptions, SphereTest, Tile, to_8bit};
+use super::explain::{Ended, Explanation, Recorder, Sample};
+use super::{
+    CameraRays, Cancel, Offset, Pass, Precision, RenderOptions, SphereTest, Texel, Tile, to_8bit,
+};
 use crate::geometry::{
     Aabb, Bvh, F64x4, Found, Lanes, MAX_LANES, Mask, Primitive, Primitive32, Ray, Ray32, Real,
     Search, Vector,
@@ -31,7 +34,9 @@ use crate::geometry::{
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
 use crate::scene::{Camera, Scene};
-use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, local_color};
+use crate::shading::{
+    Color, Illumination, Light, LightObserver, Material, SurfacePoint, Terms, local_color,
+};
 use glam::DVec3;
 use std::marker::PhantomData;
 use std::sync::Arc;
@@ -78,6 +83,8 @@ pub struct Prepared {
     camera: CameraRays,
     /// Rays per pixel on each side.
     aa: u32,
+    /// What each pixel's `f64` texels hold ([`Prepared::for_pass`]).
+    pass: Pass,
 }
 
 /// The part of a prepared scene that does not depend on the view.
@@ -183,6 +190,102 @@ impl<L: Lanes> Hits<L> {
     }
 }
 
+/// What tracing a packet gives back, per lane: the camera ray's hit (its
+/// terms, normal, distance and object) and the reflected colour behind
+/// it. Lanes that hit nothing hold zero terms, t = ∞ and object −1.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Traced<L: Lanes> {
+    /// The camera ray's hit's own terms.
+    pub terms: Terms<L::Vector>,
+    /// ks I_r: the later bounces' colours, each weighted by the product
+    /// of the ks before it.
+    pub reflection: L::Vector,
+    /// The shading normal N at the camera ray's hit.
+    pub normal: L::Vector,
+    pub t: L,
+    /// Index of the object in the scene's object list, −1 for none.
+    pub object: L,
+}
+
+impl<L: Lanes> Traced<L> {
+    #[inline(always)]
+    fn dark() -> Traced<L> {
+        let zero = L::splat_vector(Color::ZERO);
+        Traced {
+            terms: Terms {
+                ambient: zero,
+                diffuse: zero,
+                specular: zero,
+            },
+            reflection: zero,
+            normal: zero,
+            t: L::splat(f64::INFINITY),
+            object: L::splat(-1.0),
+        }
+    }
+
+    /// The colour: ((ambient + diffuse) + specular) + reflection.
+    #[inline(always)]
+    pub fn color(&self) -> L::Vector {
+        self.terms.local() + self.reflection
+    }
+
+    /// The value of `pass` (unclamped), per lane.
+    #[inline(always)]
+    fn value(&self, pass: Pass) -> L::Vector {
+        match pass {
+            Pass::Final => self.color(),
+            Pass::Ambient => self.terms.ambient,
+            Pass::Diffuse => self.terms.diffuse,
+            Pass::Specular => self.terms.specular,
+            Pass::Reflection => self.reflection,
+            Pass::Normal => self.normal,
+            Pass::Depth => L::vector_from_fn(|i| DVec3::splat(self.t.lane(i))),
+            Pass::Object => L::vector_from_fn(|i| DVec3::splat(self.object.lane(i) + 1.0)),
+        }
+    }
+}
+
+/// Sees a trace step by step: how the explained pixel's tree is recorded
+/// from the render's own loop ([`Prepared::explain`]). `()` sees nothing
+/// and compiles to nothing (renders).
+pub(super) trait Observer<L: Lanes>: LightObserver<L> {
+    /// Bounce `bounce`'s rays (f64) leave.
+    #[inline(always)]
+    fn ray(&mut self, bounce: u32, rays: &Ray<L::Vector>) {
+        let _ = (bounce, rays);
+    }
+    /// The lanes of `missed` hit nothing: their chains end.
+    #[inline(always)]
+    fn missed(&mut self, missed: L::Mask) {
+        let _ = missed;
+    }
+    /// The `alive` lanes hit `object` (of reflectance `ks`) at distance
+    /// `t` and `point`; their own colour's terms, and the weight it enters
+    /// the pixel with.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn hit(
+        &mut self,
+        alive: L::Mask,
+        object: L,
+        t: L,
+        point: &SurfacePoint<L::Vector>,
+        terms: &Terms<L::Vector>,
+        ks: L,
+        weight: L,
+    ) {
+        let _ = (alive, object, t, point, terms, ks, weight);
+    }
+    /// The chains of `lanes` end after their hit, for this reason.
+    #[inline(always)]
+    fn ended(&mut self, lanes: L::Mask, why: Ended) {
+        let _ = (lanes, why);
+    }
+}
+
+impl<L: Lanes> Observer<L> for () {}
+
 /// A kernel's intersection test of its rays against one primitive `P`.
 /// (A trait rather than a closure: the AVX path needs it inlined, and
 /// only functions can be marked `#[inline(always)]`.)
@@ -264,6 +367,9 @@ trait Kernel {
     ) -> SurfacePoint<Vectors<Self>>;
     /// The reflected rays R leaving `point`, offset off the surface.
     fn reflected(&self, point: &SurfacePoint<Vectors<Self>>) -> Self::Rays;
+    /// The rays in f64 (as they are, for the f64 kernels): what the
+    /// explained pixel shows.
+    fn in_f64(&self, rays: &Self::Rays) -> Ray<Vectors<Self>>;
 }
 
 /// A kernel's vectors (one per lane).
@@ -277,6 +383,8 @@ type Alive<K> = <<K as Kernel>::L as Real>::Mask;
 /// others.
 trait WithKernel {
     type Output;
+    /// Runs one lane at a time (f64 geometry in plain f64).
+    const ONE_LANE: bool = false;
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Self::Output;
 }
 
@@ -291,7 +399,7 @@ impl WithKernel for PixelAt {
     #[inline(always)]
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> [u8; 3] {
         let mut out = [[0; 3]; MAX_LANES];
-        p.pixels(
+        p.pixels::<K, u8>(
             kernel,
             &[(self.i, self.j)],
             Candidates::All,
@@ -302,14 +410,49 @@ impl WithKernel for PixelAt {
     }
 }
 
-/// [`Prepared::render_tile_into`]'s work.
-struct TileInto<'a> {
-    tile: &'a Tile,
-    cancel: &'a Cancel,
-    out: &'a mut Vec<u8>,
+/// [`Prepared::explain`]'s work: each ray through the pixel traced alone,
+/// its trace recorded.
+struct ExplainAt {
+    i: u32,
+    j: u32,
 }
 
-impl WithKernel for TileInto<'_> {
+impl WithKernel for ExplainAt {
+    type Output = Vec<Sample>;
+    const ONE_LANE: bool = true;
+    fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Vec<Sample> {
+        // The early stop of one-ray pixels, as the render does.
+        let exact_stop = p.aa == 1 && p.world.early_stop;
+        (0..p.sample_count())
+            .map(|k| {
+                let at = p.sample_point(self.i, self.j, k);
+                let mut recorder = Recorder::default();
+                let traced = p.trace(
+                    kernel,
+                    p.packet::<K>(&[at]),
+                    Candidates::All,
+                    exact_stop,
+                    &mut 0,
+                    &mut recorder,
+                );
+                recorder.finish(
+                    at,
+                    K::L::vector_lane(traced.reflection, 0),
+                    K::L::vector_lane(traced.color(), 0),
+                )
+            })
+            .collect()
+    }
+}
+
+/// [`Prepared::render_tile_into`]'s work.
+struct TileInto<'a, T> {
+    tile: &'a Tile,
+    cancel: &'a Cancel,
+    out: &'a mut Vec<T>,
+}
+
+impl<T: Texel> WithKernel for TileInto<'_, T> {
     type Output = Option<u64>;
     #[inline(always)]
     fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Option<u64> {
@@ -426,6 +569,11 @@ impl<const TEXTBOOK: bool, L: Lanes> Kernel for Exact<TEXTBOOK, L> {
     fn reflected(&self, point: &SurfacePoint<L::Vector>) -> Ray<L::Vector> {
         self.offset.reflected(point)
     }
+
+    #[inline(always)]
+    fn in_f64(&self, rays: &Ray<L::Vector>) -> Ray<L::Vector> {
+        *rays
+    }
 }
 
 /// f32 geometry, one ray at a time: the ray, the intersections, the hit
@@ -487,6 +635,18 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
         let ray = self.offset.reflected(&point);
         Ray32::new(ray.origin, ray.dir)
     }
+
+    #[inline(always)]
+    fn in_f64(&self, ray: &Ray32) -> Ray {
+        ray.to_f64()
+    }
+}
+
+/// A colour clamped to [0, 1] per channel (NaN to 0), as pixels average
+/// their samples.
+#[inline(always)]
+fn clamped(c: Color) -> Color {
+    c.clamp(Color::ZERO, Color::ONE)
 }
 
 /// Per channel, the most any one hit can add before weighting: the
@@ -625,6 +785,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         world: Arc::new(world),
         camera: CameraRays::new(&scene.camera),
         aa: options.aa.max(1),
+        pass: Pass::Final,
     }
 }
 
@@ -637,7 +798,21 @@ impl Prepared {
             world: Arc::clone(&self.world),
             camera: CameraRays::new(camera),
             aa: aa.max(1),
+            pass: self.pass,
         }
+    }
+
+    /// The same view computing `pass` in its `f64` texels.
+    pub fn for_pass(&self, pass: Pass) -> Prepared {
+        Prepared {
+            pass,
+            ..self.clone()
+        }
+    }
+
+    /// What this view's `f64` texels hold.
+    pub fn pass(&self) -> Pass {
+        self.pass
     }
 
     /// Both are views of one prepared scene (neither was prepared again).
@@ -728,19 +903,28 @@ impl Prepared {
     /// The colours of a packet of primary rays (the `alive` lanes),
     /// following whitted reflections as a loop; a lane leaves the loop
     /// when its chain ends. `exact_stop`: end a chain once the rest cannot
-    /// change the 8-bit value of its colour. `rays` counts the rays traced.
+    /// change the 8-bit value of its colour. `rays` counts the rays traced;
+    /// `observer` sees each step (`()`: nothing, and costs nothing).
+    ///
+    /// The colour is the camera ray's hit's own terms, then the later
+    /// bounces: ((ambient + diffuse) + specular) + reflection, where
+    /// reflection = Σ_k w_k I_k over the later hits, w_k the product of
+    /// the ks met before hit k: the contract's I = local + ks I_r unrolled.
     #[inline(always)]
-    fn trace<K: Kernel>(
+    fn trace<K: Kernel, O: Observer<K::L>>(
         &self,
         kernel: &K,
-        primary: Ray<Vectors<K>>,
-        alive: Alive<K>,
+        (primary, alive): (Ray<Vectors<K>>, Alive<K>),
         candidates: Candidates,
         exact_stop: bool,
         rays: &mut u64,
-    ) -> Vectors<K> {
+        observer: &mut O,
+    ) -> Traced<K::L> {
         let world = &*self.world;
-        let mut color = K::L::splat_vector(Color::ZERO);
+        let zero = K::L::splat_vector(Color::ZERO);
+        let mut traced = Traced::<K::L>::dark();
+        // The camera ray's hit's own colour, once known.
+        let mut first = zero;
         // Product of the ks of the surfaces met so far.
         let mut weight = K::L::ONE;
         let mut alive = alive;
@@ -752,8 +936,10 @@ impl Prepared {
                 Candidates::All
             };
             *rays += u64::from(alive.count());
+            observer.ray(bounce, &kernel.in_f64(&ray));
             let hits = kernel.nearest(self, &ray, alive, among);
             // A miss is black: its lane is done.
+            observer.missed(alive & !hits.found);
             alive = alive & hits.found;
             if !alive.any() {
                 break;
@@ -775,23 +961,65 @@ impl Prepared {
                 m: K::L::from_fn(|i| surfaces[i].material.m),
             };
             let point = kernel.surface(self, &ray, &hits, alive);
-            let local = local_color(world.illumination, c, &material, &world.lights, &point);
-            color = <Vectors<K>>::select(alive, color + local.scaled(weight), color);
+            let terms = local_color(
+                world.illumination,
+                c,
+                &material,
+                &world.lights,
+                &point,
+                observer,
+            );
+            observer.hit(
+                alive,
+                hits.object,
+                hits.t,
+                &point,
+                &terms,
+                material.ks,
+                weight,
+            );
+            let local = terms.local();
+            if bounce == 0 {
+                let pick = |v| <Vectors<K>>::select(alive, v, zero);
+                traced.terms = Terms {
+                    ambient: pick(terms.ambient),
+                    diffuse: pick(terms.diffuse),
+                    specular: pick(terms.specular),
+                };
+                traced.normal = pick(point.n);
+                traced.t = K::L::select(alive, hits.t, traced.t);
+                traced.object = K::L::select(alive, hits.object, traced.object);
+                first = pick(local);
+            } else {
+                traced.reflection = <Vectors<K>>::select(
+                    alive,
+                    traced.reflection + local.scaled(weight),
+                    traced.reflection,
+                );
+            }
             weight = K::L::select(alive, weight * material.ks, weight);
             if bounce == world.depth {
+                observer.ended(alive, Ended::Depth);
                 break;
             }
-            alive = alive & !weight.eq(K::L::ZERO);
+            let mirror = !weight.eq(K::L::ZERO);
+            observer.ended(alive & !mirror, Ended::NoMirror);
+            alive = alive & mirror;
             if exact_stop && alive.any() {
                 let levels = world.depth - bounce;
+                let color = first + traced.reflection;
                 let mut invisible = [false; MAX_LANES];
                 for (i, lane) in invisible.iter_mut().enumerate().take(K::L::WIDTH) {
-                    *lane = alive.lane(i)
-                        && self.rest_is_invisible(
-                            K::L::vector_lane(color, i),
-                            weight.lane(i),
-                            levels,
-                        );
+                    if !alive.lane(i) {
+                        continue;
+                    }
+                    let rest =
+                        self.invisible_rest(K::L::vector_lane(color, i), weight.lane(i), levels);
+                    if let Some(bound) = rest {
+                        *lane = true;
+                        let only = <Alive<K>>::from_fn(|k| k == i);
+                        observer.ended(only, Ended::EarlyStop { bound });
+                    }
                 }
                 alive = alive & !<Alive<K>>::from_fn(|i| invisible[i]);
             }
@@ -800,22 +1028,23 @@ impl Prepared {
             }
             ray = kernel.reflected(&point);
         }
-        color
+        traced
     }
 
     /// Whether `levels` more reflections, each adding at most
     /// `weight · max_ks^k · max_local`, leave every channel's 8-bit value
-    /// where it is. Every term is ≥ 0, so the final colour lies between
+    /// where it is: the most they could add when they do not, `None` when
+    /// they might. Every term is ≥ 0, so the final colour lies between
     /// `color` and `color + bound`; equal rounding at both ends settles it.
     #[inline(always)]
-    fn rest_is_invisible(&self, color: Color, weight: f64, levels: u32) -> bool {
-        let Some(&series) = self.world.tail.get(levels as usize) else {
-            return false;
-        };
+    fn invisible_rest(&self, color: Color, weight: f64, levels: u32) -> Option<Color> {
+        let &series = self.world.tail.get(levels as usize)?;
         // A hair of margin covers the rounding of the sums themselves.
         let bound = weight * series * self.world.max_local * (1.0 + 1e-9) + DVec3::splat(1e-12);
         let high = color + bound;
-        (0..3).all(|c| to_8bit(color[c]) == to_8bit(high[c]))
+        (0..3)
+            .all(|c| to_8bit(color[c]) == to_8bit(high[c]))
+            .then_some(bound)
     }
 
     /// Runs `work` with the kernel of the method's choices, each dispatched
@@ -832,6 +1061,9 @@ impl Prepared {
     #[inline(always)]
     fn with_precision<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
         match self.world.precision {
+            Precision::F64 if W::ONE_LANE => {
+                work.run(self, &Exact::<TEXTBOOK, f64>::new(self.world.offset))
+            }
             Precision::F64 => self.with_lanes::<TEXTBOOK, W>(work),
             Precision::F32 => work.run(
                 self,
@@ -874,62 +1106,114 @@ impl Prepared {
         self.with_kernel(PixelAt { i, j })
     }
 
-    /// The 8-bit colours of up to a packet's width of pixels into `out`:
-    /// with one ray per pixel, one lane per pixel; supersampled, each
-    /// pixel's samples in lanes, summed in the order of the grid.
+    /// Why pixel (i, j) has its colour: each of its rays' trees, recorded
+    /// from the render's trace ([`super::explain`]); `None` outside the
+    /// image.
+    pub fn explain(&self, i: u32, j: u32) -> Option<Explanation> {
+        if i >= self.width() || j >= self.height() {
+            return None;
+        }
+        let samples = self.with_kernel(ExplainAt { i, j });
+        // The pixel as [`Prepared::pixels`] makes it.
+        let n = f64::from(self.aa);
+        let (rgb, rgb8) = if self.aa == 1 {
+            let c = samples[0].color;
+            (c, u8::pixel(clamped(c)))
+        } else {
+            let (sum, clamped_sum) = samples
+                .iter()
+                .fold((DVec3::ZERO, DVec3::ZERO), |(s, k), sample| {
+                    (s + sample.color, k + clamped(sample.color))
+                });
+            (sum / (n * n), u8::pixel(clamped_sum / (n * n)))
+        };
+        Some(Explanation {
+            x: i,
+            y: j,
+            illumination: self.world.illumination,
+            samples,
+            rgb,
+            rgb8,
+        })
+    }
+
+    /// The pixels (8-bit colours, or the values of the view's pass) of up
+    /// to a packet's width of pixels into `out`: with one ray per pixel,
+    /// one lane per pixel; supersampled, each pixel's samples in lanes,
+    /// their clamped colours (or pass values) summed in the order of the
+    /// grid.
     #[inline(always)]
-    fn pixels<K: Kernel>(
+    fn pixels<K: Kernel, T: Texel>(
         &self,
         kernel: &K,
         pixels: &[(u32, u32)],
         candidates: Candidates,
         rays: &mut u64,
-        out: &mut [[u8; 3]; MAX_LANES],
+        out: &mut [[T; 3]; MAX_LANES],
     ) {
         let width = K::L::WIDTH;
         debug_assert!(!pixels.is_empty() && pixels.len() <= width && width <= MAX_LANES);
-        let to_8bit_color = |c: DVec3| [to_8bit(c.x), to_8bit(c.y), to_8bit(c.z)];
+        // 8-bit texels are the image (known at compile time: the trace
+        // then keeps nothing of the passes).
+        let pass = if T::UNCLAMPED { self.pass } else { Pass::Final };
         if self.aa == 1 {
             let mut points = [(0.0, 0.0); MAX_LANES];
             for (point, &(i, j)) in points.iter_mut().zip(pixels) {
                 *point = (f64::from(i) + 0.5, f64::from(j) + 0.5);
             }
-            let (primary, alive) = self.packet::<K>(&points[..pixels.len()]);
-            let c = self.trace(
+            let traced = self.trace(
                 kernel,
-                primary,
-                alive,
+                self.packet::<K>(&points[..pixels.len()]),
                 candidates,
                 self.world.early_stop,
                 rays,
+                &mut (),
             );
+            // One ray: its value as it is (8-bit texels clamp themselves).
+            let value = traced.value(pass);
             for (k, pixel) in out.iter_mut().take(pixels.len()).enumerate() {
-                *pixel = to_8bit_color(K::L::vector_lane(c, k));
+                *pixel = T::pixel(K::L::vector_lane(value, k));
             }
             return;
         }
         // Supersampled: a sample's own rounding says nothing about the
-        // mean's, so every chain runs to its end. The grid's samples in
-        // reading order, a packet's width at a time.
-        let (aa, n) = (self.aa as usize, f64::from(self.aa));
+        // mean's, so every chain runs to its end.
+        let n = f64::from(self.aa);
         let mut points = [(0.0, 0.0); MAX_LANES];
         for (pixel, &(i, j)) in out.iter_mut().zip(pixels) {
-            let (x, y) = (f64::from(i), f64::from(j));
             let mut sum = DVec3::ZERO;
-            for first in (0..aa * aa).step_by(width) {
-                let count = width.min(aa * aa - first);
+            for first in (0..self.sample_count()).step_by(width) {
+                let count = width.min(self.sample_count() - first);
                 for (k, point) in points.iter_mut().take(count).enumerate() {
-                    let (a, b) = ((first + k) % aa, (first + k) / aa);
-                    *point = (x + (a as f64 + 0.5) / n, y + (b as f64 + 0.5) / n);
+                    *point = self.sample_point(i, j, first + k);
                 }
-                let (primary, alive) = self.packet::<K>(&points[..count]);
-                let c = self.trace(kernel, primary, alive, candidates, false, rays);
+                let packet = self.packet::<K>(&points[..count]);
+                let traced = self.trace(kernel, packet, candidates, false, rays, &mut ());
+                let value = traced.value(pass);
                 for k in 0..count {
-                    sum += K::L::vector_lane(c, k).clamp(DVec3::ZERO, DVec3::ONE);
+                    let v = K::L::vector_lane(value, k);
+                    sum += if pass == Pass::Final { clamped(v) } else { v };
                 }
             }
-            *pixel = to_8bit_color(sum / (n * n));
+            *pixel = T::pixel(sum / (n * n));
         }
+    }
+
+    /// Rays per pixel: aa × aa.
+    fn sample_count(&self) -> usize {
+        (self.aa * self.aa) as usize
+    }
+
+    /// The image point of sample `k` of pixel (i, j): the pixel's centre
+    /// with one ray per pixel, else the grid's cells in reading order.
+    #[inline(always)]
+    fn sample_point(&self, i: u32, j: u32, k: usize) -> (f64, f64) {
+        let (aa, n) = (self.aa as usize, f64::from(self.aa));
+        let (a, b) = (k % aa, k / aa);
+        (
+            f64::from(i) + (a as f64 + 0.5) / n,
+            f64::from(j) + (b as f64 + 0.5) / n,
+        )
     }
 
     /// A packet of camera rays through image points (at most a packet's
@@ -944,23 +1228,33 @@ impl Prepared {
         (rays, <Alive<K>>::from_fn(|i| i <= last))
     }
 
-    /// Renders one tile as row-major RGB8 into `out` (cleared first),
-    /// checking `cancel` before every packet of pixels. Returns the number
-    /// of rays traced, or `None` when cancelled.
-    pub fn render_tile_into(&self, tile: &Tile, cancel: &Cancel, out: &mut Vec<u8>) -> Option<u64> {
+    /// Renders one tile row-major into `out` (cleared first), three
+    /// texels a pixel (RGB8, or the view's pass in f64), checking `cancel`
+    /// before every packet of pixels. Returns the number of rays traced,
+    /// or `None` when cancelled.
+    pub fn render_tile_into<T: Texel>(
+        &self,
+        tile: &Tile,
+        cancel: &Cancel,
+        out: &mut Vec<T>,
+    ) -> Option<u64> {
+        debug_assert!(T::UNCLAMPED || self.pass == Pass::Final);
         self.with_kernel(TileInto { tile, cancel, out })
     }
 
     #[inline(always)]
-    fn tile_into<K: Kernel>(
+    fn tile_into<K: Kernel, T: Texel>(
         &self,
         kernel: &K,
         tile: &Tile,
         cancel: &Cancel,
-        out: &mut Vec<u8>,
+        out: &mut Vec<T>,
     ) -> Option<u64> {
+        // Every pixel a miss until traced (what a tile that can hit
+        // nothing keeps: black, no object, t = ∞).
+        let [miss, ..] = T::pixel(f64::vector_lane(Traced::<f64>::dark().value(self.pass), 0));
         out.clear();
-        out.resize(tile.width as usize * tile.height as usize * 3, 0);
+        out.resize(tile.width as usize * tile.height as usize * 3, miss);
         let candidates = self.tile_candidates(tile);
         let candidates = match &candidates {
             Some(list) => {
@@ -977,7 +1271,7 @@ impl Prepared {
         // tile, is traced; the other three copy it.
         let step = if self.world.draft { 2 } else { 1 };
         let row_bytes = tile.width as usize * 3;
-        let mut traced = [[0u8; 3]; MAX_LANES];
+        let mut traced = [[T::default(); 3]; MAX_LANES];
         let mut row: Vec<(u32, u32)> = Vec::with_capacity(tile.width as usize);
         for (dj, j) in (tile.y..tile.y + tile.height).enumerate() {
             let line = dj * row_bytes;

@@ -250,6 +250,17 @@ pub fn object_labels(text: &str) -> Vec<Option<String>> {
         .collect()
 }
 
+/// The panel's name for object `n` (0-based) of shape `shape`, given the
+/// first words of the comment above it ([`object_labels`]): `#2 RED
+/// sphere`, `#2 sphere` without a comment.
+pub fn object_name(n: usize, shape: &str, words: Option<&str>) -> String {
+    match words {
+        Some(w) if w.to_lowercase().ends_with(shape) => format!("#{} {w}", n + 1),
+        Some(w) => format!("#{} {w} {shape}", n + 1),
+        None => format!("#{} {shape}", n + 1),
+    }
+}
+
 /// A fresh scene file for `scene`, indented by two spaces:
 /// `parse(&to_xml(scene), path) == Ok(scene)` for every valid scene.
 ///

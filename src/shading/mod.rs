@@ -41,10 +41,54 @@ pub struct SurfacePoint<V = DVec3> {
     pub v: V,
 }
 
+/// The three terms of a hit's own colour (per lane, with lanes), as
+/// [`local_color`] computes them.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Terms<V = DVec3> {
+    /// ka C.
+    pub ambient: V,
+    /// Σ I_l kd cos θ_l over the lights in front of the surface.
+    pub diffuse: V,
+    /// Σ I_l ks (cos α_l)^m over those whose mirror direction faces V.
+    pub specular: V,
+}
+
+impl<V: Vector> Terms<V> {
+    /// The hit's own colour: (ambient + diffuse) + specular, added in
+    /// that order (the renderer's order, which the passes and the
+    /// explained pixel repeat bit for bit).
+    #[inline(always)]
+    pub fn local(&self) -> V {
+        (self.ambient + self.diffuse) + self.specular
+    }
+}
+
+/// Sees each light's share of a hit as [`local_color`] computes it: the
+/// explained pixel's numbers. `()` sees nothing (renders).
+pub trait LightObserver<L: Lanes> {
+    /// Light `index` at the hit: cos θ, cos α (`None` where the model
+    /// has no specular term or no lane is lit), and what it added to the
+    /// diffuse and specular sums (zero where nothing).
+    #[inline(always)]
+    fn light(
+        &mut self,
+        index: usize,
+        cos_theta: L,
+        cos_alpha: Option<L>,
+        diffuse: L::Vector,
+        specular: L::Vector,
+    ) {
+        let _ = (index, cos_theta, cos_alpha, diffuse, specular);
+    }
+}
+
+impl<L: Lanes> LightObserver<L> for () {}
+
 /// The colour of a hit without the reflected term: the `ambient`,
-/// `lambert` or `phong` formula (`whitted` uses `phong` here). One hit, or
-/// one per lane (each lane with its surface's C and material): a lane
-/// computes what the hit alone would, bit for bit.
+/// `lambert` or `phong` formula (`whitted` uses `phong` here), as its
+/// three [`Terms`]. One hit, or one per lane (each lane with its
+/// surface's C and material): a lane computes what the hit alone would,
+/// bit for bit.
 #[inline(always)]
 pub fn local_color<L: Lanes>(
     illumination: Illumination,
@@ -52,38 +96,55 @@ pub fn local_color<L: Lanes>(
     material: &Material<L>,
     lights: &[Light],
     p: &SurfacePoint<L::Vector>,
-) -> L::Vector {
+    observer: &mut impl LightObserver<L>,
+) -> Terms<L::Vector> {
     let Material { ka, kd, ks, m } = *material;
-    // Ambient term: ka C.
-    let mut i = c.scaled(ka);
+    let zero = L::splat_vector(DVec3::ZERO);
+    let mut terms = Terms {
+        // Ambient term: ka C.
+        ambient: c.scaled(ka),
+        diffuse: zero,
+        specular: zero,
+    };
     let specular = match illumination {
-        Illumination::Ambient => return i,
+        Illumination::Ambient => return terms,
         Illumination::Lambert => false,
         Illumination::Phong | Illumination::Whitted => true,
     };
     let (n, v) = (p.n, p.v);
-    for light in lights {
+    for (index, light) in lights.iter().enumerate() {
         // L: unit vector toward the light; cos θ = N · L.
         let l = (L::splat_vector(light.position) - p.m).normalize();
         let cos_theta = n.dot(l);
         // Lit: the light is in front of the surface.
         let lit = !(cos_theta.is_nan() | cos_theta.le(L::ZERO));
         if !lit.any() {
+            observer.light(index, cos_theta, None, zero, zero);
             continue;
         }
-        let mut k = kd * cos_theta;
+        let intensity = L::splat_vector(light.color);
+        // Diffuse: I kd cos θ (the factor 0 in unlit lanes, which then
+        // add +0: the sum is as if they were left out).
+        let diffuse = intensity.scaled(L::select(lit, kd * cos_theta, L::ZERO));
+        terms.diffuse = terms.diffuse + diffuse;
+        let mut seen_alpha = None;
+        let mut shine = zero;
         if specular {
             // R: L mirrored about N; cos α = R · V.
             let r = n.scaled(L::TWO * cos_theta) - l;
             let cos_alpha = r.dot(v);
-            let highlight = cos_alpha.gt(L::ZERO);
+            // Specular: I ks (cos α)^m, where R faces V.
+            let highlight = lit & cos_alpha.gt(L::ZERO);
             if highlight.any() {
-                k = L::select(highlight, k + ks * specular_power(cos_alpha, m), k);
+                let factor = ks * specular_power(cos_alpha, m);
+                shine = intensity.scaled(L::select(highlight, factor, L::ZERO));
+                terms.specular = terms.specular + shine;
             }
+            seen_alpha = Some(cos_alpha);
         }
-        i = L::Vector::select(lit, i + L::splat_vector(light.color).scaled(k), i);
+        observer.light(index, cos_theta, seen_alpha, diffuse, shine);
     }
-    i
+    terms
 }
 
 /// Largest whole exponent raised by multiplications.
@@ -198,8 +259,9 @@ mod tests {
             &MAT,
             &[light_at(DVec3::NEG_Z)],
             &point(),
+            &mut (),
         );
-        assert_eq!(i, 0.2 * c);
+        assert_eq!(i.local(), 0.2 * c);
     }
 
     #[test]
@@ -207,10 +269,38 @@ mod tests {
         // L at 45° in the y-z plane: cos θ = √½.
         let s = std::f64::consts::FRAC_1_SQRT_2;
         let lights = [light_at(DVec3::new(0.0, -1.0, -1.0))];
-        let lambert =
-            local_color::<f64>(Illumination::Lambert, DVec3::ONE, &MAT, &lights, &point());
-        assert!((lambert - DVec3::splat(0.2 + 0.5 * s)).abs().max_element() < 1e-15);
-        let phong = local_color::<f64>(Illumination::Phong, DVec3::ONE, &MAT, &lights, &point());
+        let lambert = local_color::<f64>(
+            Illumination::Lambert,
+            DVec3::ONE,
+            &MAT,
+            &lights,
+            &point(),
+            &mut (),
+        );
+        assert!(
+            (lambert.local() - DVec3::splat(0.2 + 0.5 * s))
+                .abs()
+                .max_element()
+                < 1e-15
+        );
+        assert_eq!(lambert.specular, DVec3::ZERO);
+        let phong = local_color::<f64>(
+            Illumination::Phong,
+            DVec3::ONE,
+            &MAT,
+            &lights,
+            &point(),
+            &mut (),
+        );
+        assert_eq!(phong.ambient, DVec3::splat(0.2));
+        assert!((phong.diffuse - DVec3::splat(0.5 * s)).abs().max_element() < 1e-15);
+        assert!(
+            (phong.specular - DVec3::splat(0.4 * s.powf(3.0)))
+                .abs()
+                .max_element()
+                < 1e-15
+        );
+        let phong = phong.local();
         // N = (0,0,-1), L = (0,-s,-s): R = 2s N − L = (0, s, -s), so cos α = R · V = s.
         let expected = 0.2 + 0.5 * s + 0.4 * s.powf(3.0);
         assert!((phong - DVec3::splat(expected)).abs().max_element() < 1e-15);
@@ -219,8 +309,15 @@ mod tests {
     #[test]
     fn lights_behind_the_surface_add_nothing() {
         let lights = [light_at(DVec3::new(0.0, 0.0, 5.0))];
-        let i = local_color::<f64>(Illumination::Phong, DVec3::ONE, &MAT, &lights, &point());
-        assert_eq!(i, DVec3::splat(0.2));
+        let i = local_color::<f64>(
+            Illumination::Phong,
+            DVec3::ONE,
+            &MAT,
+            &lights,
+            &point(),
+            &mut (),
+        );
+        assert_eq!(i.local(), DVec3::splat(0.2));
     }
 
     #[test]

@@ -215,12 +215,7 @@ impl Document {
     /// The panel's name for object `n`: `#2 RED sphere` when a comment
     /// directly above it in the file starts with "RED", else `#2 sphere`.
     pub fn object_label(&self, n: usize) -> String {
-        let shape = self.object_shape(n);
-        match self.comment_words(n) {
-            Some(w) if w.to_lowercase().ends_with(shape) => format!("#{} {w}", n + 1),
-            Some(w) => format!("#{} {w} {shape}", n + 1),
-            None => format!("#{} {shape}", n + 1),
-        }
+        splice::object_name(n, self.object_shape(n), self.comment_words(n))
     }
 
     fn object_shape(&self, n: usize) -> &'static str {

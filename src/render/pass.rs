@@ -1,0 +1,271 @@
+//! Render passes: one term of the illumination formula, or one property
+//! of the camera ray's hit, for every pixel — what compositors call AOVs.
+//!
+//! A pass is traced by the same tile loop and the same trace as the
+//! image ([`trace_tiles`] with `f64` texels instead of 8-bit ones); the
+//! trace keeps the camera ray's terms apart and adds them in one order,
+//! so with one ray per pixel
+//!
+//! ```text
+//! final = ((ambient + diffuse) + specular) + reflection
+//! ```
+//!
+//! holds bit for bit in f64, and `final` rounded to 8 bits is the image.
+//! With N×N rays per pixel a term pass is the mean of its samples' terms
+//! and `final` the mean of the clamped samples (the image's value before
+//! rounding): the terms then add up to the unclamped mean only within
+//! rounding. `normal`, `depth` and `object` are properties of one ray
+//! through the pixel's centre whatever the anti-aliasing (the same ray
+//! as a click's pick, so `object` has the selection outline's ids).
+
+use super::{
+    Cancel, Progress, RenderError, RenderOptions, RenderStats, prepare, to_8bit, trace_tiles,
+};
+use crate::scene::Scene;
+use glam::DVec3;
+use image::{Rgb32FImage, RgbImage};
+
+/// What a render computes for each pixel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash)]
+pub enum Pass {
+    /// The image: the sum of the four terms.
+    #[default]
+    Final,
+    /// ka C at the camera ray's hit.
+    Ambient,
+    /// Σ I kd cos θ at the camera ray's hit.
+    Diffuse,
+    /// Σ I ks cos^m α at the camera ray's hit.
+    Specular,
+    /// ks I_r: everything the camera ray's reflection brings, its whole
+    /// chain.
+    Reflection,
+    /// The world shading normal N at the hit (facing the ray): −1 to 1,
+    /// shown as (N + 1) / 2.
+    Normal,
+    /// t, the camera ray's distance to its hit (∞ for a miss), shown
+    /// normalised over the image's range: near light, far dark.
+    Depth,
+    /// The object hit: its number (1-based, as in the panel; 0 for none),
+    /// shown as a colour of its own.
+    Object,
+}
+
+impl Pass {
+    /// Every pass, in menu order.
+    pub const ALL: [Pass; 8] = [
+        Pass::Final,
+        Pass::Ambient,
+        Pass::Diffuse,
+        Pass::Specular,
+        Pass::Reflection,
+        Pass::Normal,
+        Pass::Depth,
+        Pass::Object,
+    ];
+
+    /// The name on the command line and in the menu.
+    pub fn name(self) -> &'static str {
+        match self {
+            Pass::Final => "final",
+            Pass::Ambient => "ambient",
+            Pass::Diffuse => "diffuse",
+            Pass::Specular => "specular",
+            Pass::Reflection => "reflection",
+            Pass::Normal => "normal",
+            Pass::Depth => "depth",
+            Pass::Object => "object",
+        }
+    }
+
+    /// The pass named `name` (as [`Pass::name`] spells it).
+    pub fn named(name: &str) -> Option<Pass> {
+        Pass::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// A property of the camera ray's hit, traced with one ray through
+    /// each pixel's centre whatever the anti-aliasing.
+    pub fn is_geometric(self) -> bool {
+        matches!(self, Pass::Normal | Pass::Depth | Pass::Object)
+    }
+}
+
+/// What a tile holds per channel: an 8-bit value of the image (`u8`), or
+/// a pass's value (`f64`).
+pub trait Texel: Copy + Default + Send + Sync + 'static {
+    /// A one-ray pixel of the final pass keeps its colour unclamped (the
+    /// passes' `final`, which the terms add up to); 8-bit pixels clamp.
+    const UNCLAMPED: bool;
+    /// The pixel of a value: one ray's, or the mean of its samples'.
+    fn pixel(value: DVec3) -> [Self; 3];
+}
+
+impl Texel for u8 {
+    const UNCLAMPED: bool = false;
+    #[inline(always)]
+    fn pixel(value: DVec3) -> [u8; 3] {
+        [to_8bit(value.x), to_8bit(value.y), to_8bit(value.z)]
+    }
+}
+
+impl Texel for f64 {
+    const UNCLAMPED: bool = true;
+    #[inline(always)]
+    fn pixel(value: DVec3) -> [f64; 3] {
+        value.to_array()
+    }
+}
+
+/// One pass of a whole image: three f64 values a pixel, row by row.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PassImage {
+    pub pass: Pass,
+    pub width: u32,
+    pub height: u32,
+    pub values: Vec<f64>,
+}
+
+impl PassImage {
+    /// The value at pixel (x, y).
+    pub fn at(&self, x: u32, y: u32) -> Option<DVec3> {
+        if x >= self.width || y >= self.height {
+            return None;
+        }
+        let i = (y as usize * self.width as usize + x as usize) * 3;
+        Some(DVec3::from_slice(&self.values[i..i + 3]))
+    }
+
+    /// The nearest and farthest hit (the depth pass's range), if any
+    /// pixel's ray hits something.
+    pub fn depth_range(&self) -> Option<(f64, f64)> {
+        if self.pass != Pass::Depth {
+            return None;
+        }
+        let (near, far) = self
+            .values
+            .iter()
+            .step_by(3)
+            .filter(|t| t.is_finite())
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(n, f), &t| {
+                (n.min(t), f.max(t))
+            });
+        (near <= far).then_some((near, far))
+    }
+
+    /// The pass as an 8-bit picture: terms and `final` clamped and
+    /// rounded as the image is, N as (N + 1) / 2, depth from 1 at the
+    /// nearest hit to 0.2 at the farthest (misses black), each object a
+    /// colour of its own (misses black).
+    pub fn to_rgb8(&self) -> RgbImage {
+        let range = self.depth_range();
+        let mut image = RgbImage::new(self.width, self.height);
+        for (pixel, v) in image.pixels_mut().zip(self.values.chunks_exact(3)) {
+            let v = DVec3::from_slice(v);
+            let shown = match self.pass {
+                Pass::Normal => (v + DVec3::ONE) * 0.5,
+                Pass::Depth => match range {
+                    Some((near, far)) if v.x.is_finite() => {
+                        let span = far - near;
+                        let along = if span > 0.0 { (v.x - near) / span } else { 0.0 };
+                        DVec3::splat(1.0 - 0.8 * along)
+                    }
+                    _ => DVec3::ZERO,
+                },
+                Pass::Object => object_color(v.x),
+                _ => v,
+            };
+            pixel.0 = u8::pixel(shown);
+        }
+        image
+    }
+
+    /// The pass in 32-bit floats, unclamped (what an EXR holds): each
+    /// value the f64 one rounded to the nearest f32, except where that
+    /// would change its 8-bit value (the colour passes' values round to
+    /// the image's levels): [`f32_keeping_level`].
+    pub fn to_rgb32f(&self) -> Rgb32FImage {
+        let values = self
+            .values
+            .iter()
+            .map(|&v| {
+                if self.pass.is_geometric() {
+                    v as f32
+                } else {
+                    f32_keeping_level(v)
+                }
+            })
+            .collect();
+        Rgb32FImage::from_raw(self.width, self.height, values)
+            .expect("three values a pixel, width × height pixels")
+    }
+}
+
+/// `v` in f32 with the same 8-bit value: the nearest f32, or where that
+/// one lies across a rounding boundary (v a hair below (k + ½)/255, the
+/// f32 above it), its neighbour on v's side, one ulp further. An EXR's
+/// `final` then rounds to the PNG's pixels, every one of them (on the
+/// golden scenes about one channel in 10⁵ needs the neighbour).
+pub fn f32_keeping_level(v: f64) -> f32 {
+    let nearest = v as f32;
+    if to_8bit(f64::from(nearest)) == to_8bit(v) {
+        return nearest;
+    }
+    if f64::from(nearest) > v {
+        nearest.next_down()
+    } else {
+        nearest.next_up()
+    }
+}
+
+/// The colour of object number `id` (1-based; 0: none, black): hues
+/// spread by the golden angle, so neighbours in the list differ.
+pub fn object_color(id: f64) -> DVec3 {
+    if id.is_nan() || id < 1.0 {
+        return DVec3::ZERO;
+    }
+    let hue = ((id - 1.0) * 0.618_033_988_749_895).fract() * 6.0;
+    let sector = hue.floor();
+    let f = hue - sector;
+    let (v, s) = (0.95, 0.7);
+    let (p, q, t) = (v * (1.0 - s), v * (1.0 - s * f), v * (1.0 - s * (1.0 - f)));
+    match sector as u32 {
+        0 => DVec3::new(v, t, p),
+        1 => DVec3::new(q, v, p),
+        2 => DVec3::new(p, v, t),
+        3 => DVec3::new(p, q, v),
+        4 => DVec3::new(t, p, v),
+        _ => DVec3::new(v, p, q),
+    }
+}
+
+/// Renders one pass of `scene` with `options` (what [`super::render`]
+/// does for the image), stopping once `cancel` is set (`Ok(None)`).
+pub fn render_pass(
+    scene: &Scene,
+    options: &RenderOptions,
+    pass: Pass,
+    cancel: &Cancel,
+    progress: &Progress,
+) -> Result<Option<(PassImage, RenderStats)>, RenderError> {
+    super::in_pool(options, || {
+        let prepared = prepare(scene, options);
+        let prepared = if pass.is_geometric() {
+            prepared.with_view(&scene.camera, 1)
+        } else {
+            prepared
+        }
+        .for_pass(pass);
+        let (width, height) = (prepared.width(), prepared.height());
+        let mut values = vec![0.0; width as usize * height as usize * 3];
+        let rays = trace_tiles(&prepared, cancel, progress, Some(&mut values), |_, _| {})?;
+        Some((
+            PassImage {
+                pass,
+                width,
+                height,
+                values,
+            },
+            RenderStats { rays },
+        ))
+    })
+}
