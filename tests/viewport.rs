@@ -499,3 +499,137 @@ fn without_a_file_the_app_reopens_the_last_one_if_it_is_still_there() {
     std::fs::create_dir(&path).unwrap();
     assert!(first(&settings).path().is_none());
 }
+
+/// Polls frames until `done` holds (20 s at most).
+fn until(
+    harness: &mut Harness<'_, RayOfLightApp>,
+    what: &str,
+    done: impl Fn(&RayOfLightApp) -> bool,
+) {
+    let start = Instant::now();
+    while !done(harness.state()) {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{what} never came"
+        );
+        harness.step();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    harness.run_steps(2);
+}
+
+#[test]
+fn e_then_a_click_explains_the_pixel_as_rendered_and_a_term_selects_its_field() {
+    let (_dir, path) = file();
+    let mut harness = ready(&path);
+    // E arms the explain; the click explains instead of selecting.
+    harness.key_press(egui::Key::E);
+    harness.run_steps(1);
+    assert!(
+        harness
+            .query_by_label_contains("click a pixel to explain")
+            .is_some()
+    );
+    harness.event(Event::PointerMoved(MIDDLE));
+    harness.run_steps(1);
+    click(&mut harness, MIDDLE);
+    harness.run_steps(2);
+    let app = harness.state();
+    let e = app.explanation().expect("the pixel is explained").clone();
+    assert_eq!(
+        app.selected_object(),
+        None,
+        "the click explained, not picked"
+    );
+    // The explained value is the pixel on screen and the CLI's.
+    let image = render::render(app.document().scene(), &render::RenderOptions::default()).unwrap();
+    assert_eq!(e.rgb8, image.get_pixel(e.x, e.y).0);
+    assert_eq!(e.rgb8, app.preview().image().get_pixel(e.x, e.y).0);
+    let [r, g, b] = e.rgb8;
+    let title = format!("Pixel ({}, {}): ({r}, {g}, {b})", e.x, e.y);
+    assert!(harness.query_by_label(&title).is_some(), "{title}");
+    let hit = &e.samples[0].bounces[0];
+    assert!(
+        harness
+            .query_by_label_contains(&format!("at t = {}", render::explain::number(hit.t)))
+            .is_some()
+    );
+    // The middle pixel shows the green sphere, named as in the panel.
+    // (The object list's row, and the window's link.)
+    assert_eq!(harness.query_all_by_label("#1 GREEN sphere").count(), 2);
+    // A click on the diffuse term selects the object and marks its kd.
+    harness.get_by_label("diffuse  Σ I·kd·cos θ").click();
+    harness.run_steps(3);
+    assert_eq!(harness.state().selected_object(), Some(hit.object));
+    assert!(harness.query_by_label("Remove object").is_some());
+    assert_eq!(
+        harness.state().marked_field(),
+        Some(scene::edit::Field::Material {
+            object: hit.object,
+            coef: scene::edit::Coef::Kd
+        })
+    );
+    // Alt+click explains directly, without E.
+    let elsewhere = MIDDLE + Vec2::new(40.0, 0.0);
+    harness.event(Event::PointerMoved(elsewhere));
+    harness.run_steps(1);
+    for pressed in [true, false] {
+        harness.event_modifiers(
+            Event::PointerButton {
+                pos: elsewhere,
+                button: PointerButton::Primary,
+                pressed,
+                modifiers: Modifiers::ALT,
+            },
+            Modifiers::ALT,
+        );
+        harness.run_steps(1);
+    }
+    let again = harness.state().explanation().unwrap();
+    assert!(again.x > e.x, "{} then {}", e.x, again.x);
+    assert_eq!(again.rgb8, image.get_pixel(again.x, again.y).0);
+}
+
+#[test]
+fn view_pass_shows_a_pass_and_the_inspector_its_values() {
+    let (_dir, path) = file();
+    let mut harness = ready(&path);
+    harness
+        .state_mut()
+        .run(Command::ShowPass(render::Pass::Diffuse));
+    until(&mut harness, "the diffuse pass", |app| {
+        app.pass_shown().1.is_some()
+    });
+    let scene = harness.state().document().scene().clone();
+    let options = render::RenderOptions::default();
+    let (expected, _) = render::render_pass(
+        &scene,
+        &options,
+        render::Pass::Diffuse,
+        &render::Cancel::never(),
+        &render::Progress::default(),
+    )
+    .unwrap()
+    .unwrap();
+    assert!(harness.state().pass_shown().1 == Some(&expected));
+    harness.event(Event::PointerMoved(MIDDLE));
+    harness.run_steps(2);
+    assert!(harness.query_by_label_contains(") diffuse (").is_some());
+    // Depth: its range in the status bar.
+    harness
+        .state_mut()
+        .run(Command::ShowPass(render::Pass::Depth));
+    until(&mut harness, "the depth pass", |app| {
+        app.pass_shown().1.is_some()
+    });
+    assert!(harness.query_by_label_contains("depth pass: t ").is_some());
+    harness.event(Event::PointerMoved(MIDDLE));
+    harness.run_steps(2);
+    assert!(harness.query_by_label_contains(") t = ").is_some());
+    // Back to the picture.
+    harness
+        .state_mut()
+        .run(Command::ShowPass(render::Pass::Final));
+    harness.run_steps(2);
+    assert_eq!(harness.state().pass_shown(), (render::Pass::Final, None));
+}

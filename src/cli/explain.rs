@@ -6,7 +6,7 @@ use super::args::ExplainArgs;
 use super::{Failure, edit, fail, print_line, refused};
 use glam::DVec3;
 use rayoflight::geometry::Ray;
-use rayoflight::render::explain::{Bounce, Ended, Sample};
+use rayoflight::render::explain::{Bounce, Ended, Sample, number as n, vector as v};
 use rayoflight::render::{Explanation, prepare};
 use rayoflight::scene::edit::Edited;
 use rayoflight::scene::{self, Scene, splice};
@@ -167,24 +167,6 @@ fn reason(ended: Ended) -> &'static str {
 
 // ----- words -----
 
-/// A number for people: six significant digits at most.
-fn n(x: f64) -> String {
-    if x == 0.0 {
-        return "0".to_owned();
-    }
-    let digits = (5 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
-    let text = format!("{x:.digits$}");
-    if text.contains('.') {
-        text.trim_end_matches('0').trim_end_matches('.').to_owned()
-    } else {
-        text
-    }
-}
-
-fn v(v: DVec3) -> String {
-    format!("({}, {}, {})", n(v.x), n(v.y), n(v.z))
-}
-
 fn words(e: &Explanation, names: &Names, scene: &str) -> String {
     let [r, g, b] = e.rgb8;
     let mut out = format!(
@@ -269,13 +251,5 @@ fn sample_words(out: &mut String, s: &Sample, names: &Names) {
             v(ray.dir)
         );
     }
-    *out += &match s.ended {
-        Ended::Missed => "chain ended: a miss\n".to_owned(),
-        Ended::Depth => "chain ended: the model's reflection depth\n".to_owned(),
-        Ended::NoMirror => "chain ended: ks = 0, nothing reflected\n".to_owned(),
-        Ended::EarlyStop { bound } => format!(
-            "chain ended early: the rest adds at most {} and changes no 8-bit value\n",
-            v(bound)
-        ),
-    };
+    *out += &format!("chain ended: {}\n", s.ended.describe());
 }

@@ -38,6 +38,41 @@ pub enum Ended {
     EarlyStop { bound: DVec3 },
 }
 
+impl Ended {
+    /// In words, for people.
+    pub fn describe(&self) -> String {
+        match self {
+            Ended::Missed => "a miss".to_owned(),
+            Ended::Depth => "the model's reflection depth".to_owned(),
+            Ended::NoMirror => "ks = 0, nothing reflected".to_owned(),
+            Ended::EarlyStop { bound } => format!(
+                "early stop: the rest adds at most {} and changes no 8-bit value",
+                vector(*bound)
+            ),
+        }
+    }
+}
+
+/// A number for people: six significant digits at most, no trailing
+/// zeros.
+pub fn number(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() {
+        return format!("{}", if x == 0.0 { 0.0 } else { x });
+    }
+    let digits = (5 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    let text = format!("{x:.digits$}");
+    if text.contains('.') {
+        text.trim_end_matches('0').trim_end_matches('.').to_owned()
+    } else {
+        text
+    }
+}
+
+/// A vector for people: `(x, y, z)` with [`number`]s.
+pub fn vector(v: DVec3) -> String {
+    format!("({}, {}, {})", number(v.x), number(v.y), number(v.z))
+}
+
 /// What one light did at a hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LightShare {
@@ -220,5 +255,23 @@ impl Recorder {
             ended: self.ended.unwrap_or(Ended::Depth),
             color,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_read_well() {
+        assert_eq!(number(0.0), "0");
+        assert_eq!(number(-0.0), "0");
+        assert_eq!(number(0.4), "0.4");
+        assert_eq!(number(0.08000000000000002), "0.08");
+        assert_eq!(number(21.108_123_4), "21.1081");
+        assert_eq!(number(-0.000_416_666_7), "-0.000416667");
+        assert_eq!(number(1234567.0), "1234567");
+        assert_eq!(number(f64::INFINITY), "inf");
+        assert_eq!(vector(DVec3::new(1.0, 0.5, -2.0)), "(1, 0.5, -2)");
     }
 }

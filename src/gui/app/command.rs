@@ -57,6 +57,10 @@ pub enum Command {
     Help,
     /// Move the selected object with the mouse (G).
     Grab,
+    /// The next click on the picture explains its pixel (E).
+    Explain,
+    /// Show this render pass in place of the picture (View › Pass).
+    ShowPass(crate::render::Pass),
 }
 
 /// Every key and mouse action, for the help window (F1).
@@ -77,10 +81,17 @@ pub const HELP: &[(&str, &str)] = &[
         "move the selected object in the view plane (click: place; Esc, right click: cancel)",
     ),
     ("drag a light's marker", "move the light in the view plane"),
+    (
+        "E then click, Alt+click",
+        "explain the pixel: its rays, hits and the terms of its colour",
+    ),
     ("Ctrl+wheel, + / -", "zoom the picture"),
     ("Ctrl+drag", "pan the picture"),
     ("F / 1", "fit the picture / show it 1:1"),
-    ("Esc", "cancel the move, else the render in progress"),
+    (
+        "Esc",
+        "cancel the move or the explain click, else the render in progress",
+    ),
     ("Ctrl+Z", "undo"),
     ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
     (
@@ -195,6 +206,8 @@ impl RayOfLightApp {
                 // render.
                 if self.grab.is_some() {
                     self.grab_end(false);
+                } else if self.explain_armed {
+                    self.explain_armed = false;
                 } else {
                     self.worker.cancel();
                     self.preview.cancel();
@@ -205,6 +218,8 @@ impl RayOfLightApp {
                 self.grab_start(pointer);
             }
             Command::CameraFromFile => self.camera_from_file(),
+            Command::Explain => self.explain_armed = !self.explain_armed,
+            Command::ShowPass(pass) => self.show_pass(pass),
             Command::Help => self.help_open = !self.help_open,
             Command::Study => {
                 self.study.open = true;
@@ -252,6 +267,7 @@ impl RayOfLightApp {
                     (Key::Home, Command::CameraFromFile),
                     (Key::F1, Command::Help),
                     (Key::G, Command::Grab),
+                    (Key::E, Command::Explain),
                 ] {
                     if i.key_pressed(key) && i.modifiers.is_none() {
                         commands.push(command);
@@ -281,14 +297,15 @@ impl RayOfLightApp {
     }
 
     pub(super) fn menu_bar(&mut self, ui: &mut egui::Ui) {
-        let mut chosen = None;
-        let mut pick = |ui: &mut egui::Ui, enabled: bool, text: &str, command: Command| {
+        let chosen = std::cell::Cell::new(None);
+        let pick = |ui: &mut egui::Ui, enabled: bool, text: &str, command: Command| {
             if ui.add_enabled(enabled, egui::Button::new(text)).clicked() {
-                chosen = Some(command);
+                chosen.set(Some(command));
                 ui.close();
             }
         };
         let dirty = self.doc.has_unsaved_edits();
+        let shown_pass = self.pass;
         let has_file = self.doc.path().is_some();
         let undo = self.doc.undo_label().map(|l| format!("Undo {l}  Ctrl+Z"));
         let redo = self
@@ -346,6 +363,16 @@ impl RayOfLightApp {
                 pick(ui, true, "Camera from file  Home", Command::CameraFromFile);
                 pick(ui, true, "Study…", Command::Study);
                 pick(ui, true, "Keys and mouse…  F1", Command::Help);
+                pick(ui, true, "Explain pixel  E", Command::Explain);
+                ui.menu_button("Pass", |ui| {
+                    for pass in crate::render::Pass::ALL {
+                        let button = egui::Button::selectable(pass == shown_pass, pass.name());
+                        if ui.add(button).clicked() {
+                            chosen.set(Some(Command::ShowPass(pass)));
+                            ui.close();
+                        }
+                    }
+                });
                 ui.separator();
                 ui.label("Anti-aliasing");
                 for aa in [1, 2, 3, 4] {
@@ -359,7 +386,7 @@ impl RayOfLightApp {
                 }
             });
         });
-        if let Some(command) = chosen {
+        if let Some(command) = chosen.take() {
             // Quit goes through the window's close, which asks about edits.
             if command == Command::Quit {
                 self.ctx.send_viewport_cmd(egui::ViewportCommand::Close);

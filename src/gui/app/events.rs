@@ -110,6 +110,7 @@ impl RayOfLightApp {
         while let Ok(message) = self.background.try_recv() {
             match message {
                 Background::Ids(key, ids) => self.outline_ready(key, ids),
+                Background::Pass(key, image) => self.pass_ready(key, *image),
                 Background::File(generation, _) if generation != self.watch_generation => {}
                 // What the watcher saw while a save ran comes after it.
                 Background::File(_, event) if self.saving.is_some() => {

@@ -17,13 +17,18 @@
 //!   (G) with the mouse;
 //! - `overlay`: the selection's outline and the light markers (dragged to
 //!   move lights);
+//! - `explain`: the explained pixel's window and its path over the
+//!   picture (E, Alt+click);
+//! - `passes`: View › Pass, a render pass shown in place of the picture;
 //! - `status`: the status bar, the error banner, notices, frame counts.
 
 pub mod command;
 mod dialogs;
 mod events;
+mod explain;
 mod navigate;
 mod overlay;
+mod passes;
 mod picture;
 mod status;
 
@@ -60,6 +65,8 @@ enum Background {
     Dialog(DialogKind, Option<PathBuf>, Duration),
     /// A save ran (on a thread of its own).
     Saved(Box<SaveJob>, SaveOutcome),
+    /// A render pass for (pass, render generation).
+    Pass((render::Pass, u64), Box<render::PassImage>),
 }
 
 pub struct RayOfLightApp {
@@ -127,6 +134,14 @@ pub struct RayOfLightApp {
     wheel_at: Option<Instant>,
     /// The keys-and-mouse window is shown.
     help_open: bool,
+    /// The next click on the picture explains its pixel (E).
+    explain_armed: bool,
+    /// The explained pixel, in its window.
+    explained: Option<explain::Shown>,
+    /// The pass shown (View › Pass), and its picture once rendered.
+    pass: render::Pass,
+    pass_view: Option<passes::PassView>,
+    pass_requests: passes::PassRequests,
     /// The measured cost of rendering, for the interactive scale.
     pace: Pace,
     /// The newest request was one interactive pass at this scale: refine
@@ -200,6 +215,11 @@ impl RayOfLightApp {
             outline_wanted: None,
             wheel_at: None,
             help_open: false,
+            explain_armed: false,
+            explained: None,
+            pass: render::Pass::Final,
+            pass_view: None,
+            pass_requests: Default::default(),
             pace: Pace::default(),
             interactive: None,
             in_flight: None,
@@ -286,6 +306,11 @@ impl RayOfLightApp {
         self.selection.object
     }
 
+    /// The field marked in the panel (a term of an explained pixel).
+    pub fn marked_field(&self) -> Option<crate::scene::edit::Field> {
+        self.selection.field
+    }
+
     pub fn preview(&self) -> &Preview {
         &self.preview
     }
@@ -365,7 +390,9 @@ impl RayOfLightApp {
         self.picture(ui);
         self.modals(ui);
         self.help_window(&ctx);
+        self.explain_window(&ctx);
         self.refresh_outline();
+        self.refresh_pass();
         if self.study.open {
             for action in self.study.show(&ctx, &self.methods) {
                 self.study_action(action);

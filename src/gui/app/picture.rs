@@ -74,8 +74,12 @@ impl RayOfLightApp {
             } else if self.texture.complete() {
                 self.showing_coarse = false;
             }
-            let texture = match &self.coarse_texture {
-                Some(t) if self.showing_coarse => t.id(),
+            let (w, h) = self.preview.image().dimensions();
+            // A render pass (View › Pass) in place of the picture, once
+            // rendered at the picture's size.
+            let texture = match (&self.coarse_texture, self.pass_texture(w, h)) {
+                (_, Some(pass)) => pass,
+                (Some(t), None) if self.showing_coarse => t.id(),
                 _ => match self.texture.id() {
                     Some(id) => id,
                     None => return,
@@ -83,7 +87,6 @@ impl RayOfLightApp {
             };
             let area = ui.available_rect_before_wrap();
             let response = ui.allocate_rect(area, Sense::click_and_drag());
-            let (w, h) = self.preview.image().dimensions();
             let image_size = Vec2::new(w as f32, h as f32);
             let ppp = ui.ctx().pixels_per_point();
             if self.view.fit {
@@ -119,21 +122,31 @@ impl RayOfLightApp {
                 Color32::WHITE,
             );
             self.draw_outline(&painter, rect);
-            // Pixel inspector and pick.
+            // Pixel inspector, pick and explain (E then a click, or
+            // Alt+click).
             self.hovered = None;
+            let alt = ui.input(|i| i.modifiers.alt);
             if let Some(pos) = response.hover_pos() {
                 let rel = (pos - rect.min) / size * image_size;
                 if rel.x >= 0.0 && rel.y >= 0.0 && rel.x < image_size.x && rel.y < image_size.y {
                     let (x, y) = (rel.x as u32, rel.y as u32);
                     let rgb = self.preview.image().get_pixel(x, y).0;
                     self.hovered = Some((x, y, rgb));
+                    if self.explain_armed {
+                        ui.ctx().set_cursor_icon(egui::CursorIcon::Crosshair);
+                    }
                     if response.clicked() && !grabbing {
-                        self.pick(f64::from(rel.x), f64::from(rel.y));
+                        if self.explain_armed || alt {
+                            self.explain_pixel(x, y);
+                        } else {
+                            self.pick(f64::from(rel.x), f64::from(rel.y));
+                        }
                     }
                 }
             }
             let to_screen =
                 |x: f64, y: f64| rect.min + Vec2::new(x as f32, y as f32) / image_size * size;
+            self.draw_explained_path(&painter, to_screen);
             // Markers belong on a picture of the camera's size (not the
             // blank one shown before the first render, nor an old size).
             let camera = &self.doc.scene().camera;
@@ -238,6 +251,7 @@ impl RayOfLightApp {
         self.selection = Selection {
             object: prepared.pick(x, y),
             reveal: true,
+            field: None,
         };
     }
 }

@@ -89,10 +89,27 @@ impl RayOfLightApp {
                 });
                 if let Some((x, y, rgb)) = self.hovered {
                     ui.separator();
-                    ui.label(format!(
-                        "({x}, {y}) rgb({}, {}, {})",
-                        rgb[0], rgb[1], rgb[2]
-                    ));
+                    // The pass shown's value, else the picture's colour.
+                    ui.label(match self.pass_value(x, y) {
+                        Some(value) => format!("({x}, {y}) {value}"),
+                        None => format!("({x}, {y}) rgb({}, {}, {})", rgb[0], rgb[1], rgb[2]),
+                    });
+                }
+                if self.pass != render::Pass::Final {
+                    ui.separator();
+                    ui.label(match (self.pass_shown().1, self.depth_range()) {
+                        (None, _) => format!("rendering the {} pass…", self.pass.name()),
+                        (Some(_), Some((near, far))) => format!(
+                            "depth pass: t {} (light) to {} (dark)",
+                            render::explain::number(near),
+                            render::explain::number(far)
+                        ),
+                        (Some(_), None) => format!("{} pass", self.pass.name()),
+                    });
+                }
+                if self.explain_armed {
+                    ui.separator();
+                    ui.label("click a pixel to explain it (Esc: cancel)");
                 }
                 ui.separator();
                 ui.label(format!("{} fps", self.frames.len()));

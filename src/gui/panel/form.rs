@@ -8,6 +8,9 @@ use super::*;
 pub(super) struct Form<'s> {
     pub(super) scene: &'s Scene,
     pub(super) out: PanelOutput,
+    /// The field to mark (outlined), and whether to scroll to it now.
+    pub(super) marked: Option<Field>,
+    pub(super) reveal: bool,
 }
 
 impl Form<'_> {
@@ -47,6 +50,18 @@ impl Form<'_> {
         self.note(&response);
         if response.changed() && value.to_bits() != old.to_bits() {
             self.set(field, Value::Number(value), &response);
+        }
+        if self.marked == Some(field) {
+            let stroke = ui.visuals().selection.stroke;
+            ui.painter().rect_stroke(
+                response.rect.expand(2.0),
+                3.0,
+                egui::Stroke::new(2.0, stroke.color),
+                egui::StrokeKind::Outside,
+            );
+            if self.reveal {
+                response.scroll_to_me(Some(egui::Align::Center));
+            }
         }
         response
     }

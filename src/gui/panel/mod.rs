@@ -36,6 +36,9 @@ pub struct Selection {
     pub object: Option<usize>,
     /// Open and scroll to it once (set by a pick, cleared when done).
     pub reveal: bool,
+    /// A value of the object marked in its editor (a term of an
+    /// explained pixel clicked: the coefficient it comes from).
+    pub field: Option<Field>,
 }
 
 /// What the user did in the panel this frame.
@@ -51,9 +54,18 @@ pub struct PanelOutput {
 
 /// The whole panel for `doc`'s scene.
 pub fn scene_panel(ui: &mut Ui, doc: &Document, selection: &mut Selection) -> PanelOutput {
+    // A marked field belongs to the selected object.
+    if selection
+        .field
+        .is_some_and(|f| field_object(f) != selection.object)
+    {
+        selection.field = None;
+    }
     let mut form = Form {
         scene: doc.scene(),
         out: PanelOutput::default(),
+        marked: selection.field,
+        reveal: selection.reveal,
     };
     ui.add_enabled_ui(!doc.is_placeholder(), |ui| {
         ui.heading("Illumination");
@@ -69,6 +81,14 @@ pub fn scene_panel(ui: &mut Ui, doc: &Document, selection: &mut Selection) -> Pa
     });
     selection.reveal = false;
     form.out
+}
+
+/// The object a field belongs to, if any.
+fn field_object(field: Field) -> Option<usize> {
+    match field {
+        Field::Color { object, .. } | Field::Material { object, .. } => Some(object),
+        _ => None,
+    }
 }
 
 fn model_editor(ui: &mut Ui, form: &mut Form<'_>) {
@@ -247,7 +267,8 @@ fn objects_editor(ui: &mut Ui, form: &mut Form<'_>, doc: &Document, selection: &
             form.edit(Edit::Remove(Item::Object(object)));
         }
     });
-    if selection.reveal {
+    // (A marked field scrolls to itself.)
+    if selection.reveal && selection.field.is_none() {
         response.header_response.scroll_to_me(None);
     }
 }

@@ -1,0 +1,300 @@
+//! Explain a pixel: `E` (View › Explain pixel) then a click, or Alt+click,
+//! opens a window with the pixel's ray tree from the library
+//! ([`crate::render::Prepared::explain`]: the render's own numbers), and
+//! draws the path over the picture. Clicking a term selects the object
+//! and the coefficient it comes from in the panel.
+
+use super::*;
+use crate::render::explain::{Bounce, Sample, number, vector};
+use crate::render::{Explanation, navigate};
+use crate::scene::edit::{Coef, Field};
+use glam::DVec3;
+
+/// The explained pixel on screen.
+pub(super) struct Shown {
+    pub(super) explanation: Explanation,
+    /// The panel's names of the objects when it was explained.
+    labels: Vec<String>,
+    /// The pixel of the picture on screen then.
+    on_screen: Option<[u8; 3]>,
+    /// Which ray's tree is shown (supersampled pixels have several).
+    sample: usize,
+}
+
+/// Which coefficient a term comes from.
+fn term_field(object: usize, term: usize) -> Field {
+    let coef = match term {
+        0 => Coef::Ka,
+        1 => Coef::Kd,
+        _ => Coef::Ks,
+    };
+    Field::Material { object, coef }
+}
+
+impl RayOfLightApp {
+    /// Explains pixel (x, y) of the picture: its tree in the window, its
+    /// path over the picture.
+    pub fn explain_pixel(&mut self, x: u32, y: u32) {
+        self.explain_armed = false;
+        let scene = self.doc.scene();
+        let options = self.methods.request(false, self.aa).options(scene);
+        // The worker's prepared scene when it has this one (the method of
+        // the picture), seen with the picture's rays per pixel.
+        let prepared = match self.worker.prepared(scene) {
+            Some(p) => p.with_view(&scene.camera, options.aa),
+            None => render::prepare(scene, &options),
+        };
+        let Some(explanation) = prepared.explain(x, y) else {
+            return;
+        };
+        let image = self.preview.image();
+        let on_screen = (image.dimensions() == (scene.camera.width, scene.camera.height)
+            && self.preview.has_image())
+        .then(|| image.get_pixel(x, y).0);
+        self.explained = Some(Shown {
+            explanation,
+            labels: (0..scene.objects.len())
+                .map(|n| self.doc.object_label(n))
+                .collect(),
+            on_screen,
+            sample: 0,
+        });
+    }
+
+    /// The pixel explained in the window, if any.
+    pub fn explanation(&self) -> Option<&Explanation> {
+        self.explained.as_ref().map(|s| &s.explanation)
+    }
+
+    /// The window of the explained pixel.
+    pub(super) fn explain_window(&mut self, ctx: &egui::Context) {
+        let Some(shown) = &mut self.explained else {
+            return;
+        };
+        let mut open = true;
+        let mut select = None;
+        let e = &shown.explanation;
+        // At the right, clear of the panel.
+        let right = ctx.content_rect().right_top() + Vec2::new(-420.0, 40.0);
+        egui::Window::new("Explain pixel")
+            .open(&mut open)
+            .default_pos(right)
+            .default_width(400.0)
+            .default_height(560.0)
+            .show(ctx, |ui| {
+                let [r, g, b] = e.rgb8;
+                ui.strong(format!("Pixel ({}, {}): ({r}, {g}, {b})", e.x, e.y));
+                ui.label(format!(
+                    "{} model · unclamped {}",
+                    e.illumination.name(),
+                    vector(e.rgb)
+                ));
+                if let Some(pixel) = shown.on_screen
+                    && pixel != e.rgb8
+                {
+                    // A picture of another method or an older scene.
+                    ui.colored_label(
+                        Color32::YELLOW,
+                        format!("on screen: {pixel:?} (the picture is not finished)"),
+                    );
+                }
+                if e.samples.len() > 1 {
+                    ui.horizontal(|ui| {
+                        ui.label("ray");
+                        let count = e.samples.len();
+                        ui.add(
+                            egui::DragValue::new(&mut shown.sample)
+                                .range(0..=count - 1)
+                                .custom_formatter(|v, _| format!("{} of {count}", v as usize + 1)),
+                        );
+                        ui.label("(the pixel is the mean of its rays, each clamped)");
+                    });
+                }
+                let sample = &e.samples[shown.sample.min(e.samples.len() - 1)];
+                egui::ScrollArea::vertical()
+                    .max_height(480.0)
+                    .show(ui, |ui| {
+                        select = sample_ui(ui, sample, &shown.labels);
+                    });
+            });
+        if let Some((object, field)) = select {
+            self.selection = Selection {
+                object: Some(object),
+                reveal: true,
+                field,
+            };
+        }
+        if !open {
+            self.explained = None;
+        }
+    }
+
+    /// The explained pixel's path over the picture: its hit points, and
+    /// the segments between them that are in front of the eye.
+    pub(super) fn draw_explained_path(
+        &self,
+        painter: &egui::Painter,
+        to_screen: impl Fn(f64, f64) -> Pos2,
+    ) {
+        let Some(shown) = &self.explained else {
+            return;
+        };
+        let e = &shown.explanation;
+        let sample = &e.samples[shown.sample.min(e.samples.len() - 1)];
+        let camera = &self.doc.scene().camera;
+        let on_screen = |p: DVec3| navigate::project(camera, p).map(|(x, y)| to_screen(x, y));
+        let stroke = egui::Stroke::new(2.0, Color32::from_rgb(255, 200, 0));
+        let mut points: Vec<DVec3> = sample.bounces.iter().map(|b| b.point).collect();
+        if let Some(ray) = &sample.missed {
+            // Off to the sky: far along the ray.
+            let far = 1e3
+                * (ray.origin - sample.bounces.first().map_or(ray.origin, |b| b.ray.origin))
+                    .length()
+                    .max(1.0);
+            points.push(ray.at(far));
+        }
+        for pair in points.windows(2) {
+            if let Some((a, b)) = clip_in_front(camera, pair[0], pair[1])
+                && let (Some(a), Some(b)) = (on_screen(a), on_screen(b))
+            {
+                painter.line_segment([a, b], stroke);
+            }
+        }
+        let pixel = to_screen(sample.at.0, sample.at.1);
+        painter.circle_stroke(pixel, 5.0, stroke);
+        for (k, b) in sample.bounces.iter().enumerate() {
+            if let Some(p) = on_screen(b.point) {
+                painter.circle_filled(p, 3.5, stroke.color);
+                painter.text(
+                    p + Vec2::new(6.0, -6.0),
+                    egui::Align2::LEFT_BOTTOM,
+                    format!("{}", k + 1),
+                    egui::FontId::proportional(12.0),
+                    stroke.color,
+                );
+            }
+        }
+    }
+}
+
+/// The part of segment a–b in front of the camera's eye (both ends
+/// project), if any.
+fn clip_in_front(camera: &crate::scene::Camera, a: DVec3, b: DVec3) -> Option<(DVec3, DVec3)> {
+    let sees = |p: DVec3| navigate::project(camera, p).is_some();
+    match (sees(a), sees(b)) {
+        (true, true) => Some((a, b)),
+        (false, false) => None,
+        (seen_a, _) => {
+            // Halve toward the last point still in front.
+            let (mut inside, mut outside) = if seen_a { (a, b) } else { (b, a) };
+            for _ in 0..40 {
+                let mid = (inside + outside) * 0.5;
+                if sees(mid) {
+                    inside = mid;
+                } else {
+                    outside = mid;
+                }
+            }
+            Some(if seen_a { (a, inside) } else { (inside, b) })
+        }
+    }
+}
+
+/// One ray's tree; returns the object (and field) a click chose.
+fn sample_ui(
+    ui: &mut egui::Ui,
+    sample: &Sample,
+    labels: &[String],
+) -> Option<(usize, Option<Field>)> {
+    let mut chosen = None;
+    for (k, bounce) in sample.bounces.iter().enumerate() {
+        let which = if k == 0 {
+            "Camera ray".to_owned()
+        } else {
+            format!("Reflection {k}")
+        };
+        ui.separator();
+        ui.strong(format!(
+            "{which} from {} along {}",
+            vector(bounce.ray.origin),
+            vector(bounce.ray.dir)
+        ));
+        if let Some(c) = bounce_ui(ui, bounce, labels) {
+            chosen = Some(c);
+        }
+    }
+    if let Some(ray) = &sample.missed {
+        ui.separator();
+        ui.strong(format!(
+            "{} from {} along {}: hits nothing (black)",
+            if sample.bounces.is_empty() {
+                "Camera ray".to_owned()
+            } else {
+                format!("Reflection {}", sample.bounces.len())
+            },
+            vector(ray.origin),
+            vector(ray.dir)
+        ));
+    }
+    ui.separator();
+    ui.label(format!("Chain ended: {}", sample.ended.describe()));
+    chosen
+}
+
+fn bounce_ui(ui: &mut egui::Ui, b: &Bounce, labels: &[String]) -> Option<(usize, Option<Field>)> {
+    let mut chosen = None;
+    let label = labels.get(b.object).cloned().unwrap_or_default();
+    ui.horizontal(|ui| {
+        ui.label("hits");
+        if ui
+            .link(&label)
+            .on_hover_text("select it in the panel")
+            .clicked()
+        {
+            chosen = Some((b.object, None));
+        }
+        ui.label(format!("at t = {}", number(b.t)));
+    });
+    ui.label(format!("M = {}  N = {}", vector(b.point), vector(b.normal)));
+    for l in &b.lights {
+        let alpha = l
+            .cos_alpha
+            .map_or(String::new(), |a| format!(", cos α = {}", number(a)));
+        let behind = if l.cos_theta > 0.0 {
+            ""
+        } else {
+            " (behind: adds nothing)"
+        };
+        ui.label(format!(
+            "light {}: cos θ = {}{alpha}{behind}",
+            l.light + 1,
+            number(l.cos_theta)
+        ));
+    }
+    egui::Grid::new(("terms", b.object, b.t.to_bits()))
+        .num_columns(2)
+        .show(ui, |ui| {
+            let terms = [
+                ("ambient  ka·C", b.terms.ambient),
+                ("diffuse  Σ I·kd·cos θ", b.terms.diffuse),
+                ("specular  Σ I·ks·cos^m α", b.terms.specular),
+                ("reflection  ks·Ir", b.reflection),
+            ];
+            for (term, (name, value)) in terms.into_iter().enumerate() {
+                let hint = ["ka", "kd", "ks", "ks"][term];
+                if ui
+                    .link(name)
+                    .on_hover_text(format!("select {hint} of {label} in the panel"))
+                    .clicked()
+                {
+                    chosen = Some((b.object, Some(term_field(b.object, term))));
+                }
+                ui.monospace(vector(value));
+                ui.end_row();
+            }
+            ui.strong("colour");
+            ui.monospace(vector(b.color));
+            ui.end_row();
+        });
+    chosen
+}

@@ -1,0 +1,124 @@
+//! View › Pass: one render pass (a term of the formula, or the normal,
+//! depth or object of the camera ray's hit) shown in place of the
+//! picture. The pass is rendered on a thread of its own by the library
+//! ([`render::render_pass`], the image's tile loop) once the picture's
+//! scene and camera settle, the newest request cancelling the older; the
+//! pixel inspector shows its values.
+
+use super::*;
+use crate::render::{Cancel, Pass, PassImage, Progress};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// A pass on screen.
+pub(super) struct PassView {
+    /// The pass and the render generation it shows.
+    key: (Pass, u64),
+    pub(super) image: PassImage,
+    pub(super) texture: egui::TextureHandle,
+}
+
+/// The pass requests: the newest wanted, and a counter that cancels the
+/// older ones.
+#[derive(Default)]
+pub(super) struct PassRequests {
+    wanted: Option<(Pass, u64)>,
+    newest: Arc<AtomicU64>,
+}
+
+impl RayOfLightApp {
+    /// Shows `pass` in place of the picture (`Pass::Final`: the picture).
+    pub fn show_pass(&mut self, pass: Pass) {
+        self.pass = pass;
+        if pass == Pass::Final {
+            self.pass_view = None;
+            self.pass_requests.wanted = None;
+            self.pass_requests.newest.fetch_add(1, Ordering::Relaxed);
+        }
+    }
+
+    /// The pass shown, and its image once rendered.
+    pub fn pass_shown(&self) -> (Pass, Option<&PassImage>) {
+        let image = self
+            .pass_view
+            .as_ref()
+            .filter(|v| v.key.0 == self.pass)
+            .map(|v| &v.image);
+        (self.pass, image)
+    }
+
+    /// Renders the pass shown when the scene or camera changed and
+    /// nothing is being dragged.
+    pub(super) fn refresh_pass(&mut self) {
+        if self.pass == Pass::Final {
+            return;
+        }
+        let key = (self.pass, self.worker.newest());
+        if self.pass_requests.wanted == Some(key) || self.interacting() {
+            return;
+        }
+        self.pass_requests.wanted = Some(key);
+        let generation = self.pass_requests.newest.fetch_add(1, Ordering::Relaxed) + 1;
+        let cancel = Cancel::new(Arc::clone(&self.pass_requests.newest), generation);
+        let scene = self.doc.scene().clone();
+        let options = self.methods.request(false, self.aa).options(&scene);
+        let tx = self.background_tx.clone();
+        let ctx = self.ctx.clone();
+        std::thread::spawn(move || {
+            let done = render::render_pass(&scene, &options, key.0, &cancel, &Progress::default());
+            if let Ok(Some((image, _))) = done {
+                let _ = tx.send(Background::Pass(key, Box::new(image)));
+                ctx.request_repaint();
+            }
+        });
+    }
+
+    /// A pass arrived: on screen if it is still the one wanted.
+    pub(super) fn pass_ready(&mut self, key: (Pass, u64), image: PassImage) {
+        if self.pass_requests.wanted != Some(key) {
+            return;
+        }
+        let shown = image.to_rgb8();
+        let (w, h) = shown.dimensions();
+        let picture = egui::ColorImage::from_rgb([w as usize, h as usize], shown.as_raw());
+        let texture = self
+            .ctx
+            .load_texture("render-pass", picture, TextureOptions::NEAREST);
+        self.pass_view = Some(PassView {
+            key,
+            image,
+            texture,
+        });
+    }
+
+    /// The texture of the pass shown, when it is rendered for this
+    /// picture's size.
+    pub(super) fn pass_texture(&self, width: u32, height: u32) -> Option<egui::TextureId> {
+        let view = self.pass_view.as_ref()?;
+        (view.key.0 == self.pass && (view.image.width, view.image.height) == (width, height))
+            .then(|| view.texture.id())
+    }
+
+    /// The inspector's words for pixel (x, y) of the pass shown.
+    pub(super) fn pass_value(&self, x: u32, y: u32) -> Option<String> {
+        let (pass, Some(image)) = self.pass_shown() else {
+            return None;
+        };
+        let v = image.at(x, y)?;
+        let vector = crate::render::explain::vector;
+        Some(match pass {
+            Pass::Depth if v.x.is_finite() => {
+                format!("t = {}", crate::render::explain::number(v.x))
+            }
+            Pass::Depth => "t = ∞ (nothing hit)".to_owned(),
+            Pass::Object if v.x >= 1.0 => self.doc.object_label(v.x as usize - 1),
+            Pass::Object => "no object".to_owned(),
+            Pass::Normal => format!("N = {}", vector(v)),
+            _ => format!("{} {}", pass.name(), vector(v)),
+        })
+    }
+
+    /// The depth pass's range, for the status bar.
+    pub(super) fn depth_range(&self) -> Option<(f64, f64)> {
+        self.pass_shown().1?.depth_range()
+    }
+}
