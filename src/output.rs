@@ -3,7 +3,7 @@
 //! into place), so a failure never leaves a partial file nor touches an
 //! existing one.
 
-use crate::render::PassImage;
+use crate::render::{Pass, PassImage};
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageFormat, RgbImage};
 use std::io::{BufWriter, Write};
@@ -237,6 +237,13 @@ pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
         source,
     })?;
     write_atomic(path, &encoded)
+}
+
+/// Whether writing `pass` to `path` takes the passes' render (f64 values,
+/// [`save_pass`]) rather than the 8-bit image ([`save`]): any pass but
+/// `final`, and `final` too in an EXR (floats, unclamped).
+pub fn takes_pass(pass: Pass, path: &Path) -> bool {
+    pass != Pass::Final || format_for(path).is_ok_and(|f| f == ImageFormat::OpenExr)
 }
 
 /// Writes a render pass atomically: unclamped 32-bit floats in an EXR

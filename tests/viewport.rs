@@ -615,6 +615,25 @@ fn view_pass_shows_a_pass_and_the_inspector_its_values() {
     harness.event(Event::PointerMoved(MIDDLE));
     harness.run_steps(2);
     assert!(harness.query_by_label_contains(") diffuse (").is_some());
+    // Exported: the pass shown, its floats in an EXR.
+    let out = path.with_file_name("diffuse.exr");
+    harness.state_mut().run(Command::ExportPath);
+    harness.run_steps(2);
+    harness
+        .get_all_by_role(egui::accesskit::Role::TextInput)
+        .last()
+        .unwrap()
+        .type_text(out.to_str().unwrap());
+    harness.run_steps(1);
+    harness.key_press(egui::Key::Enter);
+    wait_for_label(&mut harness, "exported ", Duration::from_secs(20));
+    let exr = image::open(&out).unwrap().to_rgb32f();
+    let floats: Vec<f32> = expected
+        .values
+        .iter()
+        .map(|&v| render::f32_keeping_level(v))
+        .collect();
+    assert!(exr.as_raw() == &floats);
     // Depth: its range in the status bar.
     harness
         .state_mut()

@@ -11,7 +11,6 @@ mod progress;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
-use rayoflight::render::Pass;
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
@@ -131,19 +130,14 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     let counted = render::Progress::default();
     let never = render::Cancel::never();
     let cancelled = || Failure::Error("the render was cancelled".to_owned());
-    // A pass, or any EXR (floats, unclamped), comes from the passes'
-    // render; the plain image from the image's.
-    let exr = output::format_for(&out).map_err(fail)? == image::ImageFormat::OpenExr;
-    let elapsed = if r.pass != Pass::Final || exr {
+    let elapsed = if output::takes_pass(r.pass, &out) {
         let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
             measure::pass_timed(scene, &request, r.pass, &pool, &never, &counted)
         });
         let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
         output::save_pass(&timed.image, &out).map_err(fail)?;
-        if let Some((near, far)) = timed.image.depth_range()
-            && !exr
-        {
-            eprintln!("depth: t from {near} (light) to {far} (dark)");
+        if let Some((near, far)) = timed.image.depth_range() {
+            eprintln!("depth: t from {near} to {far}");
         }
         timed.elapsed
     } else {

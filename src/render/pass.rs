@@ -153,7 +153,7 @@ impl PassImage {
     }
 
     /// The pass as an 8-bit picture: terms and `final` clamped and
-    /// rounded as the image is, N as (N + 1) / 2, depth from 1 at the
+    /// rounded as the image is, N as (N + 1) / 2 (misses black), depth from 1 at the
     /// nearest hit to 0.2 at the farthest (misses black), each object a
     /// colour of its own (misses black).
     pub fn to_rgb8(&self) -> RgbImage {
@@ -162,6 +162,8 @@ impl PassImage {
         for (pixel, v) in image.pixels_mut().zip(self.values.chunks_exact(3)) {
             let v = DVec3::from_slice(v);
             let shown = match self.pass {
+                // A hit's N is unit: zero is a miss, black.
+                Pass::Normal if v == DVec3::ZERO => v,
                 Pass::Normal => (v + DVec3::ONE) * 0.5,
                 Pass::Depth => match range {
                     Some((near, far)) if v.x.is_finite() => {

@@ -165,7 +165,8 @@ impl RayOfLightApp {
 
     /// Renders at full resolution with the chosen anti-aliasing on a
     /// background thread and writes the file atomically; the status bar
-    /// shows its progress and can cancel it.
+    /// shows its progress and can cancel it. The pass shown (View › Pass)
+    /// is what is exported; an EXR holds its floats, unclamped.
     pub(super) fn export(&mut self, path: PathBuf) {
         if let Some(export) = &self.export {
             self.notify(format!(
@@ -201,11 +202,17 @@ impl RayOfLightApp {
         self.export = Some(export);
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
+        let pass = self.pass;
         std::thread::spawn(move || {
-            let result = match render::render_watched(&scene, &options, &cancel, &progress) {
-                Ok(Some((image, _))) => crate::output::save(&image, &path)
-                    .map(|()| true)
-                    .map_err(|e| e.to_string()),
+            let written = if crate::output::takes_pass(pass, &path) {
+                render::render_pass(&scene, &options, pass, &cancel, &progress)
+                    .map(|done| done.map(|(image, _)| crate::output::save_pass(&image, &path)))
+            } else {
+                render::render_watched(&scene, &options, &cancel, &progress)
+                    .map(|done| done.map(|(image, _)| crate::output::save(&image, &path)))
+            };
+            let result = match written {
+                Ok(Some(saved)) => saved.map(|()| true).map_err(|e| e.to_string()),
                 Ok(None) => Ok(false),
                 Err(e) => Err(e.to_string()),
             };

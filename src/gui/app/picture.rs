@@ -146,7 +146,7 @@ impl RayOfLightApp {
             }
             let to_screen =
                 |x: f64, y: f64| rect.min + Vec2::new(x as f32, y as f32) / image_size * size;
-            self.draw_explained_path(&painter, to_screen);
+            self.draw_explained_path(&painter.with_clip_rect(rect.intersect(area)), to_screen);
             // Markers belong on a picture of the camera's size (not the
             // blank one shown before the first render, nor an old size).
             let camera = &self.doc.scene().camera;
