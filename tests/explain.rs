@@ -8,18 +8,7 @@ mod common;
 
 use common::{Rng, rayoflight, stderr, stdout};
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-
-fn golden_scenes() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/golden");
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
-        .collect();
-    scenes.sort();
-    scenes
-}
+use std::path::Path;
 
 /// `explain --json` of pixel (x, y), parsed.
 fn explain(dir: &Path, scene: &Path, x: u32, y: u32, extra: &[&str]) -> Value {
@@ -122,7 +111,7 @@ fn check(e: &Value, pixel: [u8; 3], what: &str) {
 
 #[test]
 fn every_golden_scene_explains_200_pixels_as_rendered() {
-    let scenes = golden_scenes();
+    let scenes = common::golden_scenes();
     assert!(scenes.len() >= 19, "the golden scenes are there");
     let dir = tempfile::tempdir().unwrap();
     let mut hits_seen = 0;

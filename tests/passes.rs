@@ -11,18 +11,7 @@ use common::{rayoflight, stderr};
 use rayoflight::render::{self, Cancel, Pass, PassImage, Progress, object_ids, prepare};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
-use std::path::{Path, PathBuf};
-
-fn golden_scenes() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/golden");
-    let mut scenes: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
-        .collect();
-    scenes.sort();
-    scenes
-}
+use std::path::Path;
 
 fn pass(scene: &Scene, request: &RenderRequest, pass: Pass) -> PassImage {
     let options = request.options(scene);
@@ -50,7 +39,7 @@ const TERMS: [Pass; 4] = [
 fn the_terms_add_up_to_final_bit_for_bit_and_final_is_the_image() {
     let request = RenderRequest::default();
     let mut reflecting = 0;
-    for path in golden_scenes() {
+    for path in common::golden_scenes() {
         let scene = scene::load(&path).unwrap();
         let name = path.display();
         let [a, d, s, r] = TERMS.map(|p| pass(&scene, &request, p));

@@ -108,6 +108,21 @@ fn drag(harness: &mut Harness<'_, RayOfLightApp>, from: Pos2, to: Pos2, modifier
     harness.run_steps(2);
 }
 
+/// File › Export to path…, `out` typed into its field, Enter.
+fn export_to(harness: &mut Harness<'_, RayOfLightApp>, out: &Path) {
+    harness.state_mut().run(Command::ExportPath);
+    harness.run_steps(2);
+    // The dialog's field (the panel's search field is the other one).
+    harness
+        .get_all_by_role(egui::accesskit::Role::TextInput)
+        .last()
+        .unwrap()
+        .type_text(out.to_str().unwrap());
+    harness.run_steps(1);
+    harness.key_press(egui::Key::Enter);
+    harness.run_steps(2);
+}
+
 /// Presses and releases the primary button at `at`, without moving.
 fn click(harness: &mut Harness<'_, RayOfLightApp>, at: Pos2) {
     for pressed in [true, false] {
@@ -310,17 +325,7 @@ fn an_export_shows_its_progress_and_time_left_and_can_be_cancelled() {
     std::fs::write(&path, common::mirrors_text(10_000, 640, 360)).unwrap();
     let out = dir.path().join("out.png");
     let mut harness = app(&path);
-    harness.state_mut().run(Command::ExportPath);
-    harness.run_steps(2);
-    // The dialog's field (the panel's search field is the other one).
-    harness
-        .get_all_by_role(egui::accesskit::Role::TextInput)
-        .last()
-        .unwrap()
-        .type_text(out.to_str().unwrap());
-    harness.run_steps(1);
-    harness.key_press(egui::Key::Enter);
-    harness.run_steps(2);
+    export_to(&mut harness, &out);
     wait_for_label(&mut harness, "exporting out.png", Duration::from_secs(5));
     // After a second with tiles done: a percentage and the time left.
     wait_for_label(&mut harness, "s left", Duration::from_secs(60));
@@ -570,24 +575,47 @@ fn e_then_a_click_explains_the_pixel_as_rendered_and_a_term_selects_its_field() 
         })
     );
     // Alt+click explains directly, without E.
-    let elsewhere = MIDDLE + Vec2::new(40.0, 0.0);
-    harness.event(Event::PointerMoved(elsewhere));
-    harness.run_steps(1);
-    for pressed in [true, false] {
-        harness.event_modifiers(
-            Event::PointerButton {
-                pos: elsewhere,
-                button: PointerButton::Primary,
-                pressed,
-                modifiers: Modifiers::ALT,
-            },
-            Modifiers::ALT,
-        );
+    let alt_click = |harness: &mut Harness<'_, RayOfLightApp>, at: Pos2| {
+        harness.event(Event::PointerMoved(at));
         harness.run_steps(1);
-    }
-    let again = harness.state().explanation().unwrap();
-    assert!(again.x > e.x, "{} then {}", e.x, again.x);
-    assert_eq!(again.rgb8, image.get_pixel(again.x, again.y).0);
+        for pressed in [true, false] {
+            harness.event_modifiers(
+                Event::PointerButton {
+                    pos: at,
+                    button: PointerButton::Primary,
+                    pressed,
+                    modifiers: Modifiers::ALT,
+                },
+                Modifiers::ALT,
+            );
+            harness.run_steps(1);
+        }
+    };
+    alt_click(&mut harness, MIDDLE + Vec2::new(40.0, 0.0));
+    let elsewhere = harness.state().explanation().unwrap().clone();
+    assert!(elsewhere.x > e.x, "{} then {}", e.x, elsewhere.x);
+    assert_eq!(elsewhere.rgb8, image.get_pixel(elsewhere.x, elsewhere.y).0);
+    alt_click(&mut harness, MIDDLE);
+    let again = harness.state().explanation().unwrap().clone();
+    assert_eq!((again.x, again.y, again.rgb8), (e.x, e.y, e.rgb8));
+    // Another program saves the scene: once its picture is done, the
+    // pixel is explained again with the new numbers.
+    std::fs::write(
+        &path,
+        SCENE.replace(r#"green="1" blue="0""#, r#"green="0.5" blue="1""#),
+    )
+    .unwrap();
+    until(&mut harness, "the pixel explained again", |app| {
+        app.explanation().is_some_and(|now| now.rgb8 != again.rgb8)
+    });
+    let now = harness.state().explanation().unwrap();
+    let edited = render::render(
+        harness.state().document().scene(),
+        &render::RenderOptions::default(),
+    )
+    .unwrap();
+    assert_eq!((now.x, now.y), (again.x, again.y));
+    assert_eq!(now.rgb8, edited.get_pixel(now.x, now.y).0);
 }
 
 #[test]
@@ -617,15 +645,7 @@ fn view_pass_shows_a_pass_and_the_inspector_its_values() {
     assert!(harness.query_by_label_contains(") diffuse (").is_some());
     // Exported: the pass shown, its floats in an EXR.
     let out = path.with_file_name("diffuse.exr");
-    harness.state_mut().run(Command::ExportPath);
-    harness.run_steps(2);
-    harness
-        .get_all_by_role(egui::accesskit::Role::TextInput)
-        .last()
-        .unwrap()
-        .type_text(out.to_str().unwrap());
-    harness.run_steps(1);
-    harness.key_press(egui::Key::Enter);
+    export_to(&mut harness, &out);
     wait_for_label(&mut harness, "exported ", Duration::from_secs(20));
     let exr = image::open(&out).unwrap().to_rgb32f();
     let floats: Vec<f32> = expected

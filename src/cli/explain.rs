@@ -215,19 +215,7 @@ fn sample_words(out: &mut String, s: &Sample, names: &Names) {
         *out += &format!("  hits {} at t = {}\n", names.object(b.object), n(b.t));
         *out += &format!("  M = {}  N = {}\n", v(b.point), v(b.normal));
         for l in &b.lights {
-            let alpha = l
-                .cos_alpha
-                .map_or(String::new(), |a| format!("  cos α = {}", n(a)));
-            let behind = if l.cos_theta > 0.0 {
-                ""
-            } else {
-                "  (behind: adds nothing)"
-            };
-            *out += &format!(
-                "  light {}: cos θ = {}{alpha}{behind}\n",
-                l.light + 1,
-                n(l.cos_theta)
-            );
+            *out += &format!("  {}\n", l.describe());
         }
         *out += &format!("  ambient     ka·C            {}\n", v(b.terms.ambient));
         *out += &format!("  diffuse     Σ I·kd·cos θ    {}\n", v(b.terms.diffuse));

@@ -85,6 +85,11 @@ impl Preview {
         &self.image
     }
 
+    /// The render generation whose pixels are on screen (or arriving).
+    pub fn generation(&self) -> u64 {
+        self.generation
+    }
+
     pub fn state(&self) -> &RenderState {
         &self.state
     }

@@ -89,6 +89,26 @@ pub struct LightShare {
     pub specular: DVec3,
 }
 
+impl LightShare {
+    /// In words: `light 1: cos θ = 0.6, cos α = 0.73`, or that it is
+    /// behind the surface.
+    pub fn describe(&self) -> String {
+        let alpha = self
+            .cos_alpha
+            .map_or(String::new(), |a| format!(", cos α = {}", number(a)));
+        let behind = if self.cos_theta > 0.0 {
+            ""
+        } else {
+            " (behind: adds nothing)"
+        };
+        format!(
+            "light {}: cos θ = {}{alpha}{behind}",
+            self.light + 1,
+            number(self.cos_theta)
+        )
+    }
+}
+
 /// One hit of the chain.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Bounce {

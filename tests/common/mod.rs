@@ -114,3 +114,15 @@ pub fn document_on(
     let doc = rayoflight::gui::document::Document::open(&path).unwrap();
     (dir, path, doc)
 }
+
+/// The golden scenes' files (`scenes/golden/*.xml`), sorted.
+pub fn golden_scenes() -> Vec<std::path::PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/golden");
+    let mut scenes: Vec<_> = fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "xml"))
+        .collect();
+    scenes.sort();
+    scenes
+}

@@ -15,10 +15,10 @@ pub(super) struct Shown {
     pub(super) explanation: Explanation,
     /// The panel's names of the objects when it was explained.
     labels: Vec<String>,
-    /// The pixel of the picture on screen then.
-    on_screen: Option<[u8; 3]>,
     /// Which ray's tree is shown (supersampled pixels have several).
     sample: usize,
+    /// The render generation it explains.
+    generation: u64,
 }
 
 /// Which coefficient a term comes from.
@@ -45,20 +45,37 @@ impl RayOfLightApp {
             None => render::prepare(scene, &options),
         };
         let Some(explanation) = prepared.explain(x, y) else {
+            // Outside the picture (it shrank).
+            self.explained = None;
             return;
         };
-        let image = self.preview.image();
-        let on_screen = (image.dimensions() == (scene.camera.width, scene.camera.height)
-            && self.preview.has_image())
-        .then(|| image.get_pixel(x, y).0);
+        let sample = self.explained.as_ref().map_or(0, |s| s.sample);
+        let sample = sample.min(explanation.samples.len() - 1);
         self.explained = Some(Shown {
             explanation,
             labels: (0..scene.objects.len())
                 .map(|n| self.doc.object_label(n))
                 .collect(),
-            on_screen,
-            sample: 0,
+            sample,
+            generation: self.worker.newest(),
         });
+    }
+
+    /// Once the picture of an edited scene (or a moved camera) is done,
+    /// the same pixel is explained again: the numbers follow the edits.
+    pub(super) fn refresh_explained(&mut self) {
+        let Some(shown) = &self.explained else {
+            return;
+        };
+        let newest = self.worker.newest();
+        let done = matches!(self.preview.state(), RenderState::Done { .. })
+            && self.preview.generation() == newest;
+        if shown.generation != newest && done && !self.interacting() {
+            let (x, y) = (shown.explanation.x, shown.explanation.y);
+            let armed = self.explain_armed;
+            self.explain_pixel(x, y);
+            self.explain_armed = armed;
+        }
     }
 
     /// The pixel explained in the window, if any.
@@ -68,6 +85,14 @@ impl RayOfLightApp {
 
     /// The window of the explained pixel.
     pub(super) fn explain_window(&mut self, ctx: &egui::Context) {
+        // The pixel of the finished picture of the scene explained.
+        let on_screen = self.explained.as_ref().and_then(|shown| {
+            let done = matches!(self.preview.state(), RenderState::Done { .. })
+                && self.preview.generation() == shown.generation;
+            let (x, y) = (shown.explanation.x, shown.explanation.y);
+            let image = self.preview.image();
+            (done && x < image.width() && y < image.height()).then(|| image.get_pixel(x, y).0)
+        });
         let Some(shown) = &mut self.explained else {
             return;
         };
@@ -89,14 +114,11 @@ impl RayOfLightApp {
                     e.illumination.name(),
                     vector(e.rgb)
                 ));
-                if let Some(pixel) = shown.on_screen
+                if let Some(pixel) = on_screen
                     && pixel != e.rgb8
                 {
-                    // A picture of another method or an older scene.
-                    ui.colored_label(
-                        Color32::YELLOW,
-                        format!("on screen: {pixel:?} (the picture is not finished)"),
-                    );
+                    // Not expected: the explained value is the render's.
+                    ui.colored_label(Color32::YELLOW, format!("on screen: {pixel:?}"));
                 }
                 if e.samples.len() > 1 {
                     ui.horizontal(|ui| {
@@ -257,19 +279,7 @@ fn bounce_ui(ui: &mut egui::Ui, b: &Bounce, labels: &[String]) -> Option<(usize,
     });
     ui.label(format!("M = {}  N = {}", vector(b.point), vector(b.normal)));
     for l in &b.lights {
-        let alpha = l
-            .cos_alpha
-            .map_or(String::new(), |a| format!(", cos α = {}", number(a)));
-        let behind = if l.cos_theta > 0.0 {
-            ""
-        } else {
-            " (behind: adds nothing)"
-        };
-        ui.label(format!(
-            "light {}: cos θ = {}{alpha}{behind}",
-            l.light + 1,
-            number(l.cos_theta)
-        ));
+        ui.label(l.describe());
     }
     egui::Grid::new(("terms", b.object, b.t.to_bits()))
         .num_columns(2)

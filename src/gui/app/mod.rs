@@ -390,6 +390,7 @@ impl RayOfLightApp {
         self.picture(ui);
         self.modals(ui);
         self.help_window(&ctx);
+        self.refresh_explained();
         self.explain_window(&ctx);
         self.refresh_outline();
         self.refresh_pass();
