@@ -6,7 +6,9 @@
 //! (bands over the rayon pool, counting [`Progress`]) that [`render`] and
 //! the app's worker share.
 //! [`RenderOptions`] holds every method choice; its default is the
-//! contract's reference image. [`navigate`] moves the camera as a
+//! contract's reference image. [`render_pass`] renders one term of the
+//! formula (or the hit's normal, depth, object) through the same tile
+//! loop; [`explain`] says why a pixel has its colour, from the same trace. [`navigate`] moves the camera as a
 //! viewport does (orbit, pan, dolly); [`object_ids`] says which object each
 //! pixel shows.
 
@@ -24,7 +26,7 @@ pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
 pub use explain::Explanation;
 pub use ids::{ObjectIds, object_ids};
-pub use pass::{Pass, PassImage, Texel, f32_keeping_level, object_color, render_pass};
+pub use pass::{Pass, PassImage, Texel, f32_keeping_level, in_f32, object_color, render_pass};
 pub use prepared::{Hit, Prepared, prepare};
 pub use progress::{Progress, time_left};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};

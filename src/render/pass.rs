@@ -10,7 +10,12 @@
 //! final = ((ambient + diffuse) + specular) + reflection
 //! ```
 //!
-//! holds bit for bit in f64, and `final` rounded to 8 bits is the image.
+//! holds bit for bit in the renderer's f64 (what `explain` shows), and
+//! `final` rounded to 8 bits is the image. A pass keeps its values as an
+//! EXR holds them, in f32 ([`in_f32`]): each term the nearest f32, final
+//! their f32 sum in the same order — so the files add up bit for bit too —
+//! and still the image's 8-bit value (a term moves an ulp or two where a
+//! value a hair from a rounding boundary would cross it).
 //! With N×N rays per pixel a term pass is the mean of its samples' terms
 //! and `final` the mean of the clamped samples (the image's value before
 //! rounding): the terms then add up to the unclamped mean only within
@@ -81,6 +86,11 @@ impl Pass {
     /// The pass named `name` (as [`Pass::name`] spells it).
     pub fn named(name: &str) -> Option<Pass> {
         Pass::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    /// One of the four terms, or final: they add up.
+    pub fn is_term_or_final(self) -> bool {
+        !self.is_geometric()
     }
 
     /// A property of the camera ray's hit, traced with one ray through
@@ -181,10 +191,10 @@ impl PassImage {
         image
     }
 
-    /// The pass in 32-bit floats, unclamped (what an EXR holds): each
-    /// value the f64 one rounded to the nearest f32, except where that
-    /// would change its 8-bit value (the colour passes' values round to
-    /// the image's levels): [`f32_keeping_level`].
+    /// The pass in 32-bit floats, unclamped (what an EXR holds). One ray
+    /// per pixel, the values are f32 already ([`in_f32`]); the means of
+    /// supersampled pixels are rounded to the nearest f32 that keeps
+    /// their 8-bit value ([`f32_keeping_level`]).
     pub fn to_rgb32f(&self) -> Rgb32FImage {
         let values = self
             .values
@@ -200,6 +210,50 @@ impl PassImage {
         Rgb32FImage::from_raw(self.width, self.height, values)
             .expect("three values a pixel, width × height pixels")
     }
+}
+
+/// One ray's four terms (ambient, diffuse, specular, reflection) and its
+/// colour (their f64 sum) in f32, as the EXR passes hold them: each term
+/// the nearest f32, and the colour their f32 sum in the renderer's order,
+/// ((a + d) + s) + r, so that the files add up bit for bit. Where that
+/// sum would round to another 8-bit level than the f64 colour (a value a
+/// hair from (k + ½)/255), the largest term moves by an ulp or two until
+/// it does not: final.exr rounds to the PNG everywhere. (The values come
+/// back in f64, each an f32 exactly.)
+pub fn in_f32(terms: [DVec3; 4], color: DVec3) -> ([DVec3; 4], DVec3) {
+    let mut out = [DVec3::ZERO; 4];
+    let mut sum = DVec3::ZERO;
+    for c in 0..3 {
+        let (t, s) = channel_in_f32(terms.map(|t| t[c]), color[c]);
+        for (o, t) in out.iter_mut().zip(t) {
+            o[c] = f64::from(t);
+        }
+        sum[c] = f64::from(s);
+    }
+    (out, sum)
+}
+
+fn channel_in_f32(terms: [f64; 4], color: f64) -> ([f32; 4], f32) {
+    let mut t = terms.map(|x| x as f32);
+    let add = |t: &[f32; 4]| ((t[0] + t[1]) + t[2]) + t[3];
+    let level = to_8bit(color);
+    let largest = (0..4)
+        .max_by(|&i, &j| terms[i].abs().total_cmp(&terms[j].abs()))
+        .unwrap_or(0);
+    // A few steps at most: the f32 sum is within ulps of the f64 one.
+    for _ in 0..64 {
+        let sum = add(&t);
+        let got = to_8bit(f64::from(sum));
+        if got == level {
+            return (t, sum);
+        }
+        t[largest] = if got > level {
+            t[largest].next_down()
+        } else {
+            t[largest].next_up()
+        };
+    }
+    (t, add(&t))
 }
 
 /// `v` in f32 with the same 8-bit value: the nearest f32, or where that
@@ -270,4 +324,42 @@ pub fn render_pass(
             RenderStats { rays },
         ))
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A colour a hair below 121.5/255 (met on coloured-lights): its
+    /// nearest f32 rounds to 122, the f64 to 121.
+    const NEAR_BOUNDARY: f64 = 4.764_705_779_513_642_7e-1;
+
+    #[test]
+    fn f32_terms_add_up_and_keep_the_level() {
+        assert_eq!(to_8bit(NEAR_BOUNDARY), 121);
+        assert_eq!(to_8bit(f64::from(NEAR_BOUNDARY as f32)), 122);
+        let terms = [0.1, NEAR_BOUNDARY - 0.1 - 0.05, 0.05, 0.0].map(DVec3::splat);
+        let color = ((terms[0] + terms[1]) + terms[2]) + terms[3];
+        let (t, sum) = in_f32(terms, color);
+        for c in 0..3 {
+            let t32 = t.map(|t| t[c] as f32);
+            assert_eq!(((t32[0] + t32[1]) + t32[2]) + t32[3], sum[c] as f32);
+            assert_eq!(to_8bit(sum[c]), to_8bit(color[c]));
+            // Each term within two ulps of its nearest f32.
+            for (k, t) in t32.iter().enumerate() {
+                let nearest = terms[k][c] as f32;
+                assert!((t.to_bits() as i64 - nearest.to_bits() as i64).abs() <= 2);
+            }
+        }
+        // All of it in one term: that term moves an ulp, below.
+        let alone = [NEAR_BOUNDARY, 0.0, 0.0, 0.0].map(DVec3::splat);
+        let (t, sum) = in_f32(alone, DVec3::splat(NEAR_BOUNDARY));
+        assert_eq!(t[0].x as f32, (NEAR_BOUNDARY as f32).next_down());
+        assert_eq!((t[0].x, to_8bit(sum.x)), (sum.x, 121));
+        assert_eq!(
+            f32_keeping_level(NEAR_BOUNDARY),
+            (NEAR_BOUNDARY as f32).next_down()
+        );
+        assert_eq!(f32_keeping_level(0.25), 0.25);
+    }
 }

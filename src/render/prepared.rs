@@ -19,13 +19,19 @@
 //! - Shading data (colour, material) sits apart, read once per hit.
 //! - Whitted chains stop as soon as nothing the rest of the chain could add
 //!   can change the pixel's 8-bit value (exact: the image is unchanged).
+//! - The trace keeps the camera ray's terms and the reflected colour apart
+//!   ([`Traced`]) and adds them in one order: a tile's texels are the 8-bit
+//!   image or the values of a render pass ([`super::pass`]). An observer
+//!   type parameter sees each step; `()` in renders, the explained pixel's
+//!   recorder in [`Prepared::explain`] (one lane, the same code).
 //! - All of it but the camera is one shared [`World`]: another view of the
 //!   same scene ([`Prepared::with_view`]: a coarse pass, a moved camera, a
 //!   pick) prepares nothing again.
 
 use super::explain::{Ended, Explanation, Recorder, Sample};
 use super::{
-    CameraRays, Cancel, Offset, Pass, Precision, RenderOptions, SphereTest, Texel, Tile, to_8bit,
+    CameraRays, Cancel, Offset, Pass, Precision, RenderOptions, SphereTest, Texel, Tile, in_f32,
+    to_8bit,
 };
 use crate::geometry::{
     Aabb, Bvh, F64x4, Found, Lanes, MAX_LANES, Mask, Primitive, Primitive32, Ray, Ray32, Real,
@@ -242,6 +248,27 @@ impl<L: Lanes> Traced<L> {
             Pass::Normal => self.normal,
             Pass::Depth => L::vector_from_fn(|i| DVec3::splat(self.t.lane(i))),
             Pass::Object => L::vector_from_fn(|i| DVec3::splat(self.object.lane(i) + 1.0)),
+        }
+    }
+
+    /// Lane `k`'s four terms and colour in f32, as an EXR holds them
+    /// ([`in_f32`]): the value of `pass` (a term or final).
+    #[inline(always)]
+    fn value_in_f32(&self, pass: Pass, k: usize) -> DVec3 {
+        let lane = |v| L::vector_lane(v, k);
+        let terms = [
+            lane(self.terms.ambient),
+            lane(self.terms.diffuse),
+            lane(self.terms.specular),
+            lane(self.reflection),
+        ];
+        let (terms, color) = in_f32(terms, lane(self.color()));
+        match pass {
+            Pass::Ambient => terms[0],
+            Pass::Diffuse => terms[1],
+            Pass::Specular => terms[2],
+            Pass::Reflection => terms[3],
+            _ => color,
         }
     }
 }
@@ -1169,10 +1196,15 @@ impl Prepared {
                 rays,
                 &mut (),
             );
-            // One ray: its value as it is (8-bit texels clamp themselves).
+            // One ray: its value as it is (8-bit texels clamp themselves),
+            // the terms and final of a pass in f32 (they add up there).
             let value = traced.value(pass);
             for (k, pixel) in out.iter_mut().take(pixels.len()).enumerate() {
-                *pixel = T::pixel(K::L::vector_lane(value, k));
+                *pixel = T::pixel(if T::UNCLAMPED && pass.is_term_or_final() {
+                    traced.value_in_f32(pass, k)
+                } else {
+                    K::L::vector_lane(value, k)
+                });
             }
             return;
         }
