@@ -527,7 +527,18 @@ fn until(
 fn e_then_a_click_explains_the_pixel_as_rendered_and_a_term_selects_its_field() {
     let (_dir, path) = file();
     let mut harness = ready(&path);
-    // E arms the explain; the click explains instead of selecting.
+    // E arms the explain (Esc takes it back); the click explains
+    // instead of selecting.
+    let armed = |h: &Harness<'_, RayOfLightApp>| {
+        h.query_by_label_contains("click a pixel to explain")
+            .is_some()
+    };
+    harness.key_press(egui::Key::E);
+    harness.run_steps(1);
+    assert!(armed(&harness));
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(1);
+    assert!(!armed(&harness));
     harness.key_press(egui::Key::E);
     harness.run_steps(1);
     assert!(

@@ -36,12 +36,14 @@ impl RayOfLightApp {
         }
     }
 
-    /// The pass shown, and its image once rendered.
+    /// The pass shown, and its image once rendered for the scene and
+    /// camera of the newest picture (until then, and while the camera
+    /// moves, the picture shows instead).
     pub fn pass_shown(&self) -> (Pass, Option<&PassImage>) {
         let image = self
             .pass_view
             .as_ref()
-            .filter(|v| v.key.0 == self.pass)
+            .filter(|v| v.key == (self.pass, self.worker.newest()))
             .map(|v| &v.image);
         (self.pass, image)
     }
@@ -93,9 +95,9 @@ impl RayOfLightApp {
     /// The texture of the pass shown, when it is rendered for this
     /// picture's size.
     pub(super) fn pass_texture(&self, width: u32, height: u32) -> Option<egui::TextureId> {
+        let image = self.pass_shown().1?;
         let view = self.pass_view.as_ref()?;
-        (view.key.0 == self.pass && (view.image.width, view.image.height) == (width, height))
-            .then(|| view.texture.id())
+        ((image.width, image.height) == (width, height)).then(|| view.texture.id())
     }
 
     /// The inspector's words for pixel (x, y) of the pass shown.
