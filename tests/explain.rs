@@ -232,6 +232,13 @@ fn a_pixel_outside_the_image_is_a_usage_error_and_text_is_readable() {
         "{}",
         stderr(&o)
     );
+    let o = rayoflight(dir.path(), &["explain", "tiny.xml", "x", "0"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("<X> expects a pixel number"),
+        "{}",
+        stderr(&o)
+    );
     let o = rayoflight(dir.path(), &["explain", "tiny.xml", "8", "6"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);

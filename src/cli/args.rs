@@ -303,10 +303,10 @@ struct ExplainFlags {
     /// The scene file.
     scene: PathBuf,
     /// The pixel's column, 0 at the left.
-    #[arg(value_name = "X")]
+    #[arg(value_name = "X", value_parser = pixel)]
     x: u32,
     /// The pixel's row, 0 at the top.
-    #[arg(value_name = "Y")]
+    #[arg(value_name = "Y", value_parser = pixel)]
     y: u32,
     /// Print one JSON object: "rgb8", "rgb", "hits" (each with "object",
     /// 1-based or null for a miss, "t", "point", "normal", "terms").
@@ -410,6 +410,11 @@ fn path_value(text: &str) -> Result<(String, String), String> {
     text.split_once('=')
         .map(|(path, value)| (path.to_owned(), value.to_owned()))
         .ok_or_else(|| "expects PATH=VALUE, such as object[1].material.ka=0.5".to_owned())
+}
+
+fn pixel(text: &str) -> Result<u32, String> {
+    text.parse()
+        .map_err(|_| "expects a pixel number: 0, 1, 2, … from the image's top left".to_owned())
 }
 
 fn pass(text: &str) -> Result<Pass, String> {
