@@ -9,12 +9,14 @@ use crate::render::explain::{Bounce, Sample, number, vector};
 use crate::render::{Explanation, navigate};
 use crate::scene::edit::{Coef, Field};
 use glam::DVec3;
+use std::collections::BTreeMap;
 
 /// The explained pixel on screen.
 pub(super) struct Shown {
     pub(super) explanation: Explanation,
-    /// The panel's names of the objects when it was explained.
-    labels: Vec<String>,
+    /// The panel's names of the objects its rays hit (only those: a
+    /// scene may hold a million).
+    labels: BTreeMap<usize, String>,
     /// Which ray's tree is shown (supersampled pixels have several).
     sample: usize,
     /// The render generation it explains.
@@ -51,11 +53,15 @@ impl RayOfLightApp {
         };
         let sample = self.explained.as_ref().map_or(0, |s| s.sample);
         let sample = sample.min(explanation.samples.len() - 1);
+        let labels = explanation
+            .samples
+            .iter()
+            .flat_map(|s| &s.bounces)
+            .map(|b| (b.object, self.doc.object_label(b.object)))
+            .collect();
         self.explained = Some(Shown {
             explanation,
-            labels: (0..scene.objects.len())
-                .map(|n| self.doc.object_label(n))
-                .collect(),
+            labels,
             sample,
             generation: self.worker.newest(),
         });
@@ -226,7 +232,7 @@ fn clip_in_front(camera: &crate::scene::Camera, a: DVec3, b: DVec3) -> Option<(D
 fn sample_ui(
     ui: &mut egui::Ui,
     sample: &Sample,
-    labels: &[String],
+    labels: &BTreeMap<usize, String>,
 ) -> Option<(usize, Option<Field>)> {
     let mut chosen = None;
     for (k, bounce) in sample.bounces.iter().enumerate() {
@@ -263,9 +269,13 @@ fn sample_ui(
     chosen
 }
 
-fn bounce_ui(ui: &mut egui::Ui, b: &Bounce, labels: &[String]) -> Option<(usize, Option<Field>)> {
+fn bounce_ui(
+    ui: &mut egui::Ui,
+    b: &Bounce,
+    labels: &BTreeMap<usize, String>,
+) -> Option<(usize, Option<Field>)> {
     let mut chosen = None;
-    let label = labels.get(b.object).cloned().unwrap_or_default();
+    let label = labels.get(&b.object).cloned().unwrap_or_default();
     ui.horizontal(|ui| {
         ui.label("hits");
         if ui
