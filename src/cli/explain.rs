@@ -6,7 +6,7 @@ use super::args::ExplainArgs;
 use super::{Failure, edit, fail, print_line, refused};
 use glam::DVec3;
 use rayoflight::geometry::Ray;
-use rayoflight::render::explain::{Bounce, Ended, Sample, number as n, vector as v};
+use rayoflight::render::explain::{Bounce, Ended, Sample, describe_ray, number as n, vector as v};
 use rayoflight::render::{Explanation, prepare};
 use rayoflight::scene::edit::Edited;
 use rayoflight::scene::{self, Scene, splice};
@@ -202,16 +202,7 @@ fn words(e: &Explanation, names: &Names, scene: &str) -> String {
 
 fn sample_words(out: &mut String, s: &Sample, names: &Names) {
     for (k, b) in s.bounces.iter().enumerate() {
-        let which = if k == 0 {
-            "camera ray".to_owned()
-        } else {
-            format!("reflection {k}")
-        };
-        *out += &format!(
-            "\n{which} from {} along {}\n",
-            v(b.ray.origin),
-            v(b.ray.dir)
-        );
+        *out += &format!("\n{}\n", describe_ray(k, &b.ray));
         *out += &format!("  hits {} at t = {}\n", names.object(b.object), n(b.t));
         *out += &format!("  M = {}  N = {}\n", v(b.point), v(b.normal));
         for l in &b.lights {
@@ -228,16 +219,8 @@ fn sample_words(out: &mut String, s: &Sample, names: &Names) {
         *out += &format!("  colour                      {}\n", v(b.color));
     }
     if let Some(ray) = &s.missed {
-        let which = if s.bounces.is_empty() {
-            "camera ray".to_owned()
-        } else {
-            format!("reflection {}", s.bounces.len())
-        };
-        *out += &format!(
-            "\n{which} from {} along {}\n  hits nothing: black\n",
-            v(ray.origin),
-            v(ray.dir)
-        );
+        let ray = describe_ray(s.bounces.len(), ray);
+        *out += &format!("\n{ray}\n  hits nothing: black\n");
     }
     *out += &format!("chain ended: {}\n", s.ended.describe());
 }

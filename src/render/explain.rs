@@ -53,6 +53,21 @@ impl Ended {
     }
 }
 
+/// Ray `k` of a chain in words: `camera ray from (…) along (…)` for the
+/// first, `reflection k from …` after it.
+pub fn describe_ray(k: usize, ray: &Ray) -> String {
+    let which = if k == 0 {
+        "camera ray".to_owned()
+    } else {
+        format!("reflection {k}")
+    };
+    format!(
+        "{which} from {} along {}",
+        vector(ray.origin),
+        vector(ray.dir)
+    )
+}
+
 /// A number for people: six significant digits at most, no trailing
 /// zeros.
 pub fn number(x: f64) -> String {

@@ -5,7 +5,7 @@
 //! and the coefficient it comes from in the panel.
 
 use super::*;
-use crate::render::explain::{Bounce, Sample, number, vector};
+use crate::render::explain::{Bounce, Sample, describe_ray, number, vector};
 use crate::render::{Explanation, navigate};
 use crate::scene::edit::{Coef, Field};
 use glam::DVec3;
@@ -236,33 +236,16 @@ fn sample_ui(
 ) -> Option<(usize, Option<Field>)> {
     let mut chosen = None;
     for (k, bounce) in sample.bounces.iter().enumerate() {
-        let which = if k == 0 {
-            "Camera ray".to_owned()
-        } else {
-            format!("Reflection {k}")
-        };
         ui.separator();
-        ui.strong(format!(
-            "{which} from {} along {}",
-            vector(bounce.ray.origin),
-            vector(bounce.ray.dir)
-        ));
+        ui.strong(describe_ray(k, &bounce.ray));
         if let Some(c) = bounce_ui(ui, bounce, labels) {
             chosen = Some(c);
         }
     }
     if let Some(ray) = &sample.missed {
         ui.separator();
-        ui.strong(format!(
-            "{} from {} along {}: hits nothing (black)",
-            if sample.bounces.is_empty() {
-                "Camera ray".to_owned()
-            } else {
-                format!("Reflection {}", sample.bounces.len())
-            },
-            vector(ray.origin),
-            vector(ray.dir)
-        ));
+        let ray = describe_ray(sample.bounces.len(), ray);
+        ui.strong(format!("{ray}: hits nothing (black)"));
     }
     ui.separator();
     ui.label(format!("Chain ended: {}", sample.ended.describe()));
