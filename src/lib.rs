@@ -12,8 +12,13 @@
 //! - [`shading`]: the illumination formulas (ambient, lambert, phong, whitted).
 //! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
 //! - [`request`]: what a front end asks for (method, anti-aliasing,
-//!   threads) resolved into render options, with one precedence.
+//!   threads, region) resolved into render options, with one precedence.
 //! - [`output`]: writing images atomically, format chosen by extension.
+//! - [`region`], [`part`]: a rectangle of the image (`--region`), and the
+//!   record a part's PNG keeps of where it belongs.
+//! - [`split`], [`assemble`]: past one machine: regions of even cost for
+//!   many tasks, and their parts put back together, checked; [`sheet`]:
+//!   the renders of a sweep side by side.
 //! - [`files`]: special files and symbolic links, for reading and writing.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
@@ -29,6 +34,7 @@
 // geometry::avx, the only place `unsafe_code` is allowed.
 #![deny(unsafe_code)]
 
+pub mod assemble;
 pub mod bench;
 pub mod files;
 pub mod geometry;
@@ -37,11 +43,15 @@ pub mod gui;
 pub mod math;
 pub mod measure;
 pub mod output;
+pub mod part;
 pub mod pov;
+pub mod region;
 pub mod render;
 pub mod request;
 pub mod scene;
 pub mod shading;
+pub mod sheet;
+pub mod split;
 pub mod study;
 
 /// The built-in example scene from the brief (`scenes/example.xml`).

@@ -3,6 +3,7 @@
 //! into place), so a failure never leaves a partial file nor touches an
 //! existing one.
 
+use crate::part::Part;
 use crate::render::{Pass, PassImage};
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageFormat, RgbImage};
@@ -232,11 +233,71 @@ pub fn format_for(path: &Path) -> Result<ImageFormat, OutputError> {
 /// atomically.
 pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
     let format = format_for(path)?;
+    if format == ImageFormat::Png {
+        return save_png(image, &[], path);
+    }
     let encoded = encode(image, format).map_err(|source| OutputError::Encode {
         path: path.to_owned(),
         source,
     })?;
     write_atomic(path, &encoded)
+}
+
+/// Writes a part of a render (`--region`) as a PNG that records where it
+/// belongs ([`crate::part`]).
+pub fn save_part(image: &RgbImage, part: &Part, path: &Path) -> Result<(), OutputError> {
+    save_png(image, &[(crate::part::KEYWORD, &part.to_string())], path)
+}
+
+/// Writes `image` as a PNG with `texts` (keyword, text) in tEXt chunks
+/// before its pixels, atomically. Every PNG the project writes goes
+/// through [`write_png`]: a render saved whole and the same image put
+/// together from parts by `assemble` are the same file, byte for byte.
+pub fn save_png(image: &RgbImage, texts: &[(&str, &str)], path: &Path) -> Result<(), OutputError> {
+    write_atomic_with(
+        path,
+        |w| {
+            let mut rows = image.as_raw().chunks_exact(image.width() as usize * 3);
+            write_png(w, image.width(), image.height(), texts, |row| {
+                row.copy_from_slice(rows.next().unwrap_or_default());
+                Ok(())
+            })
+        },
+        |_| Ok::<(), OutputError>(()),
+    )
+}
+
+/// Writes a `width × height` PNG (8-bit RGB) into `w` a row at a time,
+/// top to bottom, so that an image need never be in memory whole:
+/// `next_row` fills each row (width × 3 bytes) in turn. `texts` (keyword,
+/// text) go in Latin-1 tEXt chunks before the pixels. Compressed as
+/// `image` writes PNG by default (fast deflate, adaptive filter).
+pub fn write_png<W: Write>(
+    w: W,
+    width: u32,
+    height: u32,
+    texts: &[(&str, &str)],
+    mut next_row: impl FnMut(&mut [u8]) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let mut encoder = png::Encoder::new(w, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::Filter::Adaptive);
+    for (keyword, text) in texts {
+        encoder
+            .add_text_chunk((*keyword).to_owned(), (*text).to_owned())
+            .map_err(std::io::Error::other)?;
+    }
+    let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+    let mut stream = writer.stream_writer().map_err(std::io::Error::other)?;
+    let mut row = vec![0; width as usize * 3];
+    for _ in 0..height {
+        next_row(&mut row)?;
+        stream.write_all(&row)?;
+    }
+    stream.finish().map_err(std::io::Error::other)?;
+    writer.finish().map_err(std::io::Error::other)
 }
 
 /// Whether writing `pass` to `path` takes the passes' render (f64 values,

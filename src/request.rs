@@ -9,8 +9,10 @@
 //! 2. an anti-aliasing the user asked for (`--aa N`, View › Anti-aliasing
 //!    above 1×1) replaces the method's; none asked, the method's stays
 //!    (`aa4` renders 4×4);
-//! 3. the thread count (none: rayon's pool, one thread per core).
+//! 3. the thread count (none: rayon's pool, one thread per core), and the
+//!    region of the image to render (none: all of it).
 
+use crate::region::Region;
 use crate::render::{self, RenderOptions};
 use crate::scene::Scene;
 use crate::study::Method;
@@ -25,6 +27,8 @@ pub struct RenderRequest {
     pub aa: Option<u32>,
     /// Render threads; `None`: one per core.
     pub threads: Option<usize>,
+    /// The rectangle of the image to render (`--region`); `None`: all.
+    pub region: Option<Region>,
 }
 
 impl RenderRequest {
@@ -37,6 +41,7 @@ impl RenderRequest {
         RenderOptions {
             aa: self.aa.unwrap_or(planned.aa),
             threads: self.threads,
+            region: self.region,
             ..planned
         }
     }
@@ -47,6 +52,7 @@ impl From<RenderOptions> for RenderRequest {
     fn from(options: RenderOptions) -> RenderRequest {
         RenderRequest {
             threads: options.threads,
+            region: options.region,
             method: Some(Method {
                 name: "given",
                 options: crate::study::Options::Fixed(options),
@@ -70,6 +76,7 @@ mod tests {
             method,
             aa,
             threads: Some(3),
+            region: None,
         };
         assert_eq!(request(aa4.clone(), None).options(&scene).aa, 4);
         assert_eq!(request(aa4, Some(2)).options(&scene).aa, 2);

@@ -13,6 +13,7 @@
 use super::edit::{self, EditArg};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use rayoflight::region::Region;
 use rayoflight::render::Pass;
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::EditError;
@@ -22,10 +23,13 @@ use std::path::{Path, PathBuf};
 
 pub const USAGE: &str = "\
 Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
-                  [--pass NAME] [--threads N] [--aa N] [--method NAME]
-                  [--no-gui] [--quiet]
+                  [--pass NAME] [--region X0,Y0,X1,Y1] [--threads N] [--aa N]
+                  [--method NAME] [--no-gui] [--quiet]
        rayoflight explain scene.xml X Y [--json] [--set PATH=VALUE]… [--aa N] [--method NAME]
        rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… [--add KIND]… [-out FILE]
+       rayoflight split scene.xml --tasks N [--set PATH=VALUE]… [--aa N] [--method NAME]
+       rayoflight assemble -out image.png PART.png…
+       rayoflight sheet -out sheet.png [--columns N] IMAGE…
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
        rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--quiet]
@@ -44,6 +48,11 @@ Options:
                      (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp,
                      exr: 32-bit floats, unclamped).
                      Default: the scene's path with the extension .png
+  --region X0,Y0,X1,Y1
+                     render only this rectangle of the image (pixels from
+                     the top left, X1 and Y1 excluded) into a PNG part whose
+                     pixels are the whole render's, which records where it
+                     belongs; 'rayoflight assemble' puts parts together
   --pass NAME        write one render pass instead of the image: final
                      (default), ambient, diffuse, specular, reflection (the
                      camera ray's terms; in .exr they add up to final),
@@ -72,6 +81,16 @@ Subcommands:
                      keeping every other byte: --set PATH=VALUE, --remove
                      PATH, --add sphere|plane|light, applied in the order
                      given; the file is rewritten in place, or -out FILE
+  split              N regions of the image, one a line (X0,Y0,X1,Y1), of
+                     even estimated cost (a coarse pre-pass counts the rays
+                     each part of the image costs), for a Slurm array or
+                     xargs -P: each task renders one with --region
+  assemble           put the parts --region wrote together into the full
+                     image, the same file as one render of the whole;
+                     refuses parts of other scenes or options, overlaps,
+                     gaps, regions outside the image, naming the culprit
+  sheet              a contact sheet: the images side by side in a grid,
+                     each named under it (the renders of a --set sweep)
   export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
   plan               what 'auto' will do for the scene, and why (renders
                      use it: precision, BVH and culling, early stop, terms)
@@ -97,6 +116,16 @@ pub enum Command {
     /// Render a scene (headless), or open the app on it (GUI build, no
     /// headless flag).
     Render(RenderArgs),
+    /// `split scene.xml --tasks N`.
+    Split(SplitArgs),
+    /// `assemble -out image.png PART…`.
+    Assemble { out: PathBuf, parts: Vec<PathBuf> },
+    /// `sheet -out sheet.png [--columns N] IMAGE…`.
+    Sheet {
+        out: PathBuf,
+        columns: Option<usize>,
+        images: Vec<PathBuf>,
+    },
     /// `export-pov scene.xml [-out scene.pov]`.
     ExportPov {
         scene: PathBuf,
@@ -121,10 +150,8 @@ pub struct RenderArgs {
     pub out: Option<PathBuf>,
     pub time: bool,
     pub no_gui: bool,
-    pub threads: Option<usize>,
-    pub aa: Option<u32>,
-    /// A study method to render with instead of `auto` (`--method`).
-    pub method: Option<Method>,
+    /// `--method`, `--aa`, `--threads` and `--region`.
+    pub request: RenderRequest,
     /// `--set`: values changed in memory before rendering, in order.
     pub edits: Vec<EditArg>,
     /// `--quiet`: no progress bar.
@@ -146,6 +173,17 @@ pub struct ExplainArgs {
     pub edits: Vec<EditArg>,
 }
 
+/// `rayoflight split`: which render to split, into how many regions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SplitArgs {
+    pub scene: PathBuf,
+    pub tasks: usize,
+    /// The render's method and anti-aliasing (they change the cost).
+    pub request: RenderRequest,
+    /// `--set`: values changed in memory first, in order.
+    pub edits: Vec<EditArg>,
+}
+
 /// `rayoflight edit`: what to change in a scene file, and where to write it.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EditArgs {
@@ -158,16 +196,15 @@ pub struct EditArgs {
 
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
-    /// `--no-gui`, `--threads`, `--aa`, `--method`, `--set`. In the GUI
+    /// `--no-gui`, `--threads`, `--aa`, `--method`, `--region`, `--set`,
+    /// `--pass`. In the GUI
     /// build, anything else opens the app (the headless build never asks).
     #[cfg_attr(not(feature = "gui"), allow(dead_code))]
     pub fn headless(&self) -> bool {
         self.out.is_some()
             || self.time
             || self.no_gui
-            || self.threads.is_some()
-            || self.aa.is_some()
-            || self.method.is_some()
+            || self.request != RenderRequest::default()
             || !self.edits.is_empty()
             || self.pass != Pass::Final
     }
@@ -237,10 +274,46 @@ struct RenderFlags {
     quiet: bool,
     #[arg(long, value_name = "NAME", value_parser = pass)]
     pass: Option<Pass>,
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = region)]
+    region: Option<Region>,
 }
 
 #[derive(Subcommand, Debug)]
 enum Sub {
+    /// N regions of the image, one a line, of even estimated cost.
+    ///
+    /// Each line is X0,Y0,X1,Y1 (pixels, X1 and Y1 excluded): give it to
+    /// `rayoflight scene.xml --region X0,Y0,X1,Y1 -out part-I.png`, one
+    /// task a line (a Slurm array, xargs -P, GNU parallel), then put the
+    /// parts together with `rayoflight assemble`. The regions are balanced
+    /// by cost, not area: a coarse pre-pass traces a few rays in each cell
+    /// of a grid over the image and counts the rays each costs, reflections
+    /// included; cuts follow the render's 32-pixel tiles where they can.
+    /// Give the render's --set, --aa and --method: they change the cost.
+    #[command(
+        override_usage = "rayoflight split scene.xml --tasks N [--set PATH=VALUE]… [--aa N] \
+                          [--method NAME]"
+    )]
+    Split(SplitFlags),
+    /// Put the parts `--region` wrote together into the full image.
+    ///
+    /// The image is the same file a render of the whole writes, byte for
+    /// byte. Every part's PNG records where it belongs, the full image's
+    /// size and a fingerprint of the scene and render options: assemble
+    /// refuses, naming the culprit, a file that is not a part, parts of
+    /// other scenes, options or versions, overlapping parts, pixels no
+    /// part holds (a missing part), a region outside the image. Rows are
+    /// streamed: only the parts crossing a row are open, so memory holds a
+    /// few rows, never the image.
+    #[command(override_usage = "rayoflight assemble -out image.png PART.png…")]
+    Assemble(AssembleFlags),
+    /// A contact sheet: the images side by side in a grid, each named.
+    ///
+    /// Each picture sits in a cell as large as the largest, its file name
+    /// (its end, when too long) under it: the renders of a --set sweep at
+    /// a glance.
+    #[command(override_usage = "rayoflight sheet -out sheet.png [--columns N] IMAGE…")]
+    Sheet(SheetFlags),
     /// Write the scene as a POV-Ray 3.7 file, for cross-checking.
     ExportPov {
         /// The scene file.
@@ -324,6 +397,47 @@ struct ExplainFlags {
 }
 
 #[derive(Args, Debug)]
+struct SplitFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// How many regions (tasks), at least 1.
+    #[arg(long, short = 'n', value_name = "N", value_parser = tasks, required = true)]
+    tasks: usize,
+    /// Split the render with this value changed, in memory only.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
+    /// N×N rays per pixel, 1 to 16.
+    #[arg(long, value_name = "N", value_parser = aa)]
+    aa: Option<u32>,
+    /// The study method the render uses instead of auto.
+    #[arg(long, value_name = "NAME", value_parser = method)]
+    method: Option<Method>,
+}
+
+#[derive(Args, Debug)]
+struct AssembleFlags {
+    /// The image to write (PNG).
+    #[arg(short, long, value_name = "FILE", required = true)]
+    out: PathBuf,
+    /// The parts, in any order.
+    #[arg(value_name = "PART", required = true)]
+    parts: Vec<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+struct SheetFlags {
+    /// The sheet to write; its extension picks the format.
+    #[arg(short, long, value_name = "FILE", required = true)]
+    out: PathBuf,
+    /// Pictures a row [default: as square a grid as the count allows]
+    #[arg(long, value_name = "N", value_parser = columns)]
+    columns: Option<usize>,
+    /// The images, in the order to show them.
+    #[arg(value_name = "IMAGE", required = true)]
+    images: Vec<PathBuf>,
+}
+
+#[derive(Args, Debug)]
 struct EditFlags {
     /// The scene file.
     scene: PathBuf,
@@ -398,6 +512,20 @@ fn runs(text: &str) -> Result<usize, String> {
         .ok_or_else(|| "expects an integer from 1 to 1000".to_owned())
 }
 
+fn tasks(text: &str) -> Result<usize, String> {
+    text.parse()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| "expects a whole number of tasks, at least 1".to_owned())
+}
+
+fn columns(text: &str) -> Result<usize, String> {
+    text.parse()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| "expects a whole number, at least 1".to_owned())
+}
+
 fn aa(text: &str) -> Result<u32, String> {
     let max = rayoflight::render::MAX_AA;
     text.parse()
@@ -410,6 +538,10 @@ fn path_value(text: &str) -> Result<(String, String), String> {
     text.split_once('=')
         .map(|(path, value)| (path.to_owned(), value.to_owned()))
         .ok_or_else(|| "expects PATH=VALUE, such as object[1].material.ka=0.5".to_owned())
+}
+
+fn region(text: &str) -> Result<Region, String> {
+    Region::parse(text).map_err(|e| e.to_string())
 }
 
 fn pixel(text: &str) -> Result<u32, String> {
@@ -460,6 +592,28 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
     Ok(match cli.command {
         None => Command::Render(render_args(cli.render)?),
         Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
+        Some(Sub::Split(f)) => {
+            let given = f.set.into_iter().map(|(p, v)| Given::Set(p, v));
+            Command::Split(SplitArgs {
+                edits: edit_args(given.collect(), &f.scene)?,
+                scene: f.scene,
+                tasks: f.tasks,
+                request: RenderRequest {
+                    method: f.method,
+                    aa: f.aa,
+                    ..RenderRequest::default()
+                },
+            })
+        }
+        Some(Sub::Assemble(f)) => Command::Assemble {
+            out: f.out,
+            parts: f.parts,
+        },
+        Some(Sub::Sheet(f)) => Command::Sheet {
+            out: f.out,
+            columns: f.columns,
+            images: f.images,
+        },
         Some(Sub::Plan { scene }) => Command::Plan { scene },
         Some(Sub::Explain(e)) => {
             let given = e.set.into_iter().map(|(p, v)| Given::Set(p, v));
@@ -473,6 +627,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
                     method: e.method,
                     aa: e.aa,
                     threads: None,
+                    region: None,
                 },
             })
         }
@@ -522,14 +677,38 @@ fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
         None if !r.set.is_empty() => return Err(UsageError::NoScene),
         None => Vec::new(),
     };
+    if r.region.is_some() {
+        let invalid = |message: &str| UsageError::Invalid {
+            message: message.to_owned(),
+            command: None,
+        };
+        if r.pass.is_some_and(|p| p != Pass::Final) {
+            return Err(invalid(
+                "--region renders the image: it cannot be used with --pass",
+            ));
+        }
+        let png = |out: &Path| {
+            out.extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("png"))
+        };
+        if r.out.as_deref().is_some_and(|out| !png(out)) {
+            return Err(invalid(
+                "--region writes a PNG part, which records where it belongs for \
+                 'rayoflight assemble': -out must end in .png",
+            ));
+        }
+    }
     Ok(RenderArgs {
         scene: r.scene,
         out: r.out,
         time: r.time,
         no_gui: r.no_gui,
-        threads: r.threads,
-        aa: r.aa,
-        method: r.method,
+        request: RenderRequest {
+            method: r.method,
+            aa: r.aa,
+            threads: r.threads,
+            region: r.region,
+        },
         edits,
         quiet: r.quiet,
         pass: r.pass.unwrap_or_default(),
@@ -609,7 +788,17 @@ fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
 }
 
 /// The subcommands' names, as clap derives them from `Sub`.
-const SUBCOMMANDS: [&str; 6] = ["export-pov", "plan", "explain", "bench", "edit", "study"];
+const SUBCOMMANDS: [&str; 9] = [
+    "split",
+    "assemble",
+    "sheet",
+    "export-pov",
+    "plan",
+    "explain",
+    "bench",
+    "edit",
+    "study",
+];
 
 /// The subcommand the arguments run, if any: only the first argument can
 /// name one (`args_conflicts_with_subcommands`).
@@ -733,7 +922,7 @@ mod tests {
         let Ok(Command::Render(r)) = p(&["s.xml", "--aa", "4", "--threads=3"]) else {
             panic!()
         };
-        assert_eq!((r.aa, r.threads), (Some(4), Some(3)));
+        assert_eq!((r.request.aa, r.request.threads), (Some(4), Some(3)));
     }
 
     #[test]
@@ -832,7 +1021,7 @@ mod tests {
         let Ok(Command::Render(r)) = p(&["s.xml", "--method", "f32"]) else {
             panic!()
         };
-        assert_eq!(r.method.as_ref().map(|m| m.name), Some("f32"));
+        assert_eq!(r.request.method.as_ref().map(|m| m.name), Some("f32"));
         assert!(r.headless());
         assert!(message(p(&["s.xml", "--method", "fast"])).contains("auto"));
         assert!(p(&["s.xml", "--method"]).is_err());

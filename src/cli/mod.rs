@@ -5,13 +5,14 @@
 
 mod args;
 mod bench;
+mod cluster;
 mod edit;
 mod explain;
 mod progress;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
-use rayoflight::request::RenderRequest;
+use rayoflight::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
 use rayoflight::{measure, output, pov, render, scene};
@@ -35,6 +36,14 @@ impl From<UsageError> for Failure {
 
 fn fail(e: impl std::fmt::Display) -> Failure {
     Failure::Error(e.to_string())
+}
+
+/// A usage error (exit 2) found once the scene is read.
+fn usage(message: String) -> Failure {
+    Failure::Usage(UsageError::Invalid {
+        message,
+        command: None,
+    })
 }
 
 pub fn main() -> ExitCode {
@@ -72,6 +81,13 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
         Command::ExportPov { scene, out } => export_pov(&scene, out),
         Command::Edit(args) => edit_scene(&args),
         Command::Explain(args) => explain::run(&args),
+        Command::Split(args) => cluster::split(&args),
+        Command::Assemble { out, parts } => cluster::assemble(&out, &parts),
+        Command::Sheet {
+            out,
+            columns,
+            images,
+        } => cluster::sheet(&out, columns, &images),
         Command::Plan { scene } => {
             let scene = scene::load(&scene).map_err(fail)?;
             for d in render::auto(&scene).decisions {
@@ -117,22 +133,27 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     // --set: in memory only, the scene file is never written.
     edit::apply(&mut edited, &r.edits).map_err(refused(&scene_path))?;
     let scene = edited.scene();
+    let request = &r.request;
+    let (width, height) = match request.region {
+        Some(region) => {
+            let region = region
+                .check_in(scene.camera.width, scene.camera.height)
+                .map_err(|e| usage(format!("{}: --region {e}", scene_path.display())))?;
+            (region.width(), region.height())
+        }
+        None => (scene.camera.width, scene.camera.height),
+    };
     // The output can take this image: a folder that exists and is
     // writable, a format that holds its size, no special file in the way.
-    output::check_target(&out, scene.camera.width, scene.camera.height).map_err(fail)?;
-    let request = RenderRequest {
-        method: r.method.clone(),
-        aa: r.aa,
-        threads: r.threads,
-    };
+    output::check_target(&out, width, height).map_err(fail)?;
     // Render time as the bench and the study measure it (rayoflight::measure).
-    let pool = measure::RenderPool::new(r.threads).map_err(fail)?;
+    let pool = measure::RenderPool::new(request.threads).map_err(fail)?;
     let counted = render::Progress::default();
     let never = render::Cancel::never();
     let cancelled = || Failure::Error("the render was cancelled".to_owned());
     let elapsed = if output::takes_pass(r.pass, &out) {
         let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
-            measure::pass_timed(scene, &request, r.pass, &pool, &never, &counted)
+            measure::pass_timed(scene, request, r.pass, &pool, &never, &counted)
         });
         let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
         output::save_pass(&timed.image, &out).map_err(fail)?;
@@ -142,10 +163,17 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
         timed.elapsed
     } else {
         let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
-            measure::render_timed(scene, &request, &pool, &never, &counted)
+            measure::render_timed(scene, request, &pool, &never, &counted)
         });
         let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
-        output::save(&timed.image, &out).map_err(fail)?;
+        match request.region {
+            // A part records where it belongs, for `assemble`.
+            Some(region) => {
+                let part = Part::new(scene, &request.options(scene), region);
+                output::save_part(&timed.image, &part, &out).map_err(fail)?
+            }
+            None => output::save(&timed.image, &out).map_err(fail)?,
+        }
         timed.elapsed
     };
     if r.time {

@@ -377,7 +377,16 @@ impl WorkerThread {
                 wake();
             };
             let progress = render::Progress::default();
-            let trace = || render::trace_tiles(&prepared, cancel, &progress, None, send_tile);
+            let trace = || {
+                render::trace_tiles(
+                    &prepared,
+                    prepared.frame(),
+                    cancel,
+                    &progress,
+                    None,
+                    send_tile,
+                )
+            };
             let traced = match &self.pool {
                 Some(pool) => pool.install(trace),
                 None => trace(),

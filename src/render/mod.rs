@@ -32,6 +32,7 @@ pub use progress::{Progress, time_left};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
 
 use crate::geometry::{Ray, Real, Vector};
+use crate::region::{Region, RegionError};
 use crate::scene::Scene;
 use crate::shading::{SurfacePoint, reflect};
 use image::RgbImage;
@@ -127,9 +128,14 @@ pub struct RenderOptions {
     pub offset: Offset,
     /// Follow one reflection fewer than the scene's depth (whitted).
     pub depth_cut: bool,
-    /// Trace one pixel in four (the top-left of each 2×2 block) and copy
-    /// it to the other three: a draft preview.
+    /// Trace one pixel in four (the top-left of each 2×2 block of the
+    /// image, at even x and y) and copy it to the other three: a draft
+    /// preview.
     pub draft: bool,
+    /// Render only this rectangle of the image (`--region`); `None`: all
+    /// of it. Not a method choice: each pixel is what the whole render
+    /// gives it.
+    pub region: Option<Region>,
 }
 
 impl Default for RenderOptions {
@@ -144,6 +150,7 @@ impl Default for RenderOptions {
             offset: Offset::Contract,
             depth_cut: false,
             draft: false,
+            region: None,
         }
     }
 }
@@ -170,6 +177,8 @@ pub enum RenderError {
     NoThreads,
     #[error("{0} render threads is more than this machine can use (at most {max})", max = max_threads())]
     TooManyThreads(usize),
+    #[error("--region {0}")]
+    Region(#[from] RegionError),
     #[error("cannot start {threads} render threads: {source}")]
     ThreadPool {
         threads: usize,
@@ -187,6 +196,16 @@ impl RenderOptions {
             Some(0) => Err(RenderError::NoThreads),
             Some(n) if n > max_threads() => Err(RenderError::TooManyThreads(n)),
             _ => Ok(()),
+        }
+    }
+
+    /// The pixels to render of `scene`'s image: the region asked for,
+    /// checked to lie in the image, or the whole image.
+    pub fn region_of(&self, scene: &Scene) -> Result<Region, RenderError> {
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        match self.region {
+            Some(region) => Ok(region.check_in(width, height)?),
+            None => Ok(Region::whole(width, height)),
         }
     }
 }
@@ -231,7 +250,10 @@ pub fn render_watched(
     cancel: &Cancel,
     progress: &Progress,
 ) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
-    in_pool(options, || render_all(scene, options, cancel, progress))
+    let region = options.region_of(scene)?;
+    in_pool(options, || {
+        render_all(scene, options, region, cancel, progress)
+    })
 }
 
 /// Checks `options` and runs `work` in their thread pool (rayon's global
@@ -253,62 +275,76 @@ fn in_pool<R: Send>(
     }
 }
 
+/// Renders `region` of the scene's image: an image of the region's size.
 fn render_all(
     scene: &Scene,
     options: &RenderOptions,
+    region: Region,
     cancel: &Cancel,
     progress: &Progress,
 ) -> Option<(RgbImage, RenderStats)> {
     let prepared = prepare(scene, options);
-    let mut image = RgbImage::new(prepared.width(), prepared.height());
-    let rays = trace_tiles(&prepared, cancel, progress, Some(&mut *image), |_, _| {})?;
+    let mut image = RgbImage::new(region.width(), region.height());
+    let rays = trace_tiles(
+        &prepared,
+        region,
+        cancel,
+        progress,
+        Some(&mut *image),
+        |_, _| {},
+    )?;
     Some((image, RenderStats { rays }))
 }
 
 /// The tile loop every front end shares (the CLI's render, the study, the
-/// app's worker, the passes): bands of [`TILE_SIZE`] rows spread over the
-/// current rayon pool, each traced tile by tile (so each tile culls once).
-/// Each finished tile (three texels a pixel, row-major: 8-bit channels of
-/// the image, or f64 values of the prepared view's [`Pass`]) is copied
-/// into `image` when one is given (its rows in place, no lock) and handed
-/// to `finished` (on a render thread), and counted in `progress`. Returns
-/// the rays traced, or `None` once `cancel` is set.
+/// app's worker, the passes, `--region`): `region` of the prepared view's
+/// image (all of it, or a part) cut along the image's grid of
+/// [`TILE_SIZE`] tiles, so that every pixel is traced as the whole render
+/// traces it; bands of tiles spread over the current rayon pool, each
+/// traced tile by tile (so each tile culls once). Each finished tile
+/// (three texels a pixel, row-major: 8-bit channels of the image, or f64
+/// values of the prepared view's [`Pass`]) is copied into `image` when one
+/// is given (region-sized; its rows in place, no lock) and handed to
+/// `finished` (on a render thread), and counted in `progress`. Returns the
+/// rays traced, or `None` once `cancel` is set.
 pub fn trace_tiles<T: Texel>(
     prepared: &Prepared,
+    region: Region,
     cancel: &Cancel,
     progress: &Progress,
     image: Option<&mut [T]>,
     finished: impl Fn(&Tile, &[T]) + Sync,
 ) -> Option<u64> {
-    use rayon::iter::Either;
-    let (width, height) = (prepared.width(), prepared.height());
-    progress.start(u64::from(width) * u64::from(height));
-    let row_bytes = width as usize * 3;
-    let bands = match image {
-        Some(image) => Either::Left(
-            image
-                .par_chunks_mut(row_bytes * TILE_SIZE as usize)
-                .map(Some),
-        ),
-        None => Either::Right(
-            (0..height.div_ceil(TILE_SIZE))
-                .into_par_iter()
-                .map(|_| None),
-        ),
+    debug_assert!(region.x1 <= prepared.width() && region.y1 <= prepared.height());
+    progress.start(region.area());
+    let row_bytes = region.width() as usize * 3;
+    // The bands: the grid's rows of tiles, cut to the region.
+    let bands: Vec<(u32, u32)> = grid_cuts(region.y0, region.y1).collect();
+    let mut rows: Vec<Option<&mut [T]>> = match image {
+        Some(mut image) => {
+            debug_assert_eq!(image.len(), row_bytes * region.height() as usize);
+            let mut rows = Vec::with_capacity(bands.len());
+            for &(y0, y1) in &bands {
+                let (band, rest) = image.split_at_mut(row_bytes * (y1 - y0) as usize);
+                rows.push(Some(band));
+                image = rest;
+            }
+            rows
+        }
+        None => bands.iter().map(|_| None).collect(),
     };
     bands
-        .enumerate()
-        .map(|(band, mut rows): (usize, Option<&mut [T]>)| {
-            let y = band as u32 * TILE_SIZE;
-            let band_height = TILE_SIZE.min(height - y);
+        .par_iter()
+        .zip(rows.par_iter_mut())
+        .map(|(&(y, y_end), rows)| {
             let mut pixels = Vec::new();
             let mut rays = 0;
-            for x in (0..width).step_by(TILE_SIZE as usize) {
+            for (x, x_end) in grid_cuts(region.x0, region.x1) {
                 let tile = Tile {
                     x,
                     y,
-                    width: TILE_SIZE.min(width - x),
-                    height: band_height,
+                    width: x_end - x,
+                    height: y_end - y,
                 };
                 let traced = prepared.render_tile_into(&tile, cancel, &mut pixels)?;
                 rays += traced;
@@ -316,7 +352,7 @@ pub fn trace_tiles<T: Texel>(
                 if let Some(rows) = rows.as_deref_mut() {
                     let tile_row = tile.width as usize * 3;
                     for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
-                        let start = r * row_bytes + x as usize * 3;
+                        let start = r * row_bytes + (x - region.x0) as usize * 3;
                         rows[start..start + tile_row].copy_from_slice(src);
                     }
                 }
@@ -325,6 +361,20 @@ pub fn trace_tiles<T: Texel>(
             Some(rays)
         })
         .sum::<Option<u64>>()
+}
+
+/// The half-open spans of `start..end` that the image's tile grid (lines
+/// at multiples of [`TILE_SIZE`]) cuts it into.
+fn grid_cuts(start: u32, end: u32) -> impl Iterator<Item = (u32, u32)> {
+    let mut at = start;
+    std::iter::from_fn(move || {
+        (at < end).then(|| {
+            let next = ((at / TILE_SIZE + 1) * TILE_SIZE).min(end);
+            let span = (at, next);
+            at = next;
+            span
+        })
+    })
 }
 
 /// Clamps a channel to [0, 1] and rounds it to 8 bits: floor(c·255 + 0.5).

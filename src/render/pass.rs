@@ -303,6 +303,7 @@ pub fn render_pass(
     cancel: &Cancel,
     progress: &Progress,
 ) -> Result<Option<(PassImage, RenderStats)>, RenderError> {
+    let region = options.region_of(scene)?;
     super::in_pool(options, || {
         let prepared = prepare(scene, options);
         let prepared = if pass.is_geometric() {
@@ -311,9 +312,16 @@ pub fn render_pass(
             prepared
         }
         .for_pass(pass);
-        let (width, height) = (prepared.width(), prepared.height());
+        let (width, height) = (region.width(), region.height());
         let mut values = vec![0.0; width as usize * height as usize * 3];
-        let rays = trace_tiles(&prepared, cancel, progress, Some(&mut values), |_, _| {})?;
+        let rays = trace_tiles(
+            &prepared,
+            region,
+            cancel,
+            progress,
+            Some(&mut values),
+            |_, _| {},
+        )?;
         Some((
             PassImage {
                 pass,

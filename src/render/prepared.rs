@@ -472,6 +472,33 @@ impl WithKernel for ExplainAt {
     }
 }
 
+/// [`Prepared::rays_through`]'s work: each ray traced alone among the
+/// tile's candidates, as the render traces it, its rays counted.
+struct RaysThrough<'a> {
+    points: &'a [(f64, f64)],
+    candidates: Candidates<'a>,
+}
+
+impl WithKernel for RaysThrough<'_> {
+    type Output = u64;
+    const ONE_LANE: bool = true;
+    fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> u64 {
+        let exact_stop = p.aa == 1 && p.world.early_stop;
+        let mut rays = 0;
+        for &at in self.points {
+            p.trace(
+                kernel,
+                p.packet::<K>(&[at]),
+                self.candidates,
+                exact_stop,
+                &mut rays,
+                &mut (),
+            );
+        }
+        rays
+    }
+}
+
 /// [`Prepared::render_tile_into`]'s work.
 struct TileInto<'a, T> {
     tile: &'a Tile,
@@ -851,6 +878,11 @@ impl Prepared {
         self.camera.width()
     }
 
+    /// The whole of this view's image.
+    pub fn frame(&self) -> crate::region::Region {
+        crate::region::Region::whole(self.width(), self.height())
+    }
+
     pub fn height(&self) -> u32 {
         self.camera.height()
     }
@@ -1133,6 +1165,21 @@ impl Prepared {
         self.with_kernel(PixelAt { i, j })
     }
 
+    /// The rays a render of `tile` traces for one camera ray through each
+    /// of `points` (image points in pixels, in the tile), reflections
+    /// included: what the tile costs there, for one ray a pixel. None in
+    /// a tile the render fills without tracing (nothing can be hit from
+    /// it). `split`'s estimate of where the work is.
+    pub fn rays_through(&self, tile: &Tile, points: &[(f64, f64)]) -> u64 {
+        let culled = self.tile_candidates(tile);
+        let candidates = match &culled {
+            Some(list) if list.is_empty() && self.world.planes.is_empty() => return 0,
+            Some(list) => Candidates::Only(list),
+            None => Candidates::All,
+        };
+        self.with_kernel(RaysThrough { points, candidates })
+    }
+
     /// Why pixel (i, j) has its colour: each of its rays' trees, recorded
     /// from the render's trace ([`super::explain`]); `None` outside the
     /// image.
@@ -1287,7 +1334,19 @@ impl Prepared {
         let [miss, ..] = T::pixel(f64::vector_lane(Traced::<f64>::dark().value(self.pass), 0));
         out.clear();
         out.resize(tile.width as usize * tile.height as usize * 3, miss);
-        let candidates = self.tile_candidates(tile);
+        // Draft: one pixel in four is traced, the top-left of each 2×2
+        // block of the image (even x and y); the other three copy it. A
+        // tile of a region may start at an odd row or column: its first
+        // pixels copy a block's corner outside it, traced all the same.
+        let step = if self.world.draft { 2 } else { 1 };
+        let anchor = |v: u32| v - v % step;
+        let traced_area = Tile {
+            x: anchor(tile.x),
+            y: anchor(tile.y),
+            width: tile.width + tile.x % step,
+            height: tile.height + tile.y % step,
+        };
+        let candidates = self.tile_candidates(&traced_area);
         let candidates = match &candidates {
             Some(list) => {
                 if list.is_empty() && self.world.planes.is_empty() {
@@ -1299,32 +1358,33 @@ impl Prepared {
             None => Candidates::All,
         };
         let mut rays = 0;
-        // Draft: one pixel in four, the top-left of each 2×2 block of the
-        // tile, is traced; the other three copy it.
-        let step = if self.world.draft { 2 } else { 1 };
-        let row_bytes = tile.width as usize * 3;
+        let (x_end, row_bytes) = (tile.x + tile.width, tile.width as usize * 3);
         let mut traced = [[T::default(); 3]; MAX_LANES];
         let mut row: Vec<(u32, u32)> = Vec::with_capacity(tile.width as usize);
         for (dj, j) in (tile.y..tile.y + tile.height).enumerate() {
             let line = dj * row_bytes;
-            if dj % step != 0 {
+            if j != anchor(j) && j != tile.y {
                 // A draft's odd row: the row above.
                 out.copy_within(line - row_bytes..line, line);
                 continue;
             }
             row.clear();
-            row.extend((tile.x..tile.x + tile.width).step_by(step).map(|i| (i, j)));
+            row.extend(
+                (traced_area.x..x_end)
+                    .step_by(step as usize)
+                    .map(|i| (i, anchor(j))),
+            );
             for packet in row.chunks(K::L::WIDTH) {
                 if cancel.is_cancelled() {
                     return None;
                 }
                 self.pixels(kernel, packet, candidates, &mut rays, &mut traced);
-                for (&(i, _), rgb) in packet.iter().zip(&traced) {
-                    let at = line + (i - tile.x) as usize * 3;
-                    out[at..at + 3].copy_from_slice(rgb);
-                    if step == 2 && i + 1 < tile.x + tile.width {
-                        // A draft's odd column: the pixel on its left.
-                        out[at + 3..at + 6].copy_from_slice(rgb);
+                for (&(a, _), rgb) in packet.iter().zip(&traced) {
+                    // The traced pixel and, in a draft, the one on its
+                    // right: those of them in the tile.
+                    for i in (a..a + step).filter(|i| (tile.x..x_end).contains(i)) {
+                        let at = line + (i - tile.x) as usize * 3;
+                        out[at..at + 3].copy_from_slice(rgb);
                     }
                 }
             }

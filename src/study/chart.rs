@@ -49,7 +49,7 @@ fn err<E: std::fmt::Display>(e: E) -> ChartError {
 }
 
 /// Makes DejaVu Sans plotters' `sans-serif` font (once).
-fn register_font() -> Result<(), ChartError> {
+pub(crate) fn register_font() -> Result<(), ChartError> {
     static ONCE: Once = Once::new();
     let mut result = Ok(());
     ONCE.call_once(|| {

@@ -189,6 +189,7 @@ impl RayOfLightApp {
             method: None,
             aa: Some(self.aa),
             threads: Some(Worker::default_threads()),
+            region: None,
         }
         .options(&scene);
         let export = Export {

@@ -71,6 +71,7 @@ impl PreviewMethods {
             method: Some(method.clone()),
             aa: (aa > 1).then_some(aa),
             threads: None,
+            region: None,
         }
     }
 }
