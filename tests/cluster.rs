@@ -504,3 +504,46 @@ fn split_prints_one_region_a_line_for_each_task() {
     assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(stdout(&out).lines().count(), 3);
 }
+
+#[test]
+fn sheet_lays_the_renders_of_a_sweep_side_by_side() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene_file = d.join("scene.xml");
+    fs::write(&scene_file, rayoflight::EXAMPLE_SCENE.replace("600", "48")).unwrap();
+    let s = scene_file.to_str().unwrap();
+    let mut images = Vec::new();
+    for ka in ["0.1", "0.5", "0.9"] {
+        let name = format!("ka={ka}.png");
+        let set = format!("object[1].material.ka={ka}");
+        let out = rayoflight(d, &[s, "--set", &set, "-out", &name, "-q"]);
+        assert!(out.status.success(), "{}", stderr(&out));
+        images.push(name);
+    }
+    let mut args = vec!["sheet", "-out", "sheet.png", "--columns", "3"];
+    args.extend(images.iter().map(String::as_str));
+    let out = rayoflight(d, &args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let sheet = image::open(d.join("sheet.png")).unwrap().to_rgb8();
+    let gap = rayoflight::sheet::GAP;
+    let cell = 48 + gap;
+    assert_eq!(
+        sheet.dimensions(),
+        (
+            3 * cell + gap,
+            48 + rayoflight::sheet::LABEL_HEIGHT + 2 * gap
+        )
+    );
+    // Each picture where it belongs, as rendered.
+    for (k, name) in images.iter().enumerate() {
+        let picture = image::open(d.join(name)).unwrap().to_rgb8();
+        let placed = image::imageops::crop_imm(&sheet, gap + k as u32 * cell, gap, 48, 48);
+        assert!(placed.to_image() == picture, "{name}");
+    }
+    // A file that is not an image: exit 1, named, nothing written.
+    fs::write(d.join("notes.png"), "text").unwrap();
+    let out = rayoflight(d, &["sheet", "-out", "bad.png", "notes.png"]);
+    assert_eq!(out.status.code(), Some(1));
+    assert!(stderr(&out).starts_with("notes.png: "), "{}", stderr(&out));
+    assert!(!d.join("bad.png").exists());
+}

@@ -32,7 +32,8 @@ Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
        rayoflight sheet -out sheet.png [--columns N] IMAGE…
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
-       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--quiet]
+       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--split-size PIXELS]
+                        [--quiet]
        rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]
        rayoflight --help | --version";
 
@@ -95,8 +96,10 @@ Subcommands:
   plan               what 'auto' will do for the scene, and why (renders
                      use it: precision, BVH and culling, early stop, terms)
   bench              time the bench scenes (against POV-Ray when installed),
-                     thread scaling, cost against object count, peak memory;
-                     --runs K (default 3), --csv FILE, --no-pov
+                     thread scaling, cost against object count, peak memory,
+                     a 16000x16000 render split into 64 regions and assembled
+                     against one render of the whole; --runs K (default 3),
+                     --csv FILE, --no-pov, --split-size PIXELS (0: skip)
   study              speed against accuracy: every method (f32, textbook
                      quadratic, offsets, anti-aliasing, depth cut, early
                      stop, draft, auto) on the study scenes, or on the scene
@@ -473,6 +476,10 @@ struct BenchFlags {
     /// No progress bar on stderr.
     #[arg(short, long)]
     quiet: bool,
+    /// The side of the image split into 64 regions and assembled, in
+    /// pixels (0: skip that section).
+    #[arg(long, value_name = "PIXELS", default_value_t = 16000)]
+    split_size: u32,
 }
 
 #[derive(Args, Debug)]
@@ -656,6 +663,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             csv: b.csv,
             pov: !b.no_pov,
             quiet: b.quiet,
+            split_size: b.split_size,
         }),
         Some(Sub::Study(s)) => Command::Study(super::study::StudyArgs {
             out: s.out,

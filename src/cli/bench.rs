@@ -1,13 +1,16 @@
 //! `rayoflight bench`: render times of the bench scenes, against POV-Ray
-//! when it is installed, thread scaling, cost against object count and
-//! peak memory. Prints a table on stdout and optionally writes a CSV.
+//! when it is installed, thread scaling, cost against object count, peak
+//! memory, encoding, and what splitting a 16000×16000 render into 64
+//! regions and assembling them costs. Prints a table on stdout and
+//! optionally writes a CSV.
 
 use super::progress::Steps;
 use rayoflight::measure::{Csv, Difference, RenderPool, Timed, median_of, render_timed};
+use rayoflight::part::Part;
 use rayoflight::render::{Cancel, Progress, RenderStats};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
-use rayoflight::{bench, output, pov};
+use rayoflight::{assemble, bench, output, pov, split};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -21,7 +24,13 @@ pub struct BenchArgs {
     pub pov: bool,
     /// No progress bar.
     pub quiet: bool,
+    /// The side of the split-and-assemble render (0: skip that section).
+    pub split_size: u32,
 }
+
+/// The split section's scene (the bench's dearest) and its task count.
+const SPLIT_SCENE: &str = "mirrors";
+const SPLIT_TASKS: usize = 64;
 
 /// One measured configuration: a CSV row.
 struct Row {
@@ -89,8 +98,18 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         .collect();
     let sizes = [10, 100, 1_000, 10_000, 100_000];
     let formats = ["png", "gif", "jpg", "webp"];
+    let split_steps = if args.split_size > 0 {
+        SPLIT_TASKS + 3
+    } else {
+        0
+    };
     steps.set_total(
-        (sets.len() + (sets.len() - 1) * counts.len() + sizes.len() + 1 + formats.len()) as u64,
+        (sets.len()
+            + (sets.len() - 1) * counts.len()
+            + sizes.len()
+            + 1
+            + formats.len()
+            + split_steps) as u64,
     );
     for (name, scene) in &sets {
         step(name);
@@ -268,11 +287,226 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         });
     }
 
+    if args.split_size > 0 {
+        let (_, scene) = sets
+            .iter()
+            .find(|(name, _)| name == SPLIT_SCENE)
+            .ok_or("the split section's scene is not in the bench")?;
+        split_section(scene, args, &mut step, &out, &mut rows)?;
+    }
+
     if let Some(path) = &args.csv {
         output::write_atomic(path, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
         out(&format!("\nCSV written to {}\n", path.display()));
     }
     Ok(())
+}
+
+/// One render of `scene` at `args.split_size`² against the same image
+/// split into [`SPLIT_TASKS`] regions (`split`), each rendered and written
+/// as a part, then assembled, all on this machine: what splitting costs
+/// beyond the render of the whole and its file.
+fn split_section(
+    scene: &Scene,
+    args: &BenchArgs,
+    step: &mut impl FnMut(&str),
+    out: &impl Fn(&str),
+    rows: &mut Vec<Row>,
+) -> Result<(), String> {
+    let size = args.split_size;
+    let mut scene = scene.clone();
+    (scene.camera.width, scene.camera.height) = (size, size);
+    out(&format!(
+        "\nPast one machine: {SPLIT_SCENE} at {size}x{size}, one render against {SPLIT_TASKS} \
+         regions (split, each rendered and written as a part, assemble), {} threads\n",
+        args.threads
+    ));
+    let pool = RenderPool::new(Some(args.threads)).map_err(|e| e.to_string())?;
+    let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
+    let error = |e: &dyn std::fmt::Display| e.to_string();
+    let row = |scene: String, width, height, median, stats, peak_mb| Row {
+        section: "split",
+        scene,
+        width,
+        height,
+        threads: args.threads,
+        objects: 0,
+        median,
+        stats,
+        pov: None,
+        peak_mb,
+        app: None,
+    };
+    let render = |request: &RenderRequest| {
+        render_timed(
+            &scene,
+            request,
+            &pool,
+            &Cancel::never(),
+            &Progress::default(),
+        )
+        .map_err(|e| error(&e))?
+        .ok_or_else(|| "cancelled".to_owned())
+    };
+    let timed = |work: &mut dyn FnMut() -> Result<(), String>| {
+        let start = Instant::now();
+        work().map(|()| start.elapsed())
+    };
+
+    step("split: the whole image");
+    let whole_file = dir.path().join("whole.png");
+    let whole = render(&RenderRequest::default())?;
+    let whole_write =
+        timed(&mut || output::save(&whole.image, &whole_file).map_err(|e| error(&e)))?;
+    rows.push(row(
+        "whole".into(),
+        size,
+        size,
+        whole.elapsed,
+        whole.stats,
+        None,
+    ));
+    let whole_stats = whole.stats;
+    drop(whole.image);
+
+    step("split: regions");
+    let request = RenderRequest::default();
+    let mut regions = Vec::new();
+    let pre_pass = timed(&mut || {
+        let options = request.options(&scene);
+        regions = pool
+            .install(|| split::plan(&scene, &options, SPLIT_TASKS))
+            .map_err(|e| error(&e))?;
+        Ok(())
+    })?;
+    let (mut parts, mut region_times) = (Vec::new(), Vec::new());
+    let (mut rendering, mut writing, mut rays) = (Duration::ZERO, Duration::ZERO, 0);
+    for (k, region) in regions.iter().enumerate() {
+        step(&format!("split: region {}/{}", k + 1, regions.len()));
+        let request = RenderRequest {
+            region: Some(*region),
+            ..RenderRequest::default()
+        };
+        let part = render(&request)?;
+        let path = dir.path().join(format!("part-{k}.png"));
+        let record = Part::new(&scene, &request.options(&scene), *region);
+        writing +=
+            timed(&mut || output::save_part(&part.image, &record, &path).map_err(|e| error(&e)))?;
+        rendering += part.elapsed;
+        rays += part.stats.rays;
+        region_times.push(part.elapsed);
+        rows.push(row(
+            format!("region {region}"),
+            region.width(),
+            region.height(),
+            part.elapsed,
+            part.stats,
+            None,
+        ));
+        parts.push(path);
+    }
+
+    step("split: assemble");
+    let assembled = dir.path().join("assembled.png");
+    let peak = PeakMemory::start();
+    let assembly = timed(&mut || {
+        assemble::assemble(&parts, &assembled)
+            .map(drop)
+            .map_err(|e| error(&e))
+    })?;
+    let peak_mb = peak.and_then(|p| p.extra_mb());
+    rows.push(row(
+        "assemble".into(),
+        size,
+        size,
+        assembly,
+        RenderStats::default(),
+        peak_mb,
+    ));
+    let same = std::fs::read(&assembled).map_err(|e| error(&e))?
+        == std::fs::read(&whole_file).map_err(|e| error(&e))?;
+
+    let pct = |part: Duration, of: Duration| 100.0 * part.as_secs_f64() / of.as_secs_f64();
+    let one = whole.elapsed + whole_write;
+    let file_mb = |p: &Path| std::fs::metadata(p).map_or(0.0, |m| m.len() as f64 / 1e6);
+    region_times.sort();
+    let mean = rendering / region_times.len().max(1) as u32;
+    let slowest = region_times.last().copied().unwrap_or_default();
+    out(&format!(
+        "whole:     render {:.2} s, PNG written {:.2} s ({:.1} MB)\n",
+        whole.elapsed.as_secs_f64(),
+        whole_write.as_secs_f64(),
+        file_mb(&whole_file)
+    ));
+    out(&format!(
+        "regions:   split's pre-pass {:.3} s; {} regions rendered {:.2} s in all ({:+.2} %, rays {:+.3} %), \
+         parts written {:.2} s\n",
+        pre_pass.as_secs_f64(),
+        regions.len(),
+        rendering.as_secs_f64(),
+        pct(rendering, whole.elapsed) - 100.0,
+        100.0 * (rays as f64 / whole_stats.rays.max(1) as f64 - 1.0),
+        writing.as_secs_f64()
+    ));
+    out(&format!(
+        "per region: fastest {:.3} s, median {:.3} s, slowest {:.3} s (slowest / mean {:.2})\n",
+        region_times
+            .first()
+            .copied()
+            .unwrap_or_default()
+            .as_secs_f64(),
+        region_times[region_times.len() / 2].as_secs_f64(),
+        slowest.as_secs_f64(),
+        slowest.as_secs_f64() / mean.as_secs_f64()
+    ));
+    out(&format!(
+        "assemble:  {:.2} s, peak memory {}; the same file as the whole render: {}\n",
+        assembly.as_secs_f64(),
+        peak_mb.map_or("not measurable here".to_owned(), |m| format!("{m:.1} MB")),
+        if same { "yes" } else { "NO" }
+    ));
+    let total = pre_pass + rendering + writing + assembly;
+    out(&format!(
+        "overhead:  {:+.1} % of the whole render and its file ({:.2} s against {:.2} s): \
+         pre-pass {:+.2} %, rendering {:+.2} %, writing {:+.2} %, assembly {:+.1} %\n",
+        pct(total, one) - 100.0,
+        total.as_secs_f64(),
+        one.as_secs_f64(),
+        pct(pre_pass, one),
+        pct(rendering, one) - pct(whole.elapsed, one),
+        pct(writing, one) - pct(whole_write, one),
+        pct(assembly, one)
+    ));
+    if !same {
+        return Err("the assembled image differs from the whole render".to_owned());
+    }
+    Ok(())
+}
+
+/// The peak resident memory from now on (Linux: /proc/self/clear_refs
+/// resets it).
+struct PeakMemory {
+    before_kb: f64,
+}
+
+impl PeakMemory {
+    fn read_kb(key: &str) -> Option<f64> {
+        let status = std::fs::read_to_string("/proc/self/status").ok()?;
+        let line = status.lines().find(|l| l.starts_with(key))?;
+        line.split_whitespace().nth(1)?.parse().ok()
+    }
+
+    fn start() -> Option<PeakMemory> {
+        std::fs::write("/proc/self/clear_refs", "5").ok()?;
+        Some(PeakMemory {
+            before_kb: Self::read_kb("VmRSS:")?,
+        })
+    }
+
+    /// The peak's excess over the resident memory at the start, in MB.
+    fn extra_mb(&self) -> Option<f64> {
+        Some((Self::read_kb("VmHWM:")? - self.before_kb).max(0.0) / 1e3)
+    }
 }
 
 fn ms(d: Duration) -> f64 {
@@ -498,22 +732,14 @@ fn peak_memory(
     height: u32,
     threads: usize,
 ) -> Result<Option<(f64, f64)>, String> {
-    let read_kb = |key: &str| -> Option<f64> {
-        let status = std::fs::read_to_string("/proc/self/status").ok()?;
-        let line = status.lines().find(|l| l.starts_with(key))?;
-        line.split_whitespace().nth(1)?.parse().ok()
-    };
-    if std::fs::write("/proc/self/clear_refs", "5").is_err() {
-        return Ok(None);
-    }
-    let Some(before) = read_kb("VmRSS:") else {
+    let Some(peak) = PeakMemory::start() else {
         return Ok(None);
     };
     let text = bench::spheres_on_floor(n, width, height);
     let scene = scene::parse(&text, Path::new("generated.xml")).map_err(|e| e.to_string())?;
     let (_, _, image) = time_render(&scene, threads, 1)?;
-    let peak = read_kb("VmHWM:").unwrap_or(before);
     let image_mb = image.as_raw().len() as f64 / 1e6;
+    let extra = peak.extra_mb().unwrap_or(0.0);
     drop(image);
-    Ok(Some(((peak - before) / 1e3 - image_mb, image_mb)))
+    Ok(Some((extra - image_mb, image_mb)))
 }
