@@ -39,6 +39,8 @@ pub enum AssembleError {
     },
     #[error("{}: given twice", path.display())]
     Twice { path: PathBuf },
+    #[error("{}: is one of the parts: the image cannot be written over it", path.display())]
+    OutIsAPart { path: PathBuf },
     #[error("{}: not a PNG that can be read: {reason}", path.display())]
     NotPng { path: PathBuf, reason: String },
     #[error("{}: not a part of a render (no '{}' record: written by 'rayoflight --region'?)", path.display(), part::KEYWORD)]
@@ -291,6 +293,12 @@ pub struct Assembled {
 /// PNG, atomically, streaming rows from the parts crossing each row.
 pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleError> {
     let parts = check(paths)?;
+    let target = out.canonicalize().ok();
+    if target.is_some() && paths.iter().any(|p| p.canonicalize().ok() == target) {
+        return Err(AssembleError::OutIsAPart {
+            path: out.to_owned(),
+        });
+    }
     let (width, height) = parts[0].part.image;
     output::check_target(out, width, height)?;
     // Each part opened as the rows reach its top, closed after its bottom.

@@ -353,6 +353,18 @@ fn assemble_refuses_what_does_not_fit_and_names_the_culprit() {
     let missing = d.join("gone.png");
     assert!(refused(d, &[top.clone(), missing.clone()]).starts_with(&name(&missing)));
 
+    // The image over one of its parts.
+    let out = assemble(d, &bottom, &[top.clone(), bottom.clone()]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        stderr(&out).trim(),
+        format!(
+            "{}: is one of the parts: the image cannot be written over it",
+            name(&bottom)
+        )
+    );
+    assert!(Part::parse("").is_err() && image::open(&bottom).unwrap().height() == 34);
+
     // And the two halves do fit.
     let out = assemble(d, &d.join("ok.png"), &[bottom, top]);
     assert!(out.status.success(), "{}", stderr(&out));

@@ -388,15 +388,36 @@ struct ExplainFlags {
     /// 1-based or null for a miss, "t", "point", "normal", "terms").
     #[arg(long)]
     json: bool,
-    /// Explain the render with this value changed, in memory only.
+    #[command(flatten)]
+    render: RenderOf,
+}
+
+/// Which render a subcommand speaks of (`explain`, `split`): the scene's
+/// values changed, the anti-aliasing and the method.
+#[derive(Args, Debug)]
+struct RenderOf {
+    /// The render with this value changed, in memory only.
     #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
     set: Vec<(String, String)>,
-    /// N×N rays per pixel, 1 to 16 (each ray's tree is shown).
+    /// N×N rays per pixel, 1 to 16.
     #[arg(long, value_name = "N", value_parser = aa)]
     aa: Option<u32>,
     /// The study method the render uses instead of auto.
     #[arg(long, value_name = "NAME", value_parser = method)]
     method: Option<Method>,
+}
+
+impl RenderOf {
+    /// The request and the edits, read against `scene`'s path.
+    fn resolve(self, scene: &Path) -> Result<(RenderRequest, Vec<EditArg>), UsageError> {
+        let given = self.set.into_iter().map(|(p, v)| Given::Set(p, v));
+        let request = RenderRequest {
+            method: self.method,
+            aa: self.aa,
+            ..RenderRequest::default()
+        };
+        Ok((request, edit_args(given.collect(), scene)?))
+    }
 }
 
 #[derive(Args, Debug)]
@@ -406,15 +427,8 @@ struct SplitFlags {
     /// How many regions (tasks), at least 1.
     #[arg(long, short = 'n', value_name = "N", value_parser = tasks, required = true)]
     tasks: usize,
-    /// Split the render with this value changed, in memory only.
-    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
-    set: Vec<(String, String)>,
-    /// N×N rays per pixel, 1 to 16.
-    #[arg(long, value_name = "N", value_parser = aa)]
-    aa: Option<u32>,
-    /// The study method the render uses instead of auto.
-    #[arg(long, value_name = "NAME", value_parser = method)]
-    method: Option<Method>,
+    #[command(flatten)]
+    render: RenderOf,
 }
 
 #[derive(Args, Debug)]
@@ -600,16 +614,12 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         None => Command::Render(render_args(cli.render)?),
         Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
         Some(Sub::Split(f)) => {
-            let given = f.set.into_iter().map(|(p, v)| Given::Set(p, v));
+            let (request, edits) = f.render.resolve(&f.scene)?;
             Command::Split(SplitArgs {
-                edits: edit_args(given.collect(), &f.scene)?,
                 scene: f.scene,
                 tasks: f.tasks,
-                request: RenderRequest {
-                    method: f.method,
-                    aa: f.aa,
-                    ..RenderRequest::default()
-                },
+                request,
+                edits,
             })
         }
         Some(Sub::Assemble(f)) => Command::Assemble {
@@ -623,19 +633,14 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         },
         Some(Sub::Plan { scene }) => Command::Plan { scene },
         Some(Sub::Explain(e)) => {
-            let given = e.set.into_iter().map(|(p, v)| Given::Set(p, v));
+            let (request, edits) = e.render.resolve(&e.scene)?;
             Command::Explain(ExplainArgs {
-                edits: edit_args(given.collect(), &e.scene)?,
                 scene: e.scene,
                 x: e.x,
                 y: e.y,
                 json: e.json,
-                request: RenderRequest {
-                    method: e.method,
-                    aa: e.aa,
-                    threads: None,
-                    region: None,
-                },
+                request,
+                edits,
             })
         }
         Some(Sub::Edit(e)) => {
