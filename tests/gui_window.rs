@@ -121,10 +121,21 @@ impl Window {
 
 fn start_xvfb() -> (Killed, String) {
     for n in 90..200 {
-        if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists()
-            || Path::new(&format!("/tmp/.X{n}-lock")).exists()
-        {
-            continue;
+        let (socket, lock) = (format!("/tmp/.X11-unix/X{n}"), format!("/tmp/.X{n}-lock"));
+        // A display is taken while its lock names a running server; the
+        // lock and socket of one that was killed are stale, removed here as
+        // Xvfb itself would (else the old socket looks like a new server).
+        let owner = std::fs::read_to_string(&lock)
+            .ok()
+            .and_then(|pid| pid.trim().parse::<u32>().ok());
+        match owner {
+            Some(pid) if Path::new(&format!("/proc/{pid}")).exists() => continue,
+            Some(_) => {
+                let _ = std::fs::remove_file(&lock);
+                let _ = std::fs::remove_file(&socket);
+            }
+            None if Path::new(&lock).exists() || Path::new(&socket).exists() => continue,
+            None => {}
         }
         let display = format!(":{n}");
         let child = Command::new("Xvfb")
