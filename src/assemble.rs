@@ -7,8 +7,9 @@
 //! region's size, a region outside the image, two parts that overlap and
 //! pixels no part holds. [`assemble`] then writes the image row by row:
 //! only the parts that cross the current row are open, each decoded a row
-//! at a time, so memory holds a few rows, never the image (a 16000×16000
-//! image is 768 MB).
+//! at a time on a thread of its own while the other thread compresses, so
+//! memory holds a few rows, never the image (a 16000×16000 image is 768
+//! MB).
 //!
 //! The image written is the file a one-machine render writes
 //! ([`crate::output::write_png`] for both): `cmp` finds no difference.
@@ -290,7 +291,9 @@ pub struct Assembled {
 }
 
 /// Checks the parts ([`check`]) and writes the full image to `out` as a
-/// PNG, atomically, streaming rows from the parts crossing each row.
+/// PNG, atomically. Two threads share the work: one decodes the rows of
+/// the parts crossing each row of the image ([`Rows`]), the other filters
+/// and compresses them, a bounded queue of rows between them.
 pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleError> {
     let parts = check(paths)?;
     let target = out.canonicalize().ok();
@@ -301,58 +304,40 @@ pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleErro
     }
     let (width, height) = parts[0].part.image;
     output::check_target(out, width, height)?;
-    // Each part opened as the rows reach its top, closed after its bottom.
-    let mut waiting = parts.iter().peekable();
-    let mut open_parts: Vec<(PngReader, &PartFile)> = Vec::new();
+    let (send, receive) =
+        std::sync::mpsc::sync_channel::<Result<Vec<u8>, AssembleError>>(QUEUED_ROWS);
     let mut failure: Option<AssembleError> = None;
-    let mut y = 0;
-    let written = output::write_atomic_with(
-        out,
-        |w| {
-            output::write_png(w, width, height, &[], |row| {
-                open_parts.retain(|(_, p)| p.part.region.y1 > y);
-                while let Some(p) = waiting.next_if(|p| p.part.region.y0 == y) {
-                    let opened = open(&p.path).and_then(|(reader, again)| {
-                        // The file was read once by `check`: it must not
-                        // have changed since.
-                        if again.part == p.part {
-                            Ok(reader)
-                        } else {
-                            Err(AssembleError::Decode {
-                                path: p.path.clone(),
-                                reason: "changed while the parts were put together".to_owned(),
-                            })
-                        }
-                    });
-                    match opened {
-                        Ok(reader) => open_parts.push((reader, p)),
-                        Err(e) => return Err(stop(&mut failure, e)),
+    let written = std::thread::scope(|scope| {
+        scope.spawn(|| {
+            let mut rows = Rows::new(&parts, width);
+            for _ in 0..height {
+                let row = rows.next_row();
+                let failed = row.is_err();
+                // The writer has stopped: nothing more to decode for it.
+                if send.send(row).is_err() || failed {
+                    return;
+                }
+            }
+        });
+        let written = output::write_atomic_with(
+            out,
+            |w| {
+                output::write_png(w, width, height, &[], |row| match receive.recv() {
+                    Ok(Ok(decoded)) => {
+                        row.copy_from_slice(&decoded);
+                        Ok(())
                     }
-                }
-                for (reader, p) in &mut open_parts {
-                    let region = p.part.region;
-                    let decoded = match reader.next_row() {
-                        Ok(Some(r)) => r,
-                        Ok(None) => {
-                            let reason = "ends before its last row".to_owned();
-                            let path = p.path.clone();
-                            return Err(stop(&mut failure, AssembleError::Decode { path, reason }));
-                        }
-                        Err(e) => {
-                            let reason = e.to_string();
-                            let path = p.path.clone();
-                            return Err(stop(&mut failure, AssembleError::Decode { path, reason }));
-                        }
-                    };
-                    let at = region.x0 as usize * 3;
-                    row[at..at + decoded.data().len()].copy_from_slice(decoded.data());
-                }
-                y += 1;
-                Ok(())
-            })
-        },
-        |_| Ok::<(), AssembleError>(()),
-    );
+                    Ok(Err(e)) => Err(stop(&mut failure, e)),
+                    Err(_) => Err(std::io::Error::other("the decoding thread stopped")),
+                })
+            },
+            |_| Ok::<(), AssembleError>(()),
+        );
+        // A writer that stopped early (a failure, a full disk) lets the
+        // decoding thread's next send fail, and the thread end.
+        drop(receive);
+        written
+    });
     match (written, failure) {
         (_, Some(e)) => Err(e),
         (Err(e), None) => Err(e),
@@ -361,6 +346,62 @@ pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleErro
             height,
             parts: parts.len(),
         }),
+    }
+}
+
+/// Rows decoded ahead of the writer, at most: a few hundred kilobytes on
+/// a 16000-pixel-wide image.
+const QUEUED_ROWS: usize = 16;
+
+/// The image's rows, top to bottom, from the parts: each part opened as
+/// the rows reach its top, closed after its bottom, read a row at a time.
+struct Rows<'a> {
+    waiting: std::iter::Peekable<std::slice::Iter<'a, PartFile>>,
+    open: Vec<(PngReader, &'a PartFile)>,
+    width: u32,
+    y: u32,
+}
+
+impl<'a> Rows<'a> {
+    /// `parts` in reading order, as [`check`] returns them.
+    fn new(parts: &'a [PartFile], width: u32) -> Rows<'a> {
+        Rows {
+            waiting: parts.iter().peekable(),
+            open: Vec::new(),
+            width,
+            y: 0,
+        }
+    }
+
+    fn next_row(&mut self) -> Result<Vec<u8>, AssembleError> {
+        let y = self.y;
+        self.open.retain(|(_, p)| p.part.region.y1 > y);
+        while let Some(p) = self.waiting.next_if(|p| p.part.region.y0 == y) {
+            let (reader, again) = open(&p.path)?;
+            // The file was read once by `check`: it must not have changed.
+            if again.part != p.part {
+                return Err(AssembleError::Decode {
+                    path: p.path.clone(),
+                    reason: "changed while the parts were put together".to_owned(),
+                });
+            }
+            self.open.push((reader, p));
+        }
+        let mut row = vec![0; self.width as usize * 3];
+        for (reader, p) in &mut self.open {
+            let decode_error = |reason: String| AssembleError::Decode {
+                path: p.path.clone(),
+                reason,
+            };
+            let decoded = reader
+                .next_row()
+                .map_err(|e| decode_error(e.to_string()))?
+                .ok_or_else(|| decode_error("ends before its last row".to_owned()))?;
+            let at = p.part.region.x0 as usize * 3;
+            row[at..at + decoded.data().len()].copy_from_slice(decoded.data());
+        }
+        self.y += 1;
+        Ok(row)
     }
 }
 
