@@ -408,13 +408,14 @@ fn split_section(
 
     step("split: assemble");
     let assembled = dir.path().join("assembled.png");
-    let peak = PeakMemory::start();
     let assembly = timed(&mut || {
         assemble::assemble(&parts, &assembled)
             .map(drop)
             .map_err(|e| error(&e))
     })?;
-    let peak_mb = peak.and_then(|p| p.extra_mb());
+    // Its memory, as a cluster's assembly job runs it: a process of its
+    // own (this one has held the whole image).
+    let peak_mb = assemble_process_peak_mb(&parts, &dir.path().join("again.png"))?;
     rows.push(row(
         "assemble".into(),
         size,
@@ -460,7 +461,8 @@ fn split_section(
         slowest.as_secs_f64() / mean.as_secs_f64()
     ));
     out(&format!(
-        "assemble:  {:.2} s, peak memory {}; the same file as the whole render: {}\n",
+        "assemble:  {:.2} s, peak memory of an assemble process {}; the same file as the whole \
+         render: {}\n",
         assembly.as_secs_f64(),
         peak_mb.map_or("not measurable here".to_owned(), |m| format!("{m:.1} MB")),
         if same { "yes" } else { "NO" }
@@ -481,6 +483,40 @@ fn split_section(
         return Err("the assembled image differs from the whole render".to_owned());
     }
     Ok(())
+}
+
+/// The peak resident memory (VmHWM) of `rayoflight assemble` on `parts`
+/// in a process of its own, read from /proc while it runs (Linux; `None`
+/// elsewhere). The peak only grows, so the last reading is the peak but
+/// for the process's last milliseconds.
+fn assemble_process_peak_mb(parts: &[PathBuf], out: &Path) -> Result<Option<f64>, String> {
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let mut child = Command::new(exe)
+        .arg("assemble")
+        .arg("-out")
+        .arg(out)
+        .args(parts)
+        .spawn()
+        .map_err(|e| e.to_string())?;
+    let status_file = format!("/proc/{}/status", child.id());
+    let mut peak_kb: Option<f64> = None;
+    let status = loop {
+        if let Some(status) = child.try_wait().map_err(|e| e.to_string())? {
+            break status;
+        }
+        let hwm = std::fs::read_to_string(&status_file).ok().and_then(|text| {
+            let line = text.lines().find(|l| l.starts_with("VmHWM:"))?;
+            line.split_whitespace().nth(1)?.parse::<f64>().ok()
+        });
+        if let Some(kb) = hwm {
+            peak_kb = Some(peak_kb.map_or(kb, |p| p.max(kb)));
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    };
+    if !status.success() {
+        return Err("rayoflight assemble failed".to_owned());
+    }
+    Ok(peak_kb.map(|kb| kb / 1e3))
 }
 
 /// The peak resident memory from now on (Linux: /proc/self/clear_refs
