@@ -292,7 +292,7 @@ pub struct Assembled {
 
 /// Checks the parts ([`check`]) and writes the full image to `out` as a
 /// PNG, atomically. Two threads share the work: one decodes the rows of
-/// the parts crossing each row of the image ([`Rows`]), the other filters
+/// the parts crossing each row of the image, the other filters
 /// and compresses them, a bounded queue of rows between them.
 pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleError> {
     let parts = check(paths)?;

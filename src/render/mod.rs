@@ -3,14 +3,15 @@
 //! [`prepare`] turns the scene into a [`Prepared`] scene (what tracing needs
 //! and nothing more); [`render_tile`] traces one rectangle of pixels, checking
 //! a [`Cancel`] token once per pixel; [`trace_tiles`] is the one tile loop
-//! (bands over the rayon pool, counting [`Progress`]) that [`render`] and
-//! the app's worker share.
-//! [`RenderOptions`] holds every method choice; its default is the
-//! contract's reference image. [`render_pass`] renders one term of the
-//! formula (or the hit's normal, depth, object) through the same tile
-//! loop; [`explain`] says why a pixel has its colour, from the same trace. [`navigate`] moves the camera as a
-//! viewport does (orbit, pan, dolly); [`object_ids`] says which object each
-//! pixel shows.
+//! (bands over the rayon pool, counting [`Progress`]) that [`render`], the
+//! app's worker and `--region` share: a region of the image is traced in
+//! the whole image's tiles, so its pixels are the whole render's.
+//! [`RenderOptions`] holds every method choice (and the region to render);
+//! its default is the contract's reference image. [`render_pass`] renders
+//! one term of the formula (or the hit's normal, depth, object) through the
+//! same tile loop; [`explain`] says why a pixel has its colour, from the
+//! same trace. [`navigate`] moves the camera as a viewport does (orbit,
+//! pan, dolly); [`object_ids`] says which object each pixel shows.
 
 mod auto;
 mod camera;
