@@ -20,6 +20,7 @@ use crate::region::Region;
 use std::fs::File;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A part's file and its record.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -44,8 +45,12 @@ pub enum AssembleError {
     OutIsAPart { path: PathBuf },
     #[error("{}: not a PNG that can be read: {reason}", path.display())]
     NotPng { path: PathBuf, reason: String },
-    #[error("{}: not a part of a render (no '{}' record: written by 'rayoflight --region'?)", path.display(), part::KEYWORD)]
+    #[error("{}: not a part of a render: no '{}' record before its pixels (parts are written by 'rayoflight --region'; a part re-saved by another program is not one)", path.display(), part::KEYWORD)]
     NotAPart { path: PathBuf },
+    #[error("{}: is {kind}, not a part", path.display())]
+    Special { path: PathBuf, kind: &'static str },
+    #[error("interrupted: nothing was written")]
+    Interrupted,
     #[error("{}: {source}", path.display())]
     BadRecord { path: PathBuf, source: PartError },
     #[error("{}: not an 8-bit RGB image, as parts are", path.display())]
@@ -57,22 +62,22 @@ pub enum AssembleError {
         height: u32,
         region: Region,
     },
-    #[error("{}: made by rayoflight {theirs}, but {} by {ours}: renderers of two versions may not agree", path.display(), first.display())]
+    #[error("{}: made by rayoflight {theirs}, but {} by {ours}: renderers of two versions may not agree", path.display(), other.display())]
     Version {
         path: PathBuf,
         theirs: String,
-        first: PathBuf,
+        other: PathBuf,
         ours: String,
     },
-    #[error("{}: a part of a {}×{} image, but {} of a {}×{} one", path.display(), size.0, size.1, first.display(), first_size.0, first_size.1)]
+    #[error("{}: a part of a {}×{} image, but {} of a {}×{} one", path.display(), size.0, size.1, other.display(), other_size.0, other_size.1)]
     ImageSize {
         path: PathBuf,
         size: (u32, u32),
-        first: PathBuf,
-        first_size: (u32, u32),
+        other: PathBuf,
+        other_size: (u32, u32),
     },
-    #[error("{}: a part of another scene or other render options than {}", path.display(), first.display())]
-    OtherRender { path: PathBuf, first: PathBuf },
+    #[error("{}: a part of another scene or other render options than {}", path.display(), other.display())]
+    OtherRender { path: PathBuf, other: PathBuf },
     #[error("{}: its region {region} is outside the {}×{} image", path.display(), size.0, size.1)]
     Outside {
         path: PathBuf,
@@ -97,16 +102,27 @@ type PngReader = png::Reader<BufReader<File>>;
 
 /// Opens a part's PNG and reads its header and record.
 fn open(path: &Path) -> Result<(PngReader, PartFile), AssembleError> {
-    let file = File::open(path).map_err(|source| AssembleError::Read {
+    let read_error = |source| AssembleError::Read {
         path: path.to_owned(),
         source,
-    })?;
-    let reader = png::Decoder::new(BufReader::new(file))
-        .read_info()
-        .map_err(|e| AssembleError::NotPng {
+    };
+    // A FIFO or a device is never opened: reading one could wait for ever.
+    let meta = std::fs::metadata(path).map_err(read_error)?;
+    if let Some(kind) = crate::files::special_kind(&meta) {
+        return Err(AssembleError::Special {
             path: path.to_owned(),
-            reason: e.to_string(),
-        })?;
+            kind,
+        });
+    }
+    let file = File::open(path).map_err(read_error)?;
+    let mut decoder = png::Decoder::new(BufReader::new(file));
+    // Every chunk's CRC and the pixels' Adler-32: a flipped bit must not
+    // pass into the image.
+    decoder.ignore_checksums(false);
+    let reader = decoder.read_info().map_err(|e| AssembleError::NotPng {
+        path: path.to_owned(),
+        reason: e.to_string(),
+    })?;
     let info = reader.info();
     let text = info
         .uncompressed_latin1_text
@@ -148,10 +164,10 @@ fn open(path: &Path) -> Result<(PngReader, PartFile), AssembleError> {
 /// two parts, none in no part. Returns the parts in reading order (by
 /// top, then left edge).
 pub fn check(paths: &[PathBuf]) -> Result<Vec<PartFile>, AssembleError> {
-    // The same file twice, by one name or two.
+    // The same file twice, by one name or two (a link, a hard link).
     let mut seen = std::collections::HashSet::new();
     for path in paths {
-        if !seen.insert(path.canonicalize().unwrap_or_else(|_| path.clone())) {
+        if !seen.insert(crate::files::identity(path)) {
             return Err(AssembleError::Twice { path: path.clone() });
         }
     }
@@ -159,31 +175,52 @@ pub fn check(paths: &[PathBuf]) -> Result<Vec<PartFile>, AssembleError> {
         .iter()
         .map(|path| open(path).map(|(_, part)| part))
         .collect::<Result<Vec<_>, _>>()?;
-    let Some(first) = parts.first().cloned() else {
+    if parts.is_empty() {
         return Err(AssembleError::NoParts);
-    };
-    let size = first.part.image;
+    }
+    // What most parts are parts of; the culprit is a part that differs
+    // from them (the first part may be the odd one out).
+    let kind = |p: &PartFile| (p.part.version.clone(), p.part.image, p.part.render);
+    let mut counts: Vec<(_, usize)> = Vec::new();
     for p in &parts {
-        if p.part.version != first.part.version {
+        match counts.iter_mut().find(|(k, _)| *k == kind(p)) {
+            Some((_, n)) => *n += 1,
+            None => counts.push((kind(p), 1)),
+        }
+    }
+    let most = counts.iter().map(|(_, n)| *n).max().unwrap_or(0);
+    let common = counts
+        .iter()
+        .find(|(_, n)| *n == most)
+        .map(|(k, _)| k.clone())
+        .expect("at least one part");
+    let model = parts
+        .iter()
+        .find(|p| kind(p) == common)
+        .expect("a part of the commonest kind")
+        .clone();
+    let size = model.part.image;
+    for p in &parts {
+        if p.part.version != model.part.version {
             return Err(AssembleError::Version {
                 path: p.path.clone(),
                 theirs: p.part.version.clone(),
-                first: first.path.clone(),
-                ours: first.part.version.clone(),
+                other: model.path.clone(),
+                ours: model.part.version.clone(),
             });
         }
         if p.part.image != size {
             return Err(AssembleError::ImageSize {
                 path: p.path.clone(),
                 size: p.part.image,
-                first: first.path.clone(),
-                first_size: size,
+                other: model.path.clone(),
+                other_size: size,
             });
         }
-        if p.part.render != first.part.render {
+        if p.part.render != model.part.render {
             return Err(AssembleError::OtherRender {
                 path: p.path.clone(),
-                first: first.path.clone(),
+                other: model.path.clone(),
             });
         }
         if p.part.region.check_in(size.0, size.1).is_err() {
@@ -295,9 +332,20 @@ pub struct Assembled {
 /// the parts crossing each row of the image, the other filters
 /// and compresses them, a bounded queue of rows between them.
 pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleError> {
+    assemble_until(paths, out, &AtomicBool::new(false))
+}
+
+/// [`assemble`], giving up between two rows once `stop` is set (a signal,
+/// at the binary's edge): [`AssembleError::Interrupted`], and the
+/// temporary file is removed, an older image left as it was.
+pub fn assemble_until(
+    paths: &[PathBuf],
+    out: &Path,
+    stop: &AtomicBool,
+) -> Result<Assembled, AssembleError> {
     let parts = check(paths)?;
-    let target = out.canonicalize().ok();
-    if target.is_some() && paths.iter().any(|p| p.canonicalize().ok() == target) {
+    let target = crate::files::identity(out);
+    if out.exists() && paths.iter().any(|p| crate::files::identity(p) == target) {
         return Err(AssembleError::OutIsAPart {
             path: out.to_owned(),
         });
@@ -311,7 +359,11 @@ pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleErro
         scope.spawn(|| {
             let mut rows = Rows::new(&parts, width);
             for _ in 0..height {
-                let row = rows.next_row();
+                let row = if stop.load(Ordering::Relaxed) {
+                    Err(AssembleError::Interrupted)
+                } else {
+                    rows.next_row()
+                };
                 let failed = row.is_err();
                 // The writer has stopped: nothing more to decode for it.
                 if send.send(row).is_err() || failed {
@@ -327,7 +379,7 @@ pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleErro
                         row.copy_from_slice(&decoded);
                         Ok(())
                     }
-                    Ok(Err(e)) => Err(stop(&mut failure, e)),
+                    Ok(Err(e)) => Err(keep(&mut failure, e)),
                     Err(_) => Err(std::io::Error::other("the decoding thread stopped")),
                 })
             },
@@ -399,6 +451,11 @@ impl<'a> Rows<'a> {
                 .ok_or_else(|| decode_error("ends before its last row".to_owned()))?;
             let at = p.part.region.x0 as usize * 3;
             row[at..at + decoded.data().len()].copy_from_slice(decoded.data());
+            if p.part.region.y1 == y + 1 {
+                // Its last row: read to the end of its pixels, so that the
+                // last chunk's CRC and the Adler-32 are checked too.
+                reader.finish().map_err(|e| decode_error(e.to_string()))?;
+            }
         }
         self.y += 1;
         Ok(row)
@@ -407,7 +464,7 @@ impl<'a> Rows<'a> {
 
 /// Keeps `e` to report (the PNG writer only passes I/O errors through)
 /// and stops the writing.
-fn stop(failure: &mut Option<AssembleError>, e: AssembleError) -> std::io::Error {
+fn keep(failure: &mut Option<AssembleError>, e: AssembleError) -> std::io::Error {
     let message = e.to_string();
     *failure = Some(e);
     std::io::Error::other(message)

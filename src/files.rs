@@ -1,7 +1,8 @@
 //! Facts about the files the core reads and writes that the standard
 //! library leaves to each caller: what kind of special file a path is
 //! (scenes and images must be regular files: a FIFO would block, a device
-//! never ends), and where a chain of symbolic links leads.
+//! never ends), where a chain of symbolic links leads, and whether two
+//! paths are one file.
 
 use std::fs::Metadata;
 use std::path::{Path, PathBuf};
@@ -30,6 +31,28 @@ pub fn special_kind(meta: &Metadata) -> Option<&'static str> {
         }
     }
     Some("not a regular file")
+}
+
+/// What makes two paths one file: on Unix its device and inode (a
+/// symbolic link or a hard link is the file itself), elsewhere its
+/// canonical path; a path that cannot be read stands for itself.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub enum FileIdentity {
+    Inode { device: u64, inode: u64 },
+    Path(PathBuf),
+}
+
+/// The file `path` names ([`FileIdentity`]).
+pub fn identity(path: &Path) -> FileIdentity {
+    #[cfg(unix)]
+    if let Ok(meta) = std::fs::metadata(path) {
+        use std::os::unix::fs::MetadataExt;
+        return FileIdentity::Inode {
+            device: meta.dev(),
+            inode: meta.ino(),
+        };
+    }
+    FileIdentity::Path(path.canonicalize().unwrap_or_else(|_| path.to_owned()))
 }
 
 /// The file `path` names once symbolic links are followed (at most 40, as

@@ -14,6 +14,10 @@ pub const GAP: u32 = 8;
 /// Height of the line under each picture that holds its name.
 pub const LABEL_HEIGHT: u32 = 22;
 
+/// The narrowest cell: room for a name's last dozen characters under a
+/// small picture.
+pub const MIN_CELL_WIDTH: u32 = 120;
+
 const BACKGROUND: Rgb<u8> = Rgb([48, 48, 48]);
 
 /// Why the sheet could not be drawn.
@@ -23,7 +27,8 @@ pub struct SheetError(String);
 
 /// The sheet of `images` (name, picture) in reading order, `columns` a
 /// row (none: as square a grid as the count allows). Each cell is as
-/// large as the largest picture, which is centred in it.
+/// large as the largest picture (and at least [`MIN_CELL_WIDTH`] wide, for
+/// the name), the picture centred in it.
 pub fn contact_sheet(
     images: &[(String, RgbImage)],
     columns: Option<usize>,
@@ -33,7 +38,12 @@ pub fn contact_sheet(
         .unwrap_or_else(|| (count as f64).sqrt().ceil() as usize)
         .clamp(1, count) as u32;
     let rows = count.div_ceil(columns as usize) as u32;
-    let cell_w = images.iter().map(|(_, i)| i.width()).max().unwrap_or(1);
+    let cell_w = images
+        .iter()
+        .map(|(_, i)| i.width())
+        .max()
+        .unwrap_or(1)
+        .max(MIN_CELL_WIDTH);
     let cell_h = images.iter().map(|(_, i)| i.height()).max().unwrap_or(1) + LABEL_HEIGHT;
     let width = columns * (cell_w + GAP) + GAP;
     let height = rows * (cell_h + GAP) + GAP;
@@ -95,8 +105,8 @@ mod tests {
 
     #[test]
     fn pictures_sit_in_a_grid_with_their_names_under_them() {
-        let red = RgbImage::from_pixel(40, 30, Rgb([255, 0, 0]));
-        let blue = RgbImage::from_pixel(20, 30, Rgb([0, 0, 255]));
+        let red = RgbImage::from_pixel(160, 30, Rgb([255, 0, 0]));
+        let blue = RgbImage::from_pixel(100, 30, Rgb([0, 0, 255]));
         let images = vec![
             ("a".to_owned(), red.clone()),
             ("b".to_owned(), blue),
@@ -104,18 +114,27 @@ mod tests {
         ];
         let sheet = contact_sheet(&images, None).unwrap();
         // Two columns (the square root of 3, up), two rows.
-        let cell_h = 30 + LABEL_HEIGHT;
-        assert_eq!(sheet.dimensions(), (2 * 48 + GAP, 2 * (cell_h + GAP) + GAP));
+        let (cell_w, cell_h) = (160 + GAP, 30 + LABEL_HEIGHT);
+        assert_eq!(
+            sheet.dimensions(),
+            (2 * cell_w + GAP, 2 * (cell_h + GAP) + GAP)
+        );
         assert_eq!(sheet.get_pixel(GAP, GAP), &Rgb([255, 0, 0]));
         // The narrower picture is centred in its cell.
-        assert_eq!(sheet.get_pixel(GAP + 48 + 10, GAP), &Rgb([0, 0, 255]));
-        assert_eq!(sheet.get_pixel(GAP + 48 + 9, GAP), &BACKGROUND);
+        assert_eq!(sheet.get_pixel(GAP + cell_w + 30, GAP), &Rgb([0, 0, 255]));
+        assert_eq!(sheet.get_pixel(GAP + cell_w + 29, GAP), &BACKGROUND);
         // Each name is drawn: light pixels in the label line.
         let label_row = GAP + 30 + LABEL_HEIGHT / 2;
-        let lit = (GAP..GAP + 40).any(|x| sheet.get_pixel(x, label_row)[0] > 150);
+        let lit = (GAP..GAP + 160).any(|x| sheet.get_pixel(x, label_row)[0] > 150);
         assert!(lit, "a name under the first picture");
         let one_row = contact_sheet(&images, Some(5)).unwrap();
         assert_eq!(one_row.height(), cell_h + 2 * GAP);
+        // Tiny pictures still leave room for their names.
+        let dots = vec![("ka=0.25".to_owned(), RgbImage::new(1, 1))];
+        let sheet = contact_sheet(&dots, None).unwrap();
+        assert_eq!(sheet.width(), MIN_CELL_WIDTH + 2 * GAP);
+        let label_row = GAP + 1 + LABEL_HEIGHT / 2;
+        assert!((GAP..GAP + MIN_CELL_WIDTH).any(|x| sheet.get_pixel(x, label_row)[0] > 150));
     }
 
     #[test]

@@ -336,7 +336,7 @@ fn assemble_refuses_what_does_not_fit_and_names_the_culprit() {
     );
     assert!(
         refused(d, &[top.clone(), plain.clone()]).starts_with(&format!(
-            "{}: not a part of a render (no 'RayOfLight part' record",
+            "{}: not a part of a render: no 'RayOfLight part' record before its pixels",
             name(&plain)
         ))
     );
@@ -347,6 +347,45 @@ fn assemble_refuses_what_does_not_fit_and_names_the_culprit() {
             .starts_with(&format!("{}: not a PNG that can be read", name(&text)))
     );
     let bytes = fs::read(&bottom).unwrap();
+    // A bit flipped in a part's pixels, or in a chunk's CRC: caught by the
+    // checksums, not passed into the image.
+    let idat = bytes.windows(4).position(|w| w == b"IDAT").unwrap();
+    let length = u32::from_be_bytes(bytes[idat - 4..idat].try_into().unwrap()) as usize;
+    for (file, at) in [
+        ("flipped.png", idat + 4 + length / 2),
+        ("crc.png", idat + 4 + length),
+    ] {
+        let mut damaged = bytes.clone();
+        damaged[at] ^= 0x10;
+        let path = d.join(file);
+        fs::write(&path, &damaged).unwrap();
+        let message = refused(d, &[top.clone(), path.clone()]);
+        assert!(message.starts_with(&name(&path)), "{message}");
+    }
+    // The odd one out is blamed, even when it comes first.
+    let message = refused(d, &[aa[0].clone(), top.clone(), bottom.clone()]);
+    assert!(
+        message.starts_with(&format!("{}: ", name(&aa[0]))),
+        "{message}"
+    );
+    // A hard link is the file itself.
+    let hard = d.join("hard.png");
+    fs::hard_link(&top, &hard).unwrap();
+    assert_eq!(
+        refused(d, &[top.clone(), bottom.clone(), hard.clone()]),
+        format!("{}: given twice", name(&hard))
+    );
+    // A FIFO is refused unopened (opening it would wait for a writer).
+    #[cfg(unix)]
+    {
+        let fifo = d.join("fifo.png");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        assert!(made.unwrap().success());
+        assert_eq!(
+            refused(d, &[top.clone(), fifo.clone()]),
+            format!("{}: is a FIFO, not a part", name(&fifo))
+        );
+    }
     let cut = d.join("cut.png");
     fs::write(&cut, &bytes[..bytes.len() - 40]).unwrap();
     assert!(refused(d, &[top.clone(), cut.clone()]).starts_with(&name(&cut)));
@@ -392,6 +431,15 @@ fn region_flags_that_cannot_work_are_usage_errors() {
             "-out must end in .png",
         ),
         (
+            vec![s, "--region", "0,0,8,8"],
+            "--region needs -out PART.png",
+        ),
+        (
+            vec![s, "--region", "-1,0,8,8", "-out", "p.png"],
+            "--region expects X0,Y0,X1,Y1",
+        ),
+        (vec!["split", s, "--tasks", "-1"], "--tasks expects"),
+        (
             vec![s, "--region", "0,0,8,8", "--pass", "depth", "-out", "p.png"],
             "cannot be used with --pass",
         ),
@@ -411,6 +459,28 @@ fn region_flags_that_cannot_work_are_usage_errors() {
         assert!(
             stderr(&out).contains(expected),
             "{args:?}: {}",
+            stderr(&out)
+        );
+    }
+    let out = rayoflight(d, &["split", s, "--tasks", "4097"]);
+    assert!(
+        stderr(&out).ends_with("see 'rayoflight split --help'\n"),
+        "{}",
+        stderr(&out)
+    );
+    // A list that cannot be written whole is an error, never a short list.
+    #[cfg(target_os = "linux")]
+    {
+        let full = fs::File::create("/dev/full").unwrap();
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+            .args(["split", s, "--tasks", "3"])
+            .stdout(full)
+            .output()
+            .unwrap();
+        assert_eq!(out.status.code(), Some(1));
+        assert!(
+            stderr(&out).contains("cannot write to stdout"),
+            "{}",
             stderr(&out)
         );
     }
@@ -538,7 +608,9 @@ fn sheet_lays_the_renders_of_a_sweep_side_by_side() {
     assert!(out.status.success(), "{}", stderr(&out));
     let sheet = image::open(d.join("sheet.png")).unwrap().to_rgb8();
     let gap = rayoflight::sheet::GAP;
-    let cell = 48 + gap;
+    // Cells are at least MIN_CELL_WIDTH wide, the picture centred.
+    let cell = rayoflight::sheet::MIN_CELL_WIDTH + gap;
+    let inset = (rayoflight::sheet::MIN_CELL_WIDTH - 48) / 2;
     assert_eq!(
         sheet.dimensions(),
         (
@@ -549,13 +621,76 @@ fn sheet_lays_the_renders_of_a_sweep_side_by_side() {
     // Each picture where it belongs, as rendered.
     for (k, name) in images.iter().enumerate() {
         let picture = image::open(d.join(name)).unwrap().to_rgb8();
-        let placed = image::imageops::crop_imm(&sheet, gap + k as u32 * cell, gap, 48, 48);
+        let placed = image::imageops::crop_imm(&sheet, gap + k as u32 * cell + inset, gap, 48, 48);
         assert!(placed.to_image() == picture, "{name}");
     }
+    // Not over one of its own images.
+    let before = fs::read(d.join(&images[1])).unwrap();
+    let out = rayoflight(d, &["sheet", "-out", &images[1], &images[0], &images[1]]);
+    assert_eq!(out.status.code(), Some(1));
+    assert_eq!(
+        stderr(&out).trim(),
+        format!(
+            "{}: is one of the images: the sheet cannot be written over it",
+            images[1]
+        )
+    );
+    assert_eq!(fs::read(d.join(&images[1])).unwrap(), before);
     // A file that is not an image: exit 1, named, nothing written.
     fs::write(d.join("notes.png"), "text").unwrap();
     let out = rayoflight(d, &["sheet", "-out", "bad.png", "notes.png"]);
     assert_eq!(out.status.code(), Some(1));
     assert!(stderr(&out).starts_with("notes.png: "), "{}", stderr(&out));
     assert!(!d.join("bad.png").exists());
+}
+
+#[cfg(unix)]
+#[test]
+fn an_interrupted_assembly_leaves_no_temporary_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    // A large, empty image: quick to render, long enough to assemble to
+    // be caught in the middle.
+    let scene_file = d.join("sky.xml");
+    fs::write(
+        &scene_file,
+        r#"<scene><camera width="12000" height="12000" eyeDistance="2"/><model type="ambient"/></scene>"#,
+    )
+    .unwrap();
+    let quarters = [
+        Region::new(0, 0, 12000, 3000).unwrap(),
+        Region::new(0, 3000, 12000, 6000).unwrap(),
+        Region::new(0, 6000, 12000, 9000).unwrap(),
+        Region::new(0, 9000, 12000, 12000).unwrap(),
+    ];
+    let parts = render_parts(d, &scene_file, &quarters, &[]);
+    let out_dir = d.join("out");
+    fs::create_dir(&out_dir).unwrap();
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .arg("assemble")
+        .arg("-out")
+        .arg(out_dir.join("sky.png"))
+        .args(&parts)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Interrupt it once its temporary file exists.
+    let start = std::time::Instant::now();
+    while common::files_in(&out_dir).is_empty() {
+        assert!(start.elapsed().as_secs() < 30, "no temporary file appeared");
+        std::thread::sleep(std::time::Duration::from_millis(1));
+    }
+    let pid = child.id().to_string();
+    let killed = std::process::Command::new("kill")
+        .args(["-TERM", &pid])
+        .status();
+    assert!(killed.unwrap().success());
+    let out = child.wait_with_output().unwrap();
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert_eq!(stderr(&out).trim(), "interrupted: nothing was written");
+    assert!(
+        common::files_in(&out_dir).is_empty(),
+        "{:?}",
+        common::files_in(&out_dir)
+    );
 }

@@ -277,7 +277,7 @@ struct RenderFlags {
     quiet: bool,
     #[arg(long, value_name = "NAME", value_parser = pass)]
     pass: Option<Pass>,
-    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = region)]
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = region, allow_hyphen_values = true)]
     region: Option<Region>,
 }
 
@@ -425,7 +425,14 @@ struct SplitFlags {
     /// The scene file.
     scene: PathBuf,
     /// How many regions (tasks), at least 1.
-    #[arg(long, short = 'n', value_name = "N", value_parser = tasks, required = true)]
+    #[arg(
+        long,
+        short = 'n',
+        value_name = "N",
+        value_parser = tasks,
+        required = true,
+        allow_hyphen_values = true
+    )]
     tasks: usize,
     #[command(flatten)]
     render: RenderOf,
@@ -447,7 +454,7 @@ struct SheetFlags {
     #[arg(short, long, value_name = "FILE", required = true)]
     out: PathBuf,
     /// Pictures a row [default: as square a grid as the count allows]
-    #[arg(long, value_name = "N", value_parser = columns)]
+    #[arg(long, value_name = "N", value_parser = columns, allow_hyphen_values = true)]
     columns: Option<usize>,
     /// The images, in the order to show them.
     #[arg(value_name = "IMAGE", required = true)]
@@ -534,14 +541,16 @@ fn runs(text: &str) -> Result<usize, String> {
 }
 
 fn tasks(text: &str) -> Result<usize, String> {
-    text.parse()
+    text.trim()
+        .parse()
         .ok()
         .filter(|&n| n >= 1)
         .ok_or_else(|| "expects a whole number of tasks, at least 1".to_owned())
 }
 
 fn columns(text: &str) -> Result<usize, String> {
-    text.parse()
+    text.trim()
+        .parse()
         .ok()
         .filter(|&n| n >= 1)
         .ok_or_else(|| "expects a whole number, at least 1".to_owned())
@@ -704,11 +713,20 @@ fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
             out.extension()
                 .is_some_and(|e| e.eq_ignore_ascii_case("png"))
         };
-        if r.out.as_deref().is_some_and(|out| !png(out)) {
-            return Err(invalid(
-                "--region writes a PNG part, which records where it belongs for \
-                 'rayoflight assemble': -out must end in .png",
-            ));
+        match r.out.as_deref() {
+            None => {
+                return Err(invalid(
+                    "--region needs -out PART.png: written to the scene's own image \
+                     path, a part would replace its whole render",
+                ));
+            }
+            Some(out) if !png(out) => {
+                return Err(invalid(
+                    "--region writes a PNG part, which records where it belongs for \
+                     'rayoflight assemble': -out must end in .png",
+                ));
+            }
+            Some(_) => {}
         }
     }
     Ok(RenderArgs {

@@ -5,10 +5,11 @@
 //! [`rayoflight::sheet`]); this edge reads files and words failures.
 
 use super::args::SplitArgs;
+use super::args::UsageError;
 use super::{Failure, edit, fail, print_line, refused, usage};
 use image::ImageFormat;
 use rayoflight::scene::edit::Edited;
-use rayoflight::{assemble, output, scene, sheet, split};
+use rayoflight::{assemble, files, output, scene, sheet, split};
 use std::path::{Path, PathBuf};
 
 /// `split scene.xml --tasks N`: the regions on stdout, one a line.
@@ -17,11 +18,14 @@ pub fn split(args: &SplitArgs) -> Result<(), Failure> {
     edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
     let scene = edited.scene();
     let options = args.request.options(scene);
-    let regions = split::plan(scene, &options, args.tasks)
-        .map_err(|e| usage(format!("{}: {e}", args.scene.display())))?;
+    let regions = split::plan(scene, &options, args.tasks).map_err(|e| {
+        Failure::Usage(UsageError::Invalid {
+            message: format!("{}: {e}", args.scene.display()),
+            command: Some("split"),
+        })
+    })?;
     let lines: Vec<String> = regions.iter().map(ToString::to_string).collect();
-    print_line(&lines.join("\n"));
-    Ok(())
+    print_line(&lines.join("\n"))
 }
 
 /// `assemble -out image.png PART…`.
@@ -32,7 +36,18 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
             out.display()
         )));
     }
-    assemble::assemble(parts, out).map_err(fail)?;
+    // A signal stops the assembly between two rows, its temporary file
+    // removed (the default action would leave it behind).
+    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+    #[cfg(unix)]
+    for signal in [
+        signal_hook::consts::SIGINT,
+        signal_hook::consts::SIGTERM,
+        signal_hook::consts::SIGHUP,
+    ] {
+        signal_hook::flag::register(signal, std::sync::Arc::clone(&stop)).map_err(fail)?;
+    }
+    assemble::assemble_until(parts, out, &stop).map_err(fail)?;
     Ok(())
 }
 
@@ -40,9 +55,28 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 /// file name without the extension.
 pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
     output::format_for(out).map_err(fail)?;
+    if out.exists() {
+        let target = files::identity(out);
+        if let Some(image) = images.iter().find(|i| files::identity(i) == target) {
+            return Err(Failure::Error(format!(
+                "{}: is one of the images: the sheet cannot be written over it",
+                image.display()
+            )));
+        }
+    }
     let pictures = images
         .iter()
         .map(|path| {
+            // A FIFO or a device is never opened: it could block for ever.
+            if let Some(kind) = std::fs::metadata(path)
+                .ok()
+                .and_then(|m| files::special_kind(&m))
+            {
+                return Err(Failure::Error(format!(
+                    "{}: is {kind}, not an image",
+                    path.display()
+                )));
+            }
             let picture = image::open(path)
                 .map_err(|e| Failure::Error(format!("{}: {e}", path.display())))?;
             let name = path.file_stem().map_or_else(

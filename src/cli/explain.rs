@@ -39,13 +39,13 @@ pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
     };
     if args.json {
         let value = to_json(&explained, &names);
-        print_line(&value.to_string());
+        print_line(&value.to_string())?;
     } else {
         print_line(&words(
             &explained,
             &names,
             &args.scene.display().to_string(),
-        ));
+        ))?;
     }
     Ok(())
 }

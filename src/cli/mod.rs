@@ -74,10 +74,7 @@ pub fn main() -> ExitCode {
 
 fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure> {
     match args::parse(args)? {
-        Command::Print(text) => {
-            print_line(text.trim_end());
-            Ok(())
-        }
+        Command::Print(text) => print_line(text.trim_end()),
         Command::ExportPov { scene, out } => export_pov(&scene, out),
         Command::Edit(args) => edit_scene(&args),
         Command::Explain(args) => explain::run(&args),
@@ -91,7 +88,7 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
         Command::Plan { scene } => {
             let scene = scene::load(&scene).map_err(fail)?;
             for d in render::auto(&scene).decisions {
-                print_line(&format!("{}: {}\n  {}", d.topic, d.choice, d.reason));
+                print_line(&format!("{}: {}\n  {}", d.topic, d.choice, d.reason))?;
             }
             Ok(())
         }
@@ -107,9 +104,18 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
     }
 }
 
-/// Prints to stdout, ignoring a closed pipe (`rayoflight -time … | head`).
-fn print_line(text: &str) {
-    let _ = writeln!(std::io::stdout(), "{text}");
+/// Prints a line to stdout. A closed pipe (`rayoflight split … | head`)
+/// is the reader's choice and no error; any other failure to write (a
+/// full disk: `split … > regions.txt`) is, so that a script never takes a
+/// cut list for a whole one.
+fn print_line(text: &str) -> Result<(), Failure> {
+    let mut out = std::io::stdout().lock();
+    match writeln!(out, "{text}").and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Failure::Error(format!(
+            "rayoflight: cannot write to stdout: {e}"
+        ))),
+        _ => Ok(()),
+    }
 }
 
 fn render_scene(r: RenderArgs) -> Result<(), Failure> {
@@ -177,7 +183,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
         timed.elapsed
     };
     if r.time {
-        print_line(&format!("render: {} ns", elapsed.as_nanos()));
+        print_line(&format!("render: {} ns", elapsed.as_nanos()))?;
     }
     Ok(())
 }
