@@ -51,9 +51,10 @@ Options:
                      Default: the scene's path with the extension .png
   --region X0,Y0,X1,Y1
                      render only this rectangle of the image (pixels from
-                     the top left, X1 and Y1 excluded) into a PNG part whose
-                     pixels are the whole render's, which records where it
-                     belongs; 'rayoflight assemble' puts parts together
+                     the top left, X1 and Y1 excluded) into the PNG part
+                     -out names (required): its pixels are the whole
+                     render's, and it records where it belongs;
+                     'rayoflight assemble' puts parts together
   --pass NAME        write one render pass instead of the image: final
                      (default), ambient, diffuse, specular, reflection (the
                      camera ray's terms; in .exr they add up to final),
