@@ -344,8 +344,7 @@ pub fn assemble_until(
     stop: &AtomicBool,
 ) -> Result<Assembled, AssembleError> {
     let parts = check(paths)?;
-    let target = crate::files::identity(out);
-    if out.exists() && paths.iter().any(|p| crate::files::identity(p) == target) {
+    if paths.iter().any(|p| crate::files::same_file(p, out)) {
         return Err(AssembleError::OutIsAPart {
             path: out.to_owned(),
         });

@@ -55,6 +55,12 @@ pub fn identity(path: &Path) -> FileIdentity {
     FileIdentity::Path(path.canonicalize().unwrap_or_else(|_| path.to_owned()))
 }
 
+/// Whether `b` names the existing file `a`: by another spelling of the
+/// path, through a symbolic link, or (Unix) as a hard link.
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    a.exists() && b.exists() && identity(a) == identity(b)
+}
+
 /// The file `path` names once symbolic links are followed (at most 40, as
 /// the kernel does); a dangling link gives the path it points to.
 pub fn through_links(path: &Path) -> PathBuf {

@@ -55,14 +55,11 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 /// file name without the extension.
 pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
     output::format_for(out).map_err(fail)?;
-    if out.exists() {
-        let target = files::identity(out);
-        if let Some(image) = images.iter().find(|i| files::identity(i) == target) {
-            return Err(Failure::Error(format!(
-                "{}: is one of the images: the sheet cannot be written over it",
-                image.display()
-            )));
-        }
+    if let Some(image) = images.iter().find(|i| files::same_file(i, out)) {
+        return Err(Failure::Error(format!(
+            "{}: is one of the images: the sheet cannot be written over it",
+            image.display()
+        )));
     }
     let pictures = images
         .iter()

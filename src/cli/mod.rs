@@ -15,7 +15,7 @@ use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
 use rayoflight::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
-use rayoflight::{measure, output, pov, render, scene};
+use rayoflight::{files, measure, output, pov, render, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -216,7 +216,7 @@ fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
     let out = args.out.as_deref().unwrap_or(&args.scene);
     // Edits that change nothing (a value set to the one it has) leave the
     // scene file untouched, its modification time included.
-    if new_text == text && same_file(&args.scene, out) {
+    if new_text == text && files::same_file(&args.scene, out) {
         return Ok(());
     }
     output::write_atomic(out, new_text.as_bytes()).map_err(fail)
@@ -237,51 +237,14 @@ fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     output::write_atomic(&out, text.as_bytes()).map_err(fail)
 }
 
-/// The output must never replace the scene: compare canonical paths (so
-/// `./a/../s.xml` and symbolic links are caught), and on Unix the inode
-/// (hard links).
+/// The output must never replace the scene: not by another spelling of
+/// its path (`./a/../s.xml`), a symbolic link or a hard link.
 fn refuse_same_file(scene: &Path, out: &Path) -> Result<(), Failure> {
-    if same_file(scene, out) {
+    if files::same_file(scene, out) {
         return Err(Failure::Error(format!(
             "{}: refusing to overwrite the scene file with the output",
             out.display()
         )));
     }
     Ok(())
-}
-
-/// Whether `out` names the existing file `scene`, by another path or
-/// through a link.
-fn same_file(scene: &Path, out: &Path) -> bool {
-    match (scene.canonicalize(), canonical_target(out)) {
-        (Ok(a), Some(b)) => a == b || same_inode(&a, &b),
-        _ => false,
-    }
-}
-
-/// Canonical form of a path that may not exist yet: its parent made
-/// canonical, joined with its file name.
-fn canonical_target(path: &Path) -> Option<PathBuf> {
-    if let Ok(p) = path.canonicalize() {
-        return Some(p);
-    }
-    let parent = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    Some(parent.canonicalize().ok()?.join(path.file_name()?))
-}
-
-#[cfg(unix)]
-fn same_inode(a: &Path, b: &Path) -> bool {
-    use std::os::unix::fs::MetadataExt;
-    match (a.metadata(), b.metadata()) {
-        (Ok(x), Ok(y)) => x.dev() == y.dev() && x.ino() == y.ino(),
-        _ => false,
-    }
-}
-
-#[cfg(not(unix))]
-fn same_inode(_: &Path, _: &Path) -> bool {
-    false
 }
