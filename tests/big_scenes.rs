@@ -71,7 +71,7 @@ fn the_edited_scene_shares_every_object_but_the_one_edited() {
 fn a_save_is_read_back_sharing_the_objects_on_screen() {
     let (_dir, path, mut doc) = common::document_on(&spheres_text(1000));
     let (tx, rx) = mpsc::channel();
-    let watcher = SceneWatcher::new(&path, move |e| {
+    let watcher = SceneWatcher::new(&path, doc.disk_fingerprint(), move |e| {
         let _ = tx.send(e);
     })
     .unwrap();

@@ -11,7 +11,7 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::{Command, RayOfLightApp};
-use rayoflight::gui::document::{Document, Reload, SaveError};
+use rayoflight::gui::document::{Document, Reload, SaveError, fingerprint_file};
 use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
@@ -314,7 +314,7 @@ fn defect_5_a_file_written_back_to_an_older_content_is_seen() {
 
 fn watch(path: &Path) -> (std::sync::mpsc::Receiver<FileEvent>, SceneWatcher) {
     let (tx, rx) = std::sync::mpsc::channel();
-    let watcher = SceneWatcher::new(path, move |e| {
+    let watcher = SceneWatcher::new(path, fingerprint_file(path).ok(), move |e| {
         let _ = tx.send(e);
     })
     .unwrap();

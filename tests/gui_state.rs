@@ -9,7 +9,7 @@ mod common;
 
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;
-use rayoflight::gui::document::{Document, FileState, Reload};
+use rayoflight::gui::document::{Document, FileState, Reload, fingerprint_file};
 use rayoflight::gui::preview::{Preview, RenderState};
 use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
@@ -210,7 +210,7 @@ fn watched_scene() -> (
     let path = dir.path().join("scene.xml");
     std::fs::write(&path, scene_text(0.1, 8)).unwrap();
     let (tx, rx) = mpsc::channel();
-    let watcher = SceneWatcher::new(&path, move |e| {
+    let watcher = SceneWatcher::new(&path, fingerprint_file(&path).ok(), move |e| {
         let _ = tx.send(e);
     })
     .unwrap();

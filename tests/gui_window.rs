@@ -97,26 +97,33 @@ impl Window {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(name);
         std::fs::write(&path, text).unwrap();
-        let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
-            .arg(&path)
-            .env("DISPLAY", &display)
-            .env_remove("WAYLAND_DISPLAY")
-            .env("XDG_CONFIG_HOME", dir.path())
-            .env("LIBGL_ALWAYS_SOFTWARE", "1")
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .unwrap();
+        let app = start_app(&path, &display, dir.path());
         Window {
             shots,
             display,
             dir,
             path,
-            app: Killed(app),
+            app,
             _xvfb: xvfb,
             _one: one,
         }
     }
+}
+
+/// The app on `path` on `display`, its settings and its journal in `home`.
+fn start_app(path: &Path, display: &str, home: &Path) -> Killed {
+    let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .arg(path)
+        .env("DISPLAY", display)
+        .env_remove("WAYLAND_DISPLAY")
+        .env("XDG_CONFIG_HOME", home)
+        .env("XDG_STATE_HOME", home.join("state"))
+        .env("LIBGL_ALWAYS_SOFTWARE", "1")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    Killed(app)
 }
 
 fn start_xvfb() -> (Killed, String) {
@@ -473,4 +480,165 @@ fn orbiting_with_the_mouse_moves_the_view_undoes_and_saves_what_is_shown() {
     let idle = (cpu_seconds(pid) - before) / 5.0;
     eprintln!("idle CPU: {:.1} %", idle * 100.0);
     assert!(idle < 0.05, "idle CPU {:.1} %", idle * 100.0);
+}
+
+/// The app's window, once it is there.
+fn app_window(xdotool: &dyn Fn(&[&str]) -> String) -> String {
+    let start = Instant::now();
+    loop {
+        if let Some(w) = xdotool(&["search", "--name", "RayOfLight"]).lines().next() {
+            return w.to_owned();
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the app's window"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
+/// Drags the camera from the middle of the picture to the right.
+fn orbit(xdotool: &dyn Fn(&[&str]) -> String, at: (i64, i64), steps: i64) {
+    let (x, y) = at;
+    xdotool(&["mousemove", &x.to_string(), &y.to_string()]);
+    xdotool(&["mousedown", "1"]);
+    for k in 1..=steps {
+        xdotool(&["mousemove", &(x + 15 * k).to_string(), &y.to_string()]);
+        std::thread::sleep(Duration::from_millis(60));
+    }
+    xdotool(&["mouseup", "1"]);
+}
+
+fn journal_entries(home: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(home.join("state/rayoflight/journal"))
+        .map(|d| {
+            d.flatten()
+                .map(|e| e.path())
+                .filter(|p| p.extension().is_some_and(|e| e == "json"))
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
+/// Issue 25, item 3, on the real process: unsaved edits outlive kill -9
+/// and a logout's SIGTERM, come back on screen on the next start, and
+/// Ctrl+S then writes them.
+#[test]
+fn unsaved_edits_survive_kill_9_and_sigterm_and_come_back_on_screen() {
+    let mut opened = Window::open("hot.xml", TWO_SPHERES);
+    let (shots, display, path) = (
+        opened.shots.clone(),
+        opened.display.clone(),
+        opened.path.clone(),
+    );
+    let home = opened.dir.path().to_owned();
+    let xdotool = |args: &[&str]| {
+        let out = Command::new("xdotool")
+            .args(args)
+            .env("DISPLAY", &display)
+            .output()
+            .expect("xdotool runs (apt-get install xdotool)");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let first = |name: &str| {
+        wait_for(
+            &display,
+            &shots.join(name),
+            Duration::from_secs(60),
+            "the first render",
+            |s| centroid(s, RED).1 > 500,
+        );
+        let window = app_window(&xdotool);
+        xdotool(&["windowfocus", "--sync", &window]);
+        xdotool(&["key", "--window", &window, "1"]);
+        std::thread::sleep(Duration::from_millis(500));
+        window
+    };
+    first("hot-0.png");
+    let before = screenshot(&display, &shots.join("hot-1-before.png"));
+    let middle = (
+        ((centroid(&before, RED).0 + centroid(&before, GREEN).0) / 2.0).round() as i64,
+        (before
+            .enumerate_pixels()
+            .filter(|(_, _, p)| p.0 == RED)
+            .map(|(_, y, _)| f64::from(y))
+            .sum::<f64>()
+            / centroid(&before, RED).1 as f64)
+            .round() as i64,
+    );
+    orbit(&xdotool, middle, 6);
+    std::thread::sleep(Duration::from_millis(1000));
+    let orbited = spread(&screenshot(&display, &shots.join("hot-2-orbited.png")));
+    assert!((orbited - spread(&before)).abs() > 3.0, "the view moved");
+    assert_eq!(journal_entries(&home).len(), 1, "journaled within a second");
+
+    // kill -9: the next start shows the edit, unsaved, and Ctrl+S saves it.
+    opened.app.0.kill().unwrap();
+    opened.app.0.wait().unwrap();
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), TWO_SPHERES);
+    opened.app = start_app(&path, &display, &home);
+    let window = first("hot-3-restarted.png");
+    wait_for(
+        &display,
+        &shots.join("hot-4-restored.png"),
+        Duration::from_secs(10),
+        "the restored view",
+        |s| (spread(s) - orbited).abs() < 0.01,
+    );
+    let title = xdotool(&["getwindowname", &window]);
+    assert!(
+        title.trim_end().ends_with('•'),
+        "unsaved in the title: {title}"
+    );
+    xdotool(&["key", "--window", &window, "ctrl+s"]);
+    std::thread::sleep(Duration::from_millis(1500));
+    let saved = std::fs::read_to_string(&path).unwrap();
+    assert!(saved.contains("<!-- GREEN sphere -->") && saved.contains("<rotate-y"));
+    assert!(journal_entries(&home).is_empty(), "saved: no journal");
+
+    // SIGTERM (a logout): the app ends at once, cleanly, the edit kept.
+    orbit(&xdotool, middle, 4);
+    std::thread::sleep(Duration::from_millis(1000));
+    let second = spread(&screenshot(&display, &shots.join("hot-5-orbited.png")));
+    let pid = opened.app.0.id().to_string();
+    let sent = Instant::now();
+    assert!(
+        Command::new("kill")
+            .args(["-TERM", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let status = loop {
+        if let Some(status) = opened.app.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            sent.elapsed() < Duration::from_secs(6),
+            "the app ends on SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    eprintln!("SIGTERM to exit: {:?}", sent.elapsed());
+    assert!(status.success(), "a clean exit: {status:?}");
+    assert_eq!(journal_entries(&home).len(), 1);
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        saved,
+        "nothing written"
+    );
+    opened.app = start_app(&path, &display, &home);
+    let window = first("hot-6-after-sigterm.png");
+    wait_for(
+        &display,
+        &shots.join("hot-7-restored.png"),
+        Duration::from_secs(10),
+        "the view as it was at SIGTERM",
+        |s| (spread(s) - second).abs() < 0.01,
+    );
+    xdotool(&["key", "--window", &window, "ctrl+s"]);
+    std::thread::sleep(Duration::from_millis(1500));
+    let again = std::fs::read_to_string(&path).unwrap();
+    assert_ne!(again, saved, "the edit made before SIGTERM is saved");
+    assert!(journal_entries(&home).is_empty());
 }

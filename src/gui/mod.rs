@@ -15,6 +15,8 @@
 //! - [`texture`]: that picture on the GPU, uploaded a changed tile (or a
 //!   band of rows) at a time.
 //! - [`watcher`]: the file watcher (notify), debounced.
+//! - [`journal`]: the unsaved edits kept on disk as they are made, restored
+//!   after a crash or a logout.
 //! - [`study`]: the Study window and the live preview's choice of method.
 //!
 //! It reaches the core only through `scene`, `render`, `study` and
@@ -22,6 +24,7 @@
 
 pub mod app;
 pub mod document;
+pub mod journal;
 pub mod pace;
 mod panel;
 pub mod preview;
@@ -89,11 +92,9 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
         "RayOfLight",
         options,
         Box::new(move |cc| {
-            Ok(Box::new(app::RayOfLightApp::new(
-                &cc.egui_ctx,
-                doc,
-                persisted,
-            )))
+            let mut app = app::RayOfLightApp::new(&cc.egui_ctx, doc, persisted);
+            app.end_on_signals();
+            Ok(Box::new(app))
         }),
     )
     .map_err(|e| GuiError::Window(e.to_string()))

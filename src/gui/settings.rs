@@ -2,7 +2,9 @@
 //! size, the anti-aliasing, the study's runs and the last file open
 //! ([`Settings`]), and the
 //! recent files ([`Recent`]). Both live in `$XDG_CONFIG_HOME/rayoflight/`
-//! (or `~/.config/rayoflight/`); tests use them in memory only.
+//! (or `~/.config/rayoflight/`); tests use them in memory only. Beside
+//! them, where the journal of unsaved edits goes (a state, not a setting:
+//! `$XDG_STATE_HOME`, [`crate::gui::journal`]).
 //!
 //! `settings.txt` holds `key = value` lines. Unknown keys and bad values
 //! are ignored: a stale or hand-edited file never stops the app.
@@ -25,6 +27,9 @@ pub fn config_file(name: &str) -> Option<PathBuf> {
 pub struct Persisted {
     pub settings: Settings,
     pub recent: Recent,
+    /// The folder of the journal of unsaved edits
+    /// ([`crate::gui::journal`]); `None`: no journal.
+    pub journal: Option<PathBuf>,
 }
 
 impl Persisted {
@@ -33,6 +38,7 @@ impl Persisted {
         Persisted {
             settings: Settings::load(config_file("settings.txt")),
             recent: Recent::user(),
+            journal: crate::gui::journal::user_folder(),
         }
     }
 

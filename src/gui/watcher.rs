@@ -16,13 +16,17 @@
 //! link now points elsewhere) and whether the file's size, time or inode
 //! changed, and reports a change that events missed.
 //!
+//! The watch starts from the bytes the document read (their fingerprint):
+//! a file that changed between that read and the watch is reported at
+//! once, not missed.
+//!
 //! Every change is reported, even one back to a content reported before
 //! (only a repeat of the very same bytes and stamp is not): the document
 //! compares what it gets with the text it last read or wrote, which the
 //! watcher cannot know.
 
 use crate::files::through_links;
-use crate::gui::document::FileRead;
+use crate::gui::document::{FileRead, fingerprint_file};
 use crate::scene::{self, LoadError, Object};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
@@ -171,9 +175,16 @@ impl Watched {
 }
 
 impl SceneWatcher {
-    /// Starts watching `path`; `on_event` runs on a watcher thread.
+    /// Starts watching `path`, whose bytes the document read had the
+    /// fingerprint `document_read` (`None`: it read none, the file was missing or
+    /// broken); `on_event` runs on a watcher thread.
+    ///
+    /// The watch starts from those bytes, not from a look at the file now:
+    /// a file replaced between the document's read and this call (no
+    /// event and no new stamp would tell) is read and reported at once.
     pub fn new(
         path: &Path,
+        document_read: Option<u64>,
         on_event: impl Fn(FileEvent) + Send + Sync + 'static,
     ) -> Result<SceneWatcher, WatchError> {
         let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
@@ -261,7 +272,12 @@ impl SceneWatcher {
         let watched = Arc::new(Mutex::new(watched));
         std::thread::Builder::new()
             .name("scene-watcher-poll".to_owned())
-            .spawn(move || poll(&poll_path, &watched, &seen, &poll_stop, report))
+            .spawn(move || {
+                if document_read.is_none() || fingerprint_file(&poll_path).ok() != document_read {
+                    report(false);
+                }
+                poll(&poll_path, &watched, &seen, &poll_stop, report);
+            })
             .map_err(|e| error(notify::Error::io(e)))?;
         Ok(SceneWatcher { path, stop, known })
     }

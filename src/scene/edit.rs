@@ -212,7 +212,7 @@ impl Axis {
     pub fn name(self) -> &'static str {
         name_of(&AXES, self)
     }
-    fn of(self, v: Vec3) -> f64 {
+    pub(crate) fn of(self, v: Vec3) -> f64 {
         match self {
             Axis::X => v.x,
             Axis::Y => v.y,
@@ -232,7 +232,7 @@ impl Channel {
     pub fn name(self) -> &'static str {
         name_of(&CHANNELS, self)
     }
-    fn axis(self) -> Axis {
+    pub(crate) fn axis(self) -> Axis {
         match self {
             Channel::Red => Axis::X,
             Channel::Green => Axis::Y,
@@ -872,26 +872,9 @@ enum Restore {
 }
 
 impl Undo {
-    /// An undo that applies `edit` (with no origin to restore): for steps
-    /// built from edits rather than from applying them, such as undoing a
-    /// reload from disk.
-    pub fn from_edit(edit: Edit) -> Undo {
-        Undo {
-            edit,
-            restore: Restore::Nothing,
-        }
-    }
-
     /// The inverse edit.
     pub fn edit(&self) -> &Edit {
         &self.edit
-    }
-
-    /// Drops the origin it would restore: for when the text the origins
-    /// point into is replaced (a reload from disk). The element comes back
-    /// as new text.
-    pub fn forget_origin(&mut self) {
-        self.restore = Restore::Nothing;
     }
 }
 

@@ -14,6 +14,7 @@
 
 pub mod edit;
 mod error;
+pub mod identity;
 mod load;
 pub mod merge;
 pub mod splice;

@@ -355,7 +355,10 @@ impl RayOfLightApp {
         match (answer, confirm) {
             (Answer::Cancel, _) => {}
             (Answer::Go, Confirm::Replace(path)) => self.save_as(&path),
-            (Answer::Go, Confirm::Discard(command)) => self.execute(command),
+            (Answer::Go, Confirm::Discard(command)) => {
+                self.discard_journal();
+                self.execute(command);
+            }
             // Once saved (no conflict, no error) it goes on; else the edits
             // stay.
             (Answer::SaveThen, Confirm::Discard(command)) => self.save_then(Some(command)),

@@ -26,6 +26,7 @@ pub mod command;
 mod dialogs;
 mod events;
 mod explain;
+mod hot_exit;
 mod navigate;
 mod overlay;
 mod passes;
@@ -51,6 +52,7 @@ use egui::{Color32, Key, KeyboardShortcut, Modifiers, Pos2, Rect, Sense, Texture
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::time::{Duration, Instant};
 
@@ -155,7 +157,12 @@ pub struct RayOfLightApp {
     title: String,
     /// The user chose to quit without saving.
     allow_close: bool,
-    /// Print the status figures to stderr once a second (RAYOFLIGHT_STATS).
+    /// The journal of unsaved edits, when the app keeps one.
+    hot_exit: Option<hot_exit::HotExit>,
+    /// A signal asked the app to end (see [`RayOfLightApp::end_on_signals`]).
+    signalled: Arc<AtomicBool>,
+    /// Print the status figures to stderr once a second
+    /// (`RAYOFLIGHT_STATS`, see [`stats_wanted`]).
     stats: bool,
     last_stats: Instant,
     /// The longest time `draw` took since the last stats line.
@@ -167,7 +174,11 @@ impl RayOfLightApp {
     /// The app on `doc`, with what it remembers between runs
     /// ([`Persisted::user`] in the app, [`Persisted::in_memory`] in tests).
     pub fn new(ctx: &egui::Context, doc: Document, persisted: Persisted) -> RayOfLightApp {
-        let Persisted { settings, recent } = persisted;
+        let Persisted {
+            settings,
+            recent,
+            journal,
+        } = persisted;
         let wake_ctx = ctx.clone();
         let worker = Worker::spawn(Worker::default_threads(), move || {
             wake_ctx.request_repaint()
@@ -185,7 +196,9 @@ impl RayOfLightApp {
             background_tx,
             title: String::new(),
             allow_close: false,
-            stats: std::env::var_os("RAYOFLIGHT_STATS").is_some(),
+            hot_exit: journal.map(hot_exit::HotExit::new),
+            signalled: Arc::new(AtomicBool::new(false)),
+            stats: stats_wanted(std::env::var_os("RAYOFLIGHT_STATS").as_deref()),
             last_stats: Instant::now(),
             slowest_frame: Duration::ZERO,
             path_prompt: None,
@@ -226,9 +239,17 @@ impl RayOfLightApp {
             render_pending: false,
             ctx: ctx.clone(),
         };
+        app.restore_journal();
         app.watch();
         app.request_render();
         app
+    }
+
+    /// SIGTERM, SIGINT and SIGHUP (a logout, Ctrl+C, a closed terminal)
+    /// end the app cleanly from now on, with the unsaved edits in the
+    /// journal and nothing asked.
+    pub fn end_on_signals(&mut self) {
+        self.signalled = hot_exit::watch_signals(&self.ctx);
     }
 
     /// The scene changed (an edit, undo, redo, a reload): drop a selection
@@ -248,6 +269,7 @@ impl RayOfLightApp {
         self.doc = doc;
         self.selection = Selection::default();
         self.view = View::default();
+        self.restore_journal();
         self.watch();
         self.request_render();
     }
@@ -262,7 +284,7 @@ impl RayOfLightApp {
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
         let generation = self.watch_generation;
-        match SceneWatcher::new(&path, move |event| {
+        match SceneWatcher::new(&path, self.doc.disk_fingerprint(), move |event| {
             let _ = tx.send(Background::File(generation, event));
             ctx.request_repaint();
         }) {
@@ -368,6 +390,7 @@ impl RayOfLightApp {
         self.count_frame();
         self.drain_events();
         let ctx = ui.ctx().clone();
+        self.keep_journal(&ctx);
         self.guard_close(&ctx);
         self.shortcuts(&ctx);
         let title = format!(
@@ -418,4 +441,15 @@ impl RayOfLightApp {
             ctx.request_repaint_after(Duration::from_millis(16));
         }
     }
+}
+
+/// Whether `RAYOFLIGHT_STATS` asks for the figures on stderr: set to
+/// anything but empty, `0`, `false`, `no` or `off` (as such switches read).
+pub fn stats_wanted(value: Option<&std::ffi::OsStr>) -> bool {
+    value
+        .and_then(std::ffi::OsStr::to_str)
+        .map(|v| v.trim().to_ascii_lowercase())
+        .is_some_and(|v| !matches!(v.as_str(), "" | "0" | "false" | "no" | "off"))
+        // A value that is not UTF-8 is still set.
+        || value.is_some_and(|v| v.to_str().is_none())
 }

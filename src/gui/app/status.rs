@@ -112,11 +112,20 @@ impl RayOfLightApp {
                     ui.label("click a pixel to explain it (Esc: cancel)");
                 }
                 ui.separator();
-                ui.label(format!("{} fps", self.frames.len()));
+                // The frames of the last second, this one included; with
+                // no other, the window is idle (and draws nothing more).
+                if self.frames.len() <= 1 {
+                    ui.label("idle");
+                } else {
+                    ui.label(format!("{} fps", self.frames.len()));
+                    // One more frame once this second is over, to say so.
+                    ui.ctx().request_repaint_after(Duration::from_millis(1100));
+                }
                 self.export_progress(ui);
                 if let Some(saving) = &self.saving {
+                    // No spinner: it would draw every frame it can while
+                    // the save runs; the seconds go up four times a second.
                     ui.separator();
-                    ui.spinner();
                     ui.label(format!(
                         "saving… {:.0} s",
                         saving.started.elapsed().as_secs_f64().floor()

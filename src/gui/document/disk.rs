@@ -72,6 +72,8 @@ impl FileRead {
 pub struct PendingMerge {
     read: FileRead,
     conflicts: Vec<Conflict>,
+    /// The unsaved edits the conflicts' indices count in.
+    edits: Vec<Edit>,
     /// Save once the conflicts are settled (the merge came from Ctrl+S).
     save_after: bool,
 }
@@ -89,15 +91,43 @@ pub(super) fn fingerprint(bytes: &[u8]) -> u64 {
     f.finish()
 }
 
+/// Why a path could not be fingerprinted.
+#[derive(Debug)]
+pub enum FingerprintError {
+    Io(std::io::Error),
+    /// A FIFO, device or socket: never opened (a FIFO blocks until a
+    /// writer comes, a device may never end).
+    NotAFile(&'static str),
+}
+
+impl FingerprintError {
+    /// The error as the loader words it, for `path`.
+    pub fn to_load_error(&self, path: &Path) -> LoadError {
+        let kind = match self {
+            FingerprintError::Io(e) => LoadErrorKind::Io {
+                kind: e.kind(),
+                message: e.to_string(),
+            },
+            FingerprintError::NotAFile(kind) => LoadErrorKind::NotAFile { kind },
+        };
+        LoadError::new(path, None, kind)
+    }
+}
+
 /// The [`fingerprint`] of the file at `path`, read in pieces (not into
-/// memory at once: the file may be a gigabyte).
-pub(super) fn fingerprint_file(path: &Path) -> std::io::Result<u64> {
+/// memory at once: the file may be a gigabyte). A path that is not a
+/// regular file is not opened.
+pub fn fingerprint_file(path: &Path) -> Result<u64, FingerprintError> {
     use std::io::Read;
-    let mut file = std::fs::File::open(path)?;
+    let meta = std::fs::metadata(path).map_err(FingerprintError::Io)?;
+    if let Some(kind) = crate::files::special_kind(&meta) {
+        return Err(FingerprintError::NotAFile(kind));
+    }
+    let mut file = std::fs::File::open(path).map_err(FingerprintError::Io)?;
     let mut buffer = vec![0; 1 << 16];
     let mut f = Fingerprint::default();
     loop {
-        match file.read(&mut buffer)? {
+        match file.read(&mut buffer).map_err(FingerprintError::Io)? {
             0 => return Ok(f.finish()),
             n => f.add(&buffer[..n]),
         }
@@ -107,18 +137,18 @@ pub(super) fn fingerprint_file(path: &Path) -> std::io::Result<u64> {
 /// A fingerprint made piece by piece: the same however the bytes are cut
 /// (SipHash reads what it is given as one stream).
 #[derive(Default)]
-struct Fingerprint {
+pub(super) struct Fingerprint {
     hasher: std::hash::DefaultHasher,
     len: u64,
 }
 
 impl Fingerprint {
-    fn add(&mut self, piece: &[u8]) {
+    pub(super) fn add(&mut self, piece: &[u8]) {
         self.hasher.write(piece);
         self.len += piece.len() as u64;
     }
 
-    fn finish(mut self) -> u64 {
+    pub(super) fn finish(mut self) -> u64 {
         self.hasher.write_u64(self.len);
         self.hasher.finish()
     }
@@ -148,68 +178,69 @@ impl Document {
         }
         let save_after = self.conflict.as_ref().is_some_and(|c| c.save_after);
         if !self.dirty && self.conflict.is_none() {
-            // Undoing the reload brings back the scene before it.
-            let back = merge::edits_between(&read.scene, self.scene());
-            let undos = back.into_iter().rev().map(Undo::from_edit).collect();
-            self.rebase(read, None, Vec::new());
-            self.undo.push(Step {
-                label: "reload from disk".to_owned(),
-                undos,
-                dragging: None,
-            });
-            self.redo.clear();
+            // Undoing the reload brings back the text before it.
+            let shown = self.take_file(read);
+            self.show_version("reload from disk", shown);
             return Reload::Replaced;
         }
-        self.merge_with(read, &BTreeMap::new(), save_after)
+        self.merge_with(read, &[], save_after)
+    }
+
+    /// The unsaved edits: what turns the file's scene into the one on
+    /// screen, element by element ([`merge::edits_between`]), as a
+    /// three-way merge diffs the base with its side. Two edits that cancel
+    /// out (a removal undone) are none.
+    pub fn unsaved_edits(&self) -> Vec<Edit> {
+        merge::edits_between(self.file_scene(), self.scene())
     }
 
     /// Replays the unsaved edits onto the file's version `read`; with
-    /// conflicts left, keeps it pending and asks.
+    /// conflicts left, keeps it pending and asks. `choices` settles the
+    /// edits it names. The merge is an undo step: undoing it brings back
+    /// the text and edits before it.
     pub(super) fn merge_with(
         &mut self,
         read: FileRead,
-        choices: &BTreeMap<usize, Choice>,
+        choices: &[(Edit, Choice)],
         save_after: bool,
     ) -> Reload {
-        let merged = merge::merge(self.saved.scene(), &read.scene, &self.log, choices);
+        let edits = self.unsaved_edits();
+        let by_index: BTreeMap<usize, Choice> = edits
+            .iter()
+            .enumerate()
+            .filter_map(|(i, e)| Some((i, choices.iter().find(|(c, _)| c == e)?.1)))
+            .collect();
+        let merged = merge::merge(self.file_scene(), &read.scene, &edits, &by_index);
         if !merged.conflicts.is_empty() {
             self.conflict = Some(PendingMerge {
                 read,
                 conflicts: merged.conflicts,
+                edits,
                 save_after,
             });
             return Reload::Conflict;
         }
         self.conflict = None;
-        self.rebase(read, Some(merged.edited), merged.applied);
+        let file = self.take_file(read);
+        let shown = Version {
+            edited: merged.edited,
+            ..file
+        };
+        self.show_version("merge with the file's changes", shown);
         Reload::Merged
     }
 
-    /// The file's version `read` becomes the source; the scene on screen
-    /// becomes `edited`, whose origins point into its text, with `log` its
-    /// unsaved edits (`None`: the file's scene itself).
-    fn rebase(&mut self, read: FileRead, edited: Option<Edited>, log: Vec<Edit>) {
+    /// The file's version `read` becomes the file's; returns it.
+    fn take_file(&mut self, read: FileRead) -> Version {
         let FileRead {
             text,
-            scene: theirs,
+            scene,
             fingerprint,
             labels,
         } = read;
         self.disk = Some(fingerprint);
-        self.labels = labels;
-        self.source = Arc::new(text);
-        self.source_scene = theirs.clone();
-        self.saved = Edited::new(theirs);
-        self.edited = edited.unwrap_or_else(|| self.saved.clone());
-        self.log = log;
-        // The origins the stacks would restore point into the old text.
-        for step in self.undo.iter_mut().chain(self.redo.iter_mut()) {
-            step.dragging = None;
-            for undo in &mut step.undos {
-                undo.forget_origin();
-            }
-        }
-        self.update_dirty();
+        self.file = Version::new(Arc::new(text), scene, Arc::new(labels));
+        self.file.clone()
     }
 
     /// Settles the pending conflicts: `choices[i]` for `conflicts()[i]`.
@@ -218,13 +249,13 @@ impl Document {
         let Some(pending) = self.conflict.take() else {
             return Ok(Reload::Unchanged);
         };
-        let map: BTreeMap<usize, Choice> = pending
+        let settled: Vec<(Edit, Choice)> = pending
             .conflicts
             .iter()
             .zip(choices)
-            .map(|(c, choice)| (c.edit, *choice))
+            .filter_map(|(c, choice)| Some((pending.edits.get(c.edit)?.clone(), *choice)))
             .collect();
-        let reload = self.merge_with(pending.read, &map, pending.save_after);
+        let reload = self.merge_with(pending.read, &settled, pending.save_after);
         if reload == Reload::Merged && pending.save_after {
             self.save()?;
         }
@@ -256,6 +287,15 @@ mod tests {
         let bytes: Vec<u8> = (0..200_001u32).map(|i| (i * 7 % 251) as u8).collect();
         std::fs::write(&path, &bytes).unwrap();
         assert_eq!(fingerprint_file(&path).unwrap(), fingerprint(&bytes));
+        let fifo = dir.path().join("fifo");
+        let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+        if made.is_ok_and(|s| s.success()) {
+            // Never opened: an open would block until a writer came.
+            assert!(matches!(
+                fingerprint_file(&fifo),
+                Err(FingerprintError::NotAFile("a FIFO"))
+            ));
+        }
         let mut other = bytes.clone();
         other[150_000] ^= 1;
         assert_ne!(fingerprint(&other), fingerprint(&bytes));

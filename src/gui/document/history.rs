@@ -1,6 +1,13 @@
 //! The undo history of a [`Document`]: every edit as an undo step (a whole
 //! drag of one value is one step), undo and redo, and reverting to the
 //! file's scene.
+//!
+//! A step either undoes edits (their [`Undo`]s, which bring back removed
+//! elements with their origins, so with their text) or puts back a whole
+//! [`Version`]: what a reload from disk, a merge or a revert replaced. The
+//! steps below such a step were made on the text it puts back, so their
+//! origins are good again by the time they are undone: undoing everything
+//! gives back the text as first read, byte for byte.
 
 use super::*;
 
@@ -9,11 +16,20 @@ use super::*;
 pub(super) struct Step {
     /// "ka of #2 sphere".
     pub(super) label: String,
-    /// Applied last to first.
-    pub(super) undos: Vec<Undo>,
+    pub(super) change: Change,
     /// What is being dragged: the next edit of the same values in the same
     /// drag joins this step.
     pub(super) dragging: Option<DragKey>,
+}
+
+/// What undoing (or redoing) a step does.
+#[derive(Debug, Clone)]
+pub(super) enum Change {
+    /// Applies these, last to first.
+    Edits(Vec<Undo>),
+    /// Puts this version on screen (and the one there in its place on the
+    /// other stack).
+    Version(Box<Version>),
 }
 
 /// What a drag changes: values, or a whole transformation.
@@ -70,6 +86,25 @@ impl Document {
     /// edits of the same fields right after ones also made while dragging
     /// join their step: a whole drag is undone at once.
     pub fn apply_step(&mut self, edits: Vec<Edit>, dragging: bool) -> Result<(), EditError> {
+        let label = step_label(&edits, self.scene());
+        self.apply_as(edits, label, dragging)
+    }
+
+    /// Applies edits as one undo step named `label`.
+    pub(super) fn apply_labelled(
+        &mut self,
+        edits: Vec<Edit>,
+        label: String,
+    ) -> Result<(), EditError> {
+        self.apply_as(edits, label, false)
+    }
+
+    fn apply_as(
+        &mut self,
+        edits: Vec<Edit>,
+        label: String,
+        dragging: bool,
+    ) -> Result<(), EditError> {
         if edits.is_empty() {
             return Ok(());
         }
@@ -79,15 +114,14 @@ impl Document {
                 message: "no scene has loaded from the file yet".to_owned(),
             });
         }
-        let label = step_label(&edits, self.scene());
         let mut undos = Vec::new();
         for edit in &edits {
-            match self.edited.apply(edit) {
+            match self.shown.edited.apply(edit) {
                 Ok(undo) => undos.push(undo),
                 Err(e) => {
                     // Leave the scene as it was.
                     for undo in undos.into_iter().rev() {
-                        let _ = self.edited.undo(undo);
+                        let _ = self.shown.edited.undo(undo);
                     }
                     return Err(e);
                 }
@@ -100,31 +134,13 @@ impl Document {
         if !joins {
             self.undo.push(Step {
                 label,
-                undos,
+                change: Change::Edits(undos),
                 dragging: key,
             });
         }
         self.redo.clear();
-        for edit in edits {
-            self.log_edit(edit);
-        }
         self.update_dirty();
         Ok(())
-    }
-
-    /// Adds `edit` to the unsaved edits. A value set again right after it
-    /// was set (each step of a drag), or the camera moved again, replaces
-    /// the earlier one: a merge replays, and asks about, each value once.
-    fn log_edit(&mut self, edit: Edit) {
-        let replaces = match (&edit, self.log.last()) {
-            (Edit::Set(field, _), Some(Edit::Set(last, _))) => field == last,
-            (Edit::Transform(owner, _), Some(Edit::Transform(last, _))) => owner == last,
-            _ => false,
-        };
-        if replaces {
-            self.log.pop();
-        }
-        self.log.push(edit);
     }
 
     /// Ends a drag: the next edit of the same field is a step of its own.
@@ -161,53 +177,64 @@ impl Document {
         Some(label)
     }
 
-    /// Applies a step's undos, last first, and returns the step that
-    /// reverses it.
+    /// Undoes (or redoes) a step and returns the step that reverses it.
     fn replay(&mut self, step: Step) -> Step {
-        let mut back = Vec::new();
-        for undo in step.undos.into_iter().rev() {
-            let edit = undo.edit().clone();
-            // Each undo reverses an edit that was applied to exactly this
-            // state, so it applies; one that does not is skipped rather than
-            // leaving the stack half done.
-            if let Ok(reverse) = self.edited.undo(undo) {
-                self.log_edit(edit);
-                back.push(reverse);
+        let change = match step.change {
+            Change::Edits(undos) => {
+                let mut back = Vec::new();
+                for undo in undos.into_iter().rev() {
+                    // Each undo reverses an edit that was applied to exactly
+                    // this state, so it applies; one that does not is skipped
+                    // rather than leaving the stack half done.
+                    if let Ok(reverse) = self.shown.edited.undo(undo) {
+                        back.push(reverse);
+                    }
+                }
+                // The reverses, applied last to first, undo this in reverse
+                // order.
+                Change::Edits(back)
             }
-        }
+            Change::Version(version) => {
+                let before = std::mem::replace(&mut self.shown, *version);
+                Change::Version(Box::new(before))
+            }
+        };
         self.update_dirty();
-        // The reverses, applied last to first, undo this in reverse order.
         Step {
             label: step.label,
-            undos: back,
+            change,
             dragging: None,
         }
+    }
+
+    /// Puts `version` on screen as one undo step named `label`: undoing it
+    /// brings back the version on screen before, whole.
+    pub(super) fn show_version(&mut self, label: &str, version: Version) {
+        let before = std::mem::replace(&mut self.shown, version);
+        for step in &mut self.undo {
+            step.dragging = None;
+        }
+        self.undo.push(Step {
+            label: label.to_owned(),
+            change: Change::Version(Box::new(before)),
+            dragging: None,
+        });
+        self.redo.clear();
+        self.update_dirty();
     }
 
     /// After every change of the scene on screen (and of the labels).
     pub(super) fn update_dirty(&mut self) {
         self.generation = super::next_generation();
-        self.dirty = self.scene() != self.saved.scene();
-        if !self.dirty {
-            // Back to what the file holds: nothing to replay onto it.
-            self.log.clear();
-        }
+        self.dirty = !self.shown.same_as(&self.file);
     }
 
-    /// Drops the unsaved edits: back to the file's scene, as one undo step.
-    /// Undoing the revert brings the edits back by their paths.
+    /// Drops the unsaved edits: back to the file's text, as one undo step.
+    /// Undoing the revert brings the version on screen before it back.
     pub fn revert(&mut self) {
         if !self.dirty {
             return;
         }
-        let back = merge::edits_between(self.saved.scene(), self.scene());
-        self.edited = self.saved.clone();
-        self.undo.push(Step {
-            label: "revert edits".to_owned(),
-            undos: back.into_iter().rev().map(Undo::from_edit).collect(),
-            dragging: None,
-        });
-        self.redo.clear();
-        self.update_dirty();
+        self.show_version("revert edits", self.file.clone());
     }
 }

@@ -5,31 +5,40 @@
 //!   [`Edit`](crate::scene::edit::Edit) (panel, keys, viewport) and can be
 //!   undone; a whole drag of one value is one undo step. Saving does not
 //!   clear the history.
+//! - The document holds two [`Version`]s, each a text with the scene shown
+//!   from it: the file's, and the one on screen. The unsaved edits are what
+//!   differs between their scenes, element by element.
 //! - The file is never written over text the app has not read: before each
 //!   write the file is read again and its fingerprint compared with the
 //!   bytes last read or written. A different file is merged with the
-//!   unsaved edits value by value ([`crate::scene::merge`]); the user is
-//!   asked only where both changed the same value; a file that does not
-//!   load is never written over.
+//!   unsaved edits ([`crate::scene::merge`]), each edit going to the same
+//!   element however the other program moved things around it; the user is
+//!   asked only where both changed the same value or the element is gone;
+//!   a file that does not load is never written over.
 //! - The watcher's reports are compared with that same fingerprint, so an
 //!   external write is never mistaken for what the app already has.
-//! - A reload from disk with nothing unsaved is an undo step too: undoing
-//!   it brings back the scene before it, as unsaved edits.
+//! - A reload from disk, a merge and a revert are undo steps too: undoing
+//!   one puts the version on screen before it back whole, so its text comes
+//!   back byte for byte, as unsaved edits against the file.
 //!
-//! Save-back splices the edits into the text last read from disk (the
-//! source the edits' origins point into), so unchanged bytes stay as they
-//! are and undoing everything and saving gives the file back byte for byte.
+//! Save-back splices the edits into the text of the version on screen
+//! (the source the edits' origins point into), so unchanged bytes stay as
+//! they are and undoing everything and saving gives the file back byte for
+//! byte.
 //!
 //! The undo history lives in `history`, reading the file in `disk`,
-//! saving (on another thread if need be) in `save`.
+//! saving (on another thread if need be) in `save`, what the journal of
+//! unsaved edits needs in `restore`.
 
 mod disk;
 mod history;
+mod restore;
 mod save;
 
 use disk::fingerprint;
-pub use disk::{FileRead, PendingMerge, Reload, SaveError};
+pub use disk::{FileRead, FingerprintError, PendingMerge, Reload, SaveError, fingerprint_file};
 use history::Step;
+pub use restore::{TextWriter, fingerprint_text};
 pub use save::{SaveJob, SaveOutcome, SaveStep};
 
 use std::collections::BTreeMap;
@@ -52,29 +61,60 @@ pub enum FileState {
     /// The file was deleted or moved away; the last scene stays on screen.
     Missing,
 }
+/// A text and what is shown from it: the text the elements' origins point
+/// into, the scene it loads to, the edited scene and the objects' labels.
+///
+/// The document holds two: the file's (what the file holds as last read or
+/// written) and the one on screen. A reload, a merge or a revert replaces
+/// the one on screen whole, and undoing it puts the old one back, so its
+/// text comes back byte for byte, comments and spelling included.
+#[derive(Debug, Clone)]
+pub(crate) struct Version {
+    /// The text the origins of `edited` point into; saves splice the edits
+    /// into it.
+    source: Arc<String>,
+    /// The scene `source` loads to (sharing its objects with `edited` where
+    /// they are the same): saves compare with it rather than parse the text
+    /// again.
+    source_scene: Scene,
+    /// The scene, with where each element came from in `source`.
+    edited: Edited,
+    /// The first words of the comment above each object of `source`.
+    labels: Arc<Vec<Option<String>>>,
+}
+
+impl Version {
+    fn new(text: Arc<String>, scene: Scene, labels: Arc<Vec<Option<String>>>) -> Version {
+        Version {
+            source: text,
+            source_scene: scene.clone(),
+            edited: Edited::new(scene),
+            labels,
+        }
+    }
+
+    /// Whether this writes the same text as `other` would: the same source
+    /// and the same scene. (Two versions of one source text share it.)
+    fn same_as(&self, other: &Version) -> bool {
+        Arc::ptr_eq(&self.source, &other.source) && self.edited.scene() == other.edited.scene()
+    }
+}
+
 #[derive(Debug, Clone)]
 pub struct Document {
     path: Option<PathBuf>,
-    /// The text last read from the file, which the elements' origins point
-    /// into; saves splice the edits into it.
-    source: Arc<String>,
-    /// The scene `source` loads to (sharing its objects with `saved` and
-    /// `edited` where they are the same): saves compare with it rather
-    /// than parse the text again.
-    source_scene: Scene,
+    /// What the file holds as of the last read or write (its `edited` is the
+    /// scene there, with the origins it had then: reverting keeps every
+    /// element's text).
+    file: Version,
+    /// The scene on screen: the file's plus the unsaved edits, or another
+    /// text altogether after undoing a reload.
+    shown: Version,
     /// The file's bytes as last read or written, or `None` when unknown
     /// (never read, or missing).
     disk: Option<u64>,
-    /// The scene the file holds as of the last read or write.
-    /// (With the origins it had then: reverting keeps every element's text.)
-    saved: Edited,
-    /// The scene on screen: `saved` plus the unsaved edits.
-    edited: Edited,
-    /// `edited` differs from `saved`.
+    /// `shown` would write another text than the file's.
     dirty: bool,
-    /// The edits since the file was last read or written, replayed onto a
-    /// newer file.
-    log: Vec<Edit>,
     undo: Vec<Step>,
     redo: Vec<Step>,
     state: FileState,
@@ -84,9 +124,7 @@ pub struct Document {
     /// the panel is read-only and saving refuses.
     placeholder: bool,
     conflict: Option<PendingMerge>,
-    /// The first words of the comment above each object of `source`.
-    labels: Vec<Option<String>>,
-    /// Changes with every change of the scene on screen or of `labels`
+    /// Changes with every change of the scene on screen or of the labels
     /// (see [`Document::generation`]).
     generation: u64,
 }
@@ -100,17 +138,15 @@ fn next_generation() -> u64 {
 
 impl Document {
     fn from_text(path: Option<PathBuf>, text: String, scene: Scene, state: FileState) -> Document {
-        let saved = Edited::new(scene.clone());
+        let labels = Arc::new(splice::object_labels(&text));
+        let disk = Some(fingerprint(text.as_bytes()));
+        let file = Version::new(Arc::new(text), scene, labels);
         Document {
             path,
-            disk: Some(fingerprint(text.as_bytes())),
-            labels: splice::object_labels(&text),
-            source: Arc::new(text),
-            source_scene: scene.clone(),
-            edited: saved.clone(),
-            saved,
+            disk,
+            shown: file.clone(),
+            file,
             dirty: false,
-            log: Vec::new(),
             undo: Vec::new(),
             redo: Vec::new(),
             state,
@@ -180,7 +216,7 @@ impl Document {
 
     /// The scene on screen.
     pub fn scene(&self) -> &Scene {
-        self.edited.scene()
+        self.shown.edited.scene()
     }
 
     /// A short name for the title bar.
@@ -202,6 +238,13 @@ impl Document {
     /// No scene has loaded from the file yet: nothing to edit or save.
     pub fn is_placeholder(&self) -> bool {
         self.placeholder
+    }
+
+    /// The fingerprint of the file's bytes as last read or written
+    /// ([`fingerprint_file`]), `None` when unknown: what the watcher
+    /// starts from.
+    pub fn disk_fingerprint(&self) -> Option<u64> {
+        self.disk
     }
 
     pub fn has_unsaved_edits(&self) -> bool {
@@ -227,8 +270,8 @@ impl Document {
 
     /// The first words of the comment above object `n` in the file.
     fn comment_words(&self, n: usize) -> Option<&str> {
-        let k = self.edited.object_origin(n)?;
-        self.labels.get(k)?.as_deref()
+        let k = self.shown.edited.object_origin(n)?;
+        self.shown.labels.get(k)?.as_deref()
     }
 
     /// The objects (in order) that `query` finds: each of its words, case
@@ -276,12 +319,12 @@ impl Document {
 
     /// The scene as the file holds it (after the last read or write).
     pub fn file_scene(&self) -> &Scene {
-        self.saved.scene()
+        self.file.edited.scene()
     }
 
     /// The scene with, for each element, where it came from in the text
     /// last read from disk.
     pub fn edited(&self) -> &Edited {
-        &self.edited
+        &self.shown.edited
     }
 }

@@ -16,22 +16,18 @@
 //!
 //! [`Document::save`] does the three in a row.
 
-use super::disk::{fingerprint, fingerprint_file};
+use super::disk::{FingerprintError, fingerprint, fingerprint_file};
 use super::*;
-use std::sync::Arc;
 
 /// A save taken from a document, to run on any thread.
 #[derive(Debug, Clone)]
 pub struct SaveJob {
     path: PathBuf,
-    source: Arc<String>,
-    source_scene: Scene,
-    edited: Edited,
+    /// The version to write.
+    version: Version,
     /// The fingerprint of the file as last read or written.
     disk: Option<u64>,
     dirty: bool,
-    /// Edits logged when the job was taken: those written.
-    logged: usize,
 }
 
 /// What a [`SaveJob`] did.
@@ -69,45 +65,38 @@ impl SaveJob {
             // Nothing unsaved and the file as we know it: nothing to do.
             Ok(seen) if Some(seen) == self.disk && !self.dirty => SaveOutcome::Unchanged,
             Ok(seen) if Some(seen) == self.disk => self.write(),
-            Ok(_) => match scene::load_sharing(&self.path, &self.edited.scene().objects) {
+            Ok(_) => match scene::load_sharing(&self.path, &self.version.edited.scene().objects) {
                 Ok((text, theirs)) => {
                     SaveOutcome::FileChanged(Box::new(FileRead::new(text, theirs)))
                 }
                 Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(e))),
             },
             // A file deleted since: writing brings it back.
-            Err(e) if e.kind() == std::io::ErrorKind::NotFound => self.write(),
-            Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(LoadError::new(
-                &self.path,
-                None,
-                LoadErrorKind::Io {
-                    kind: e.kind(),
-                    message: e.to_string(),
-                },
-            )))),
+            Err(FingerprintError::Io(e)) if e.kind() == std::io::ErrorKind::NotFound => {
+                self.write()
+            }
+            // A FIFO or device in its place is never opened.
+            Err(e) => {
+                SaveOutcome::Failed(SaveError::DiskBroken(Box::new(e.to_load_error(&self.path))))
+            }
         }
     }
 
     fn write(&self) -> SaveOutcome {
-        match write_scene(&self.path, &self.source, &self.source_scene, &self.edited) {
+        match write_scene(&self.path, &self.version) {
             Ok(written) => SaveOutcome::Written(written),
             Err(e) => SaveOutcome::Failed(e),
         }
     }
 }
 
-/// Streams `edited` spliced into `source` (whose scene is `source_scene`)
-/// to `path`; the new file is read back and must load as the edited scene
+/// Streams `version`'s edited scene spliced into its source to `path`; the new file is read back and must load as the edited scene
 /// before it replaces the old one. No copy of the text is built: on a file
 /// of a million objects the text is 170 MB. Returns the new file's
 /// fingerprint (`None` for a device or FIFO, not read back).
-fn write_scene(
-    path: &Path,
-    source: &str,
-    source_scene: &Scene,
-    edited: &Edited,
-) -> Result<Option<u64>, SaveError> {
-    let rewrite = splice::plan(source, source_scene, edited)?;
+fn write_scene(path: &Path, version: &Version) -> Result<Option<u64>, SaveError> {
+    let edited = &version.edited;
+    let rewrite = splice::plan(&version.source, &version.source_scene, edited)?;
     let mut written = None;
     crate::output::write_atomic_with(
         path,
@@ -140,12 +129,9 @@ impl Document {
         }
         Ok(SaveJob {
             path,
-            source: Arc::clone(&self.source),
-            source_scene: self.source_scene.clone(),
-            edited: self.edited.clone(),
+            version: self.shown.clone(),
             disk: self.disk,
             dirty: self.dirty,
-            logged: self.log.len(),
         })
     }
 
@@ -154,16 +140,16 @@ impl Document {
     pub fn save_done(&mut self, job: SaveJob, outcome: SaveOutcome) -> Result<SaveStep, SaveError> {
         match outcome {
             SaveOutcome::Written(written) => {
-                self.wrote(written, job.edited, job.logged);
+                self.wrote(written, job.version);
                 Ok(SaveStep::Done(Reload::Unchanged))
             }
             SaveOutcome::Unchanged => Ok(SaveStep::Done(Reload::Unchanged)),
             SaveOutcome::FileChanged(read) => {
-                if !self.dirty && self.log.is_empty() {
+                if !self.dirty {
                     // Nothing of ours to write: take the file's version.
                     return Ok(SaveStep::Done(self.file_read(*read)));
                 }
-                match self.merge_with(*read, &BTreeMap::new(), true) {
+                match self.merge_with(*read, &[], true) {
                     Reload::Conflict => Err(SaveError::Conflict),
                     _ => Ok(SaveStep::Again),
                 }
@@ -196,21 +182,20 @@ impl Document {
         if self.placeholder {
             return Err(SaveError::NothingLoaded);
         }
-        let written = write_scene(path, &self.source, &self.source_scene, &self.edited)?;
+        let written = write_scene(path, &self.shown)?;
         self.path = Some(path.to_owned());
         self.state = FileState::Watching;
         self.error = None;
         self.conflict = None;
-        self.wrote(written, self.edited.clone(), self.log.len());
+        self.wrote(written, self.shown.clone());
         Ok(())
     }
 
-    /// The file now holds `saved` (`written`: its fingerprint), with the
-    /// first `logged` edits of the log: those are no longer unsaved.
-    fn wrote(&mut self, written: Option<u64>, saved: Edited, logged: usize) {
+    /// The file now holds `saved` (`written`: its fingerprint). What was
+    /// edited since the save was taken stays unsaved.
+    fn wrote(&mut self, written: Option<u64>, saved: Version) {
         self.disk = written;
-        self.saved = saved;
-        self.log.drain(..logged.min(self.log.len()));
+        self.file = saved;
         if self.state == FileState::Missing {
             self.state = FileState::Watching;
         }

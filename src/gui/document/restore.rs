@@ -1,0 +1,92 @@
+//! What the journal of unsaved edits needs of a [`Document`]
+//! ([`crate::gui::journal`]): the edits and the text they apply to, to
+//! write, and the edits restored onto that text, merged through the usual
+//! engine with the file as it is now.
+
+use super::disk::{Fingerprint, fingerprint};
+use super::*;
+
+/// Writes a text, on any thread.
+pub type TextWriter = Box<dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()> + Send>;
+
+impl Document {
+    /// The fingerprint of the text the file holds as last read or written:
+    /// the text the unsaved edits apply to.
+    pub fn file_fingerprint(&self) -> u64 {
+        if let Some(disk) = self.disk {
+            return disk;
+        }
+        // Unknown (the file is gone): the text itself.
+        let mut f = Fingerprint::default();
+        let _ = self.file_text_writer()(&mut FingerprintWriter(&mut f));
+        f.finish()
+    }
+
+    /// Something that writes the text the file holds as last read or
+    /// written (the source with the file's scene spliced in), on any
+    /// thread: the base the unsaved edits apply to.
+    pub fn file_text_writer(&self) -> TextWriter {
+        let file = self.file.clone();
+        Box::new(move |w| {
+            let rewrite = splice::plan(&file.source, &file.source_scene, &file.edited)
+                .map_err(std::io::Error::other)?;
+            rewrite.write_to(w)
+        })
+    }
+
+    /// Restores `edits`, made on the text `base`, onto this document just
+    /// opened from the file: as one undo step on `base`, then merged with
+    /// the file as it is now if it is not `base` any more (a conflict is
+    /// asked as with any other program's save). Returns how it merged, or
+    /// why the edits cannot be restored (a base that does not load, an
+    /// edit that does not apply: the journal is damaged).
+    pub fn restore(&mut self, base: String, edits: &[Edit]) -> Result<Reload, String> {
+        let path = self.path.clone().ok_or("the scene has no file")?;
+        let base_scene = scene::parse(&base, &path).map_err(|e| format!("its base: {e}"))?;
+        let mut doc = Document::from_text(Some(path), base, base_scene, FileState::Watching);
+        let label = match edits.len() {
+            1 => "restore 1 unsaved edit".to_owned(),
+            n => format!("restore {n} unsaved edits"),
+        };
+        doc.apply_labelled(edits.to_vec(), label)
+            .map_err(|e| format!("an edit does not apply: {e}"))?;
+        let reload = if self.placeholder {
+            // The file does not load now: the edits stay on their base, and
+            // saving refuses until the file loads again.
+            doc.disk = None;
+            doc.error.clone_from(&self.error);
+            Reload::Broken
+        } else if self.state == FileState::Missing {
+            doc.disk = None;
+            doc.state = FileState::Missing;
+            Reload::Unchanged
+        } else if self.disk == doc.disk {
+            Reload::Unchanged
+        } else {
+            let read = FileRead::new(self.file.source.as_ref().clone(), self.file_scene().clone());
+            doc.file_read(read)
+        };
+        *self = doc;
+        Ok(reload)
+    }
+}
+
+/// Feeds written bytes to a [`Fingerprint`].
+struct FingerprintWriter<'a>(&'a mut Fingerprint);
+
+impl std::io::Write for FingerprintWriter<'_> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        self.0.add(buf);
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// The [`fingerprint`] of a text, as [`fingerprint_file`] gives for a
+/// file holding it.
+pub fn fingerprint_text(text: &str) -> u64 {
+    fingerprint(text.as_bytes())
+}

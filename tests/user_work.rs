@@ -1,0 +1,749 @@
+//! Nothing the user wrote is lost or altered (issue 25): undoing a reload
+//! gives back the text before it byte for byte, and unsaved edits follow
+//! their element by its identity when another program inserts, removes or
+//! moves elements around it. Each defect found by hand first, then a
+//! property test that interleaves another program's changes with the
+//! app's edits and saves.
+#![cfg(feature = "gui")]
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use egui_kittest::kittest::Queryable;
+use rayoflight::gui::app::RayOfLightApp;
+use rayoflight::gui::document::{Document, Reload, SaveError};
+use rayoflight::gui::settings::Persisted;
+use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
+use rayoflight::math::TransformStep;
+use rayoflight::scene::edit::{Coef, Edit, Field, Item, Value};
+use rayoflight::scene::merge::Choice;
+use rayoflight::scene::{self, Scene};
+
+/// The brief's example with comments above and inside the light, and a
+/// number spelled `-2.0e0`.
+const EXAMPLE: &str = r#"<?xml version="1.0"?>
+<scene>
+<!-- big green ball -->
+<sphere>
+ <color red="0.2" green="0.8" blue="0.2"/>
+ <material ka="0.3" kd="0.3" ks="0.3" m="20"/>
+ <transformation>
+  <translate x="2" y="0" z="-2"/>
+ </transformation>
+</sphere>
+<!-- small red ball -->
+<sphere>
+ <color red="1.0" green="0.2" blue="0.0"/>
+ <material ka="0.4" kd="0.5" ks="0.3" m="1"/>
+ <transformation>
+  <translate x="-2" y="0" z="-2"/>
+ </transformation>
+</sphere>
+<!-- the only light -->
+<light x="1" y="-4" z="-2.0e0">
+ <!-- white, full strength -->
+ <color red="1.0" green="1.0" blue="1.0"/>
+</light>
+<camera width="60" height="60" eyeDistance="4">
+  <transformation>
+   <translate x="0" y="0" z="-20"/>
+ </transformation>
+</camera>
+<model type="whitted" depth="2"/>
+</scene>
+"#;
+
+fn parse(text: &str) -> Scene {
+    scene::parse(text, Path::new("t.xml")).unwrap()
+}
+
+fn file_with(text: &str) -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("scene.xml");
+    std::fs::write(&path, text).unwrap();
+    (dir, path)
+}
+
+fn read(path: &Path) -> String {
+    std::fs::read_to_string(path).unwrap()
+}
+
+/// Another program writes `text`; the watcher hands it to the document.
+fn they_write(doc: &mut Document, path: &Path, text: &str) -> Reload {
+    std::fs::write(path, text).unwrap();
+    doc.file_loaded(text.to_owned(), parse(text))
+}
+
+fn ka(object: usize) -> Field {
+    Field::Material {
+        object,
+        coef: Coef::Ka,
+    }
+}
+
+#[test]
+fn item_1_undoing_a_reload_gives_back_the_text_byte_for_byte() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    // sed -i 's/light x="1"/light x="5"/'
+    let theirs = EXAMPLE.replace(r#"light x="1""#, r#"light x="5""#);
+    assert_eq!(they_write(&mut doc, &path, &theirs), Reload::Replaced);
+    assert_eq!(doc.scene().lights[0].position.x, 5.0);
+    assert_eq!(doc.undo().as_deref(), Some("reload from disk"));
+    assert!(doc.has_unsaved_edits());
+    doc.save().unwrap();
+    assert_eq!(read(&path), EXAMPLE, "Ctrl+Z, Ctrl+S: the text before");
+    // Redo brings the other program's text back, and saves it as it was.
+    assert_eq!(doc.redo().as_deref(), Some("reload from disk"));
+    doc.save().unwrap();
+    assert_eq!(read(&path), theirs);
+}
+
+#[test]
+fn item_1_undoing_another_programs_removals_restores_their_text_in_place() {
+    let red = "<!-- small red ball -->\n<sphere>\n <color red=\"1.0\" green=\"0.2\" blue=\"0.0\"/>\n <material ka=\"0.4\" kd=\"0.5\" ks=\"0.3\" m=\"1\"/>\n <transformation>\n  <translate x=\"-2\" y=\"0\" z=\"-2\"/>\n </transformation>\n</sphere>\n";
+    let light = "<!-- the only light -->\n<light x=\"1\" y=\"-4\" z=\"-2.0e0\">\n <!-- white, full strength -->\n <color red=\"1.0\" green=\"1.0\" blue=\"1.0\"/>\n</light>\n";
+    assert!(EXAMPLE.contains(red) && EXAMPLE.contains(light));
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    let without_red = EXAMPLE.replace(red, "");
+    assert_eq!(they_write(&mut doc, &path, &without_red), Reload::Replaced);
+    let without_both = without_red.replace(light, "");
+    assert_eq!(they_write(&mut doc, &path, &without_both), Reload::Replaced);
+    assert_eq!(doc.undo().as_deref(), Some("reload from disk"));
+    doc.save().unwrap();
+    assert_eq!(read(&path), without_red, "the light back where it was");
+    assert_eq!(doc.undo().as_deref(), Some("reload from disk"));
+    doc.save().unwrap();
+    assert_eq!(read(&path), EXAMPLE, "the sphere back with its comment");
+}
+
+#[test]
+fn item_1_undoing_a_merge_and_a_revert_gives_back_their_texts() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    doc.apply(Edit::Set(ka(1), Value::Number(0.9))).unwrap();
+    let theirs = EXAMPLE.replace("<!-- the only light -->", "<!-- the key light -->");
+    assert_eq!(they_write(&mut doc, &path, &theirs), Reload::Merged);
+    assert!(doc.has_unsaved_edits());
+    // Undo the merge, then the edit: the text first read, unsaved against
+    // the other program's.
+    assert_eq!(doc.undo().as_deref(), Some("merge with the file's changes"));
+    assert_eq!(doc.scene().objects[1].material.ka, 0.9);
+    assert!(doc.undo().is_some());
+    assert!(doc.has_unsaved_edits(), "the file holds the other text");
+    doc.save().unwrap();
+    assert_eq!(read(&path), EXAMPLE);
+
+    // Revert, then undo it: the edits come back on the same text.
+    doc.apply(Edit::Set(ka(0), Value::Number(0.7))).unwrap();
+    doc.revert();
+    assert!(!doc.has_unsaved_edits());
+    assert_eq!(doc.undo().as_deref(), Some("revert edits"));
+    assert_eq!(doc.scene().objects[0].material.ka, 0.7);
+    doc.save().unwrap();
+    assert_eq!(read(&path), EXAMPLE.replace(r#"ka="0.3""#, r#"ka="0.7""#));
+}
+
+#[test]
+fn item_2_an_edit_stays_on_its_object_when_another_program_inserts_above() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    assert_eq!(doc.object_label(0), "#1 big green ball sphere");
+    doc.apply(Edit::Set(ka(0), Value::Number(0.9))).unwrap();
+    let new = "<!-- a newcomer -->\n<sphere/>\n";
+    let theirs = EXAMPLE.replacen(
+        "<!-- big green ball -->",
+        &format!("{new}<!-- big green ball -->"),
+        1,
+    );
+    assert_eq!(they_write(&mut doc, &path, &theirs), Reload::Merged);
+    assert_eq!(doc.object_label(1), "#2 big green ball sphere");
+    doc.save().unwrap();
+    let expected = theirs.replacen(r#"ka="0.3""#, r#"ka="0.9""#, 1);
+    assert_eq!(read(&path), expected, "ka on the green ball, nothing else");
+}
+
+#[test]
+fn item_2_an_edit_on_an_object_another_program_removed_is_a_conflict() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    doc.apply(Edit::Set(ka(0), Value::Number(0.9))).unwrap();
+    let green_end = EXAMPLE.find("<!-- small red ball -->").unwrap();
+    let green_start = EXAMPLE.find("<!-- big green ball -->").unwrap();
+    let theirs = format!("{}{}", &EXAMPLE[..green_start], &EXAMPLE[green_end..]);
+    assert_eq!(they_write(&mut doc, &path, &theirs), Reload::Conflict);
+    let conflicts = doc.conflict().unwrap().conflicts();
+    assert_eq!(conflicts.len(), 1);
+    assert!(conflicts[0].theirs.contains("gone"), "{:?}", conflicts[0]);
+    assert!(!conflicts[0].can_keep_yours);
+    // "Keep all of mine" cannot put it anywhere: the file is theirs.
+    doc.resolve(&[Choice::Mine]).unwrap();
+    doc.save().unwrap();
+    assert_eq!(
+        read(&path),
+        theirs,
+        "no edit landed on the plane or the red ball"
+    );
+}
+
+#[test]
+fn item_2_edits_follow_their_light_and_object_across_a_reordering() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    doc.apply(Edit::Set(ka(1), Value::Number(0.25))).unwrap();
+    // Another program puts the red ball first.
+    let green = &EXAMPLE[EXAMPLE.find("<!-- big green ball -->").unwrap()
+        ..EXAMPLE.find("<!-- small red ball -->").unwrap()];
+    let theirs = EXAMPLE.replace(green, "").replace(
+        "<!-- the only light -->",
+        &format!("{green}<!-- the only light -->"),
+    );
+    assert_eq!(they_write(&mut doc, &path, &theirs), Reload::Merged);
+    doc.save().unwrap();
+    let saved = parse(&read(&path));
+    assert_eq!(
+        saved.objects[0].material.ka, 0.25,
+        "the red ball, now first"
+    );
+    assert_eq!(saved.objects[1].material.ka, 0.3, "the green one untouched");
+}
+
+// ----- the property: random changes from both sides -----
+
+struct Rng(u64);
+
+impl Rng {
+    fn next(&mut self) -> u64 {
+        // xorshift64*
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next() % n as u64) as usize
+    }
+}
+
+/// A ball's marker: its x, which only its own block in the text sets.
+fn marker(object: &scene::Object) -> i64 {
+    match object.transform.steps().first() {
+        Some(TransformStep::Translate(t)) => t.x as i64,
+        other => panic!("no marker: {other:?}"),
+    }
+}
+
+fn block(id: i64, red: f64) -> String {
+    format!(
+        "  <!-- ball {id} -->\n  <sphere>\n    <color red=\"{red}\" green=\"0.5\" blue=\"0.5\"/>\n    <material ka=\"0.1\" kd=\"0.5\"/>\n    <transformation><translate x=\"{id}\" z=\"9\"/></transformation>\n  </sphere>\n"
+    )
+}
+
+/// The text's ball blocks (each sphere, from the start of its line or of
+/// the comment line above it to the end of its end tag's line) and what
+/// lies before and after them.
+fn blocks(text: &str) -> (String, Vec<String>, String) {
+    let mut starts = Vec::new();
+    let mut end = None;
+    let mut from = 0;
+    while let Some(k) = text[from..].find("<sphere") {
+        let at = from + k;
+        let mut start = text[..at].rfind('\n').map_or(0, |n| n + 1);
+        let above = text[..start.saturating_sub(1)]
+            .rfind('\n')
+            .map_or(0, |n| n + 1);
+        if text[above..start].trim_start().starts_with("<!-- ball") {
+            start = above;
+        }
+        starts.push(start);
+        let close = at + text[at..].find("</sphere>").expect("spheres have children");
+        let line_end = close
+            + text[close..]
+                .find('\n')
+                .map_or(text.len() - close, |n| n + 1);
+        end = Some(line_end);
+        from = line_end;
+    }
+    let Some(end) = end else {
+        let at = text.find("  <light").unwrap();
+        return (text[..at].to_owned(), Vec::new(), text[at..].to_owned());
+    };
+    let list = starts
+        .iter()
+        .zip(starts.iter().skip(1).chain(std::iter::once(&end)))
+        .map(|(a, b)| text[*a..*b].to_owned())
+        .collect();
+    (text[..starts[0]].to_owned(), list, text[end..].to_owned())
+}
+
+/// The marker of a ball's block.
+fn block_marker(block: &str) -> i64 {
+    let at = block.find("translate x=\"").unwrap() + "translate x=\"".len();
+    let end = at + block[at..].find('"').unwrap();
+    block[at..end].parse::<f64>().unwrap() as i64
+}
+
+/// Settles a conflict as a user would: their edit where it can still be
+/// kept, the file's version where its element is gone.
+fn settle(doc: &mut Document) {
+    while let Some(pending) = doc.conflict() {
+        let choices: Vec<Choice> = pending
+            .conflicts()
+            .iter()
+            .map(|c| {
+                if c.can_keep_yours {
+                    Choice::Mine
+                } else {
+                    Choice::Theirs
+                }
+            })
+            .collect();
+        doc.resolve(&choices).unwrap();
+    }
+}
+
+#[test]
+fn random_changes_from_both_sides_keep_every_edit_on_its_element_and_undo_to_the_original() {
+    let seed = std::env::var("RAYOFLIGHT_EDIT_SEED")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(0x0025_5eed_u64);
+    let mut rng = Rng(seed);
+    for round in 0..40 {
+        eprintln!("-- round {round}");
+        let context = format!("round {round}, seed {seed:#x}");
+        let mut next_id = 1;
+        let mut text = String::from("<scene>\n");
+        for _ in 0..4 {
+            text.push_str(&block(next_id, 0.5));
+            next_id += 1;
+        }
+        text.push_str("  <light x=\"0\" y=\"-4\" z=\"-4\"/>\n  <camera width=\"8\" height=\"8\" eyeDistance=\"1\"/>\n</scene>\n");
+        let original = text.clone();
+        let (_dir, path) = file_with(&text);
+        let mut doc = Document::open(&path).unwrap();
+        // What each ball's ka must be: the app's last edit of it, or as
+        // written; a ball either side removed is gone.
+        let mut truth: BTreeMap<i64, f64> = (1..next_id).map(|id| (id, 0.1)).collect();
+        for _ in 0..30 {
+            match rng.below(10) {
+                // The app edits a ball's ka, or removes a ball.
+                0..=4 => {
+                    let objects = &doc.scene().objects;
+                    if objects.is_empty() {
+                        continue;
+                    }
+                    let n = rng.below(objects.len());
+                    let id = marker(&objects[n]);
+                    if rng.below(6) == 0 {
+                        doc.apply(Edit::Remove(Item::Object(n))).unwrap();
+                        eprintln!("app removes {id}");
+                        truth.remove(&id);
+                    } else {
+                        let v = (rng.below(1000) as f64) / 1000.0;
+                        doc.apply(Edit::Set(ka(n), Value::Number(v))).unwrap();
+                        eprintln!("app sets ka of {id} to {v}");
+                        truth.insert(id, v);
+                    }
+                }
+                5 => match doc.save() {
+                    Ok(_) | Err(SaveError::Conflict) => settle(&mut doc),
+                    Err(e) => panic!("{context}: {e}"),
+                },
+                // The app undoes its last edit. (Undoing a reload or a
+                // merge here would make the user's side move elements back,
+                // which a merge replays as a removal and an insertion, as
+                // diff3 does: a ball the other program removes then comes
+                // back. The end of each round undoes those too.)
+                6 if doc
+                    .undo_label()
+                    .is_some_and(|l| !l.contains("reload") && !l.contains("merge")) =>
+                {
+                    eprintln!("app undoes {:?}", doc.undo());
+                    // Start the truth again from the scene on screen.
+                    truth = doc
+                        .scene()
+                        .objects
+                        .iter()
+                        .map(|o| (marker(o), o.material.ka))
+                        .collect();
+                }
+                6 => {}
+                // Another program inserts, removes, moves or recolours a
+                // ball, keeping every other byte.
+                _ => {
+                    let disk = read(&path);
+                    let (before, mut list, after) = blocks(&disk);
+                    let op = rng.below(4);
+                    if op == 0 || list.is_empty() {
+                        let at = rng.below(list.len() + 1);
+                        list.insert(at, block(next_id, 0.5));
+                        truth.insert(next_id, 0.1);
+                        next_id += 1;
+                    } else if op == 1 {
+                        let b = list.remove(rng.below(list.len()));
+                        truth.remove(&block_marker(&b));
+                    } else if op == 2 {
+                        let b = list.remove(rng.below(list.len()));
+                        let at = rng.below(list.len() + 1);
+                        list.insert(at, b);
+                    } else {
+                        let k = rng.below(list.len());
+                        let red = format!("red=\"0.{}\"", 1 + rng.below(9));
+                        let start = list[k].find("red=\"").unwrap();
+                        let end = start + list[k][start + 5..].find('"').unwrap() + 6;
+                        list[k].replace_range(start..end, &red);
+                    }
+                    let new = format!("{before}{}{after}", list.concat());
+                    eprintln!(
+                        "they write (op {op}): {:?}",
+                        they_write(&mut doc, &path, &new)
+                    );
+                    settle(&mut doc);
+                }
+            }
+            let on_screen: BTreeMap<i64, f64> = doc
+                .scene()
+                .objects
+                .iter()
+                .map(|o| (marker(o), o.material.ka))
+                .collect();
+            assert_eq!(on_screen, truth, "{context}: every edit on its own ball");
+        }
+        match doc.save() {
+            Ok(_) | Err(SaveError::Conflict) => settle(&mut doc),
+            Err(e) => panic!("{context}: {e}"),
+        }
+        let saved: BTreeMap<i64, f64> = parse(&read(&path))
+            .objects
+            .iter()
+            .map(|o| (marker(o), o.material.ka))
+            .collect();
+        assert_eq!(
+            saved, truth,
+            "{context}: the file holds every edit on its ball"
+        );
+        while doc.undo().is_some() {}
+        doc.save().unwrap_or_else(|e| panic!("{context}: {e}"));
+        assert_eq!(read(&path), original, "{context}: undoing everything");
+    }
+}
+
+// ----- the file on disk -----
+
+fn watch(path: &Path, doc: &Document) -> (mpsc::Receiver<FileEvent>, SceneWatcher) {
+    let (tx, rx) = mpsc::channel();
+    let watcher = SceneWatcher::new(path, doc.disk_fingerprint(), move |e| {
+        let _ = tx.send(e);
+    })
+    .unwrap();
+    (rx, watcher)
+}
+
+fn replace_atomically(path: &Path, text: &str) {
+    let tmp = path.with_extension("part");
+    std::fs::write(&tmp, text).unwrap();
+    std::fs::rename(&tmp, path).unwrap();
+}
+
+#[test]
+fn item_4_a_file_fixed_before_the_watch_starts_is_shown() {
+    // Broken at launch, fixed (renamed into place) before the watcher
+    // starts: no event and no later stamp tells; the watcher must start
+    // from the bytes the document read.
+    let (_dir, path) = file_with("<scene>\n  <sphere>\n");
+    let doc = Document::open(&path).unwrap();
+    assert!(doc.is_placeholder() && doc.error().is_some());
+    replace_atomically(&path, EXAMPLE);
+    let (rx, _watcher) = watch(&path, &doc);
+    match rx.recv_timeout(Duration::from_secs(5)) {
+        Ok(FileEvent::Loaded(read)) => assert_eq!(read.text, EXAMPLE),
+        other => panic!("the fixed file is reported: {other:?}"),
+    }
+
+    // A good file replaced by another between the read and the watch.
+    let doc = Document::open(&path).unwrap();
+    let theirs = EXAMPLE.replace("depth=\"2\"", "depth=\"3\"");
+    replace_atomically(&path, &theirs);
+    let (rx, _watcher) = watch(&path, &doc);
+    match rx.recv_timeout(Duration::from_secs(5)) {
+        Ok(FileEvent::Loaded(read)) => assert_eq!(read.text, theirs),
+        other => panic!("the new file is reported: {other:?}"),
+    }
+    // The file as the document read it: nothing to report.
+    let doc = Document::open(&path).unwrap();
+    let (rx, _watcher) = watch(&path, &doc);
+    assert!(
+        rx.recv_timeout(Duration::from_millis(800)).is_err(),
+        "no report of what the document has"
+    );
+}
+
+#[test]
+fn item_5_saving_over_a_fifo_refuses_at_once_and_the_good_file_comes_back() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut doc = Document::open(&path).unwrap();
+    doc.apply(Edit::Set(ka(0), Value::Number(0.9))).unwrap();
+    std::fs::remove_file(&path).unwrap();
+    let made = std::process::Command::new("mkfifo")
+        .arg(&path)
+        .status()
+        .unwrap();
+    assert!(made.success());
+    let job = doc.save_job().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        let _ = tx.send(job.run());
+    });
+    let outcome = rx
+        .recv_timeout(Duration::from_secs(5))
+        .expect("the save does not hang on the FIFO");
+    let Err(e) = doc.save_done(doc.save_job().unwrap(), outcome) else {
+        panic!("a FIFO is not written");
+    };
+    assert!(e.to_string().contains("is a FIFO"), "{e}");
+    // The good file put back: the edit merges onto it and saves.
+    std::fs::remove_file(&path).unwrap();
+    let theirs = EXAMPLE.replace("depth=\"2\"", "depth=\"3\"");
+    std::fs::write(&path, &theirs).unwrap();
+    assert!(doc.has_unsaved_edits());
+    doc.save().unwrap();
+    assert_eq!(
+        read(&path),
+        theirs.replacen(r#"ka="0.3""#, r#"ka="0.9""#, 1)
+    );
+}
+
+#[test]
+fn item_10_rayoflight_stats_0_is_off() {
+    use rayoflight::gui::app::stats_wanted;
+    use std::ffi::OsStr;
+    for off in [
+        None,
+        Some(""),
+        Some("0"),
+        Some("false"),
+        Some("no"),
+        Some("OFF"),
+    ] {
+        assert!(!stats_wanted(off.map(OsStr::new)), "{off:?}");
+    }
+    for on in ["1", "yes", "true", "on"] {
+        assert!(stats_wanted(Some(OsStr::new(on))), "{on}");
+    }
+}
+
+// ----- unsaved work outlives the process (item 3) -----
+
+fn app_with_journal(doc: Document, journal: &Path) -> Harness<'static, RayOfLightApp> {
+    let persisted = Persisted {
+        journal: Some(journal.to_owned()),
+        ..Persisted::in_memory()
+    };
+    let app = RayOfLightApp::new(&egui::Context::default(), doc, persisted);
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    harness.run_steps(3);
+    harness
+}
+
+/// Steps the app until `done` holds; returns how long it took (at most
+/// `limit`).
+fn step_until(
+    harness: &mut Harness<'_, RayOfLightApp>,
+    limit: Duration,
+    what: &str,
+    done: impl Fn(&RayOfLightApp) -> bool,
+) -> Duration {
+    let start = Instant::now();
+    while !done(harness.state()) {
+        assert!(start.elapsed() < limit, "{what} within {limit:?}");
+        harness.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    start.elapsed()
+}
+
+fn journal_entries(folder: &Path) -> Vec<PathBuf> {
+    let mut found: Vec<PathBuf> = std::fs::read_dir(folder)
+        .map(|d| d.flatten().map(|e| e.path()).collect())
+        .unwrap_or_default();
+    found.retain(|p| p.extension().is_some_and(|e| e == "json"));
+    found
+}
+
+fn status_says(harness: &Harness<'_, RayOfLightApp>, words: &str) -> bool {
+    harness.query_by_label_contains(words).is_some()
+}
+
+#[test]
+fn item_3_unsaved_edits_are_journaled_and_restored_after_a_crash() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("state/rayoflight/journal");
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(
+        journal_entries(&folder).is_empty(),
+        "nothing unsaved, no journal"
+    );
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    let took = step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    eprintln!("edit to journal: {took:?}");
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&folder), 0o700);
+        for f in std::fs::read_dir(&folder).unwrap().flatten() {
+            assert_eq!(mode(&f.path()), 0o600, "{}", f.path().display());
+        }
+    }
+    // The process dies: nothing runs at exit.
+    std::mem::forget(harness);
+    assert_eq!(read(&path), EXAMPLE, "the file is never written unasked");
+
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    let doc = harness.state().document();
+    assert!(doc.has_unsaved_edits());
+    assert_eq!(doc.scene().model.illumination, scene::Illumination::Lambert);
+    assert!(
+        status_says(&harness, "restored 1 unsaved edit from"),
+        "the status says so"
+    );
+    assert!(status_says(&harness, "Ctrl+S saves, Ctrl+Z undoes"));
+    // Ctrl+S writes only the edit, and the journal goes.
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    step_until(&mut harness, Duration::from_secs(10), "the save", |app| {
+        !app.is_saving() && !app.document().has_unsaved_edits()
+    });
+    assert_eq!(
+        read(&path),
+        EXAMPLE.replace(r#"type="whitted""#, r#"type="lambert""#)
+    );
+    step_until(
+        &mut harness,
+        Duration::from_secs(2),
+        "the journal removed",
+        |_| journal_entries(&folder).is_empty(),
+    );
+
+    // An edit undone: nothing unsaved, no journal.
+    harness.get_by_label("phong").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    step_until(
+        &mut harness,
+        Duration::from_secs(2),
+        "the journal removed",
+        |_| journal_entries(&folder).is_empty(),
+    );
+}
+
+#[test]
+fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    std::mem::forget(harness);
+    // Another program inserts a sphere and moves the light meanwhile.
+    let theirs = EXAMPLE
+        .replace(r#"light x="1""#, r#"light x="7""#)
+        .replacen(
+            "<!-- big green ball -->",
+            "<sphere/>\n<!-- big green ball -->",
+            1,
+        );
+    std::fs::write(&path, &theirs).unwrap();
+
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(status_says(&harness, "merged with the file's changes"));
+    let s = harness.state().document().scene().clone();
+    assert_eq!(s.model.illumination, scene::Illumination::Lambert);
+    assert_eq!(s.lights[0].position.x, 7.0);
+    assert_eq!(s.objects.len(), 3);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    step_until(&mut harness, Duration::from_secs(10), "the save", |app| {
+        !app.is_saving() && !app.document().has_unsaved_edits()
+    });
+    assert_eq!(
+        read(&path),
+        theirs.replace(r#"type="whitted""#, r#"type="lambert""#)
+    );
+
+    // A conflict: both changed the model.
+    harness.get_by_label("phong").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    std::mem::forget(harness);
+    let ambient = read(&path).replace(r#"type="lambert""#, r#"type="ambient""#);
+    std::fs::write(&path, &ambient).unwrap();
+    let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    let doc = harness.state().document();
+    assert!(doc.conflict().is_some(), "the usual question");
+    assert!(status_says(&harness, "choose what to keep"));
+    assert_eq!(read(&path), ambient, "nothing written before the answer");
+}
+
+#[test]
+fn item_3_a_damaged_journal_is_set_aside_with_a_notice() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    std::mem::forget(harness);
+    // Cut short, as by a full disk.
+    let entry = journal_entries(&folder).remove(0);
+    let text = std::fs::read_to_string(&entry).unwrap();
+    std::fs::write(&entry, &text[..text.len() - 20]).unwrap();
+    let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(!harness.state().document().has_unsaved_edits());
+    assert!(status_says(&harness, "is damaged"));
+    assert!(journal_entries(&folder).is_empty());
+    assert!(
+        std::fs::read_dir(&folder)
+            .unwrap()
+            .flatten()
+            .any(|f| f.file_name().to_string_lossy().ends_with(".json.damaged")),
+        "kept aside, not lost"
+    );
+    // Another file of the same name elsewhere never gets it.
+    let (_other_dir, other) = file_with(EXAMPLE);
+    let harness = app_with_journal(Document::open(&other).unwrap(), &folder);
+    assert!(!harness.state().document().has_unsaved_edits());
+}
