@@ -86,7 +86,7 @@ fn a_save_is_read_back_sharing_the_objects_on_screen() {
         {
             FileEvent::Loaded(read) => break read,
             FileEvent::Broken(e) => panic!("{e}"),
-            FileEvent::Missing => {}
+            FileEvent::Missing | FileEvent::Reading => {}
         }
     };
     assert!(unshared(&back.scene, doc.scene()).is_empty());

@@ -145,21 +145,41 @@ fn start_xvfb() -> (Killed, String) {
             None => {}
         }
         let display = format!(":{n}");
+        // Its messages, to say why if it does not start.
+        let log = std::env::temp_dir().join(format!("rayoflight-xvfb-{n}.log"));
         let child = Command::new("Xvfb")
             .args([&display, "-screen", "0", "1280x900x24", "-nolisten", "tcp"])
             .stdout(Stdio::null())
-            .stderr(Stdio::null())
+            .stderr(
+                std::fs::File::create(&log)
+                    .map(Stdio::from)
+                    .unwrap_or_else(|_| Stdio::null()),
+            )
             .spawn()
             .expect("Xvfb runs (apt-get install xvfb)");
-        let child = Killed(child);
+        let mut child = Killed(child);
         let start = Instant::now();
-        while start.elapsed() < Duration::from_secs(10) {
+        while start.elapsed() < Duration::from_secs(20) {
             if Path::new(&format!("/tmp/.X11-unix/X{n}")).exists() {
                 return (child, display);
             }
+            // A server that ended at once could not take this display
+            // (another one still holds it): try the next.
+            if child.0.try_wait().ok().flatten().is_some() {
+                break;
+            }
             std::thread::sleep(Duration::from_millis(50));
         }
-        panic!("Xvfb did not start on {display}");
+        if child.0.try_wait().ok().flatten().is_none() {
+            panic!(
+                "Xvfb did not start on {display}: {}",
+                std::fs::read_to_string(&log).unwrap_or_default()
+            );
+        }
+        eprintln!(
+            "Xvfb could not take {display}, trying the next: {}",
+            std::fs::read_to_string(&log).unwrap_or_default()
+        );
     }
     panic!("no free X display number");
 }

@@ -15,6 +15,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;
 use rayoflight::gui::document::{Document, Reload, SaveError};
+use rayoflight::gui::preview::RenderState;
 use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
@@ -746,4 +747,194 @@ fn item_3_a_damaged_journal_is_set_aside_with_a_notice() {
     let (_other_dir, other) = file_with(EXAMPLE);
     let harness = app_with_journal(Document::open(&other).unwrap(), &folder);
     assert!(!harness.state().document().has_unsaved_edits());
+}
+
+#[test]
+fn item_6_a_camera_brought_back_to_the_files_leaves_its_text_alone() {
+    let text = EXAMPLE.replace(
+        r#"<translate x="0" y="0" z="-20"/>"#,
+        r#"<translate y="-3" z="-8"/>"#,
+    );
+    let (_dir, path) = file_with(&text);
+    let mut doc = Document::open(&path).unwrap();
+    let home = doc.scene().camera.transform.steps().to_vec();
+    // An orbit, then Home, then another value.
+    let orbit = vec![
+        TransformStep::RotateY(0.5),
+        TransformStep::Translate(glam::DVec3::new(-4.0, -3.0, -7.0)),
+    ];
+    doc.apply(Edit::Transform(
+        rayoflight::scene::edit::Owner::Camera,
+        orbit,
+    ))
+    .unwrap();
+    doc.apply(Edit::Transform(
+        rayoflight::scene::edit::Owner::Camera,
+        home,
+    ))
+    .unwrap();
+    doc.apply(Edit::Set(ka(1), Value::Number(0.25))).unwrap();
+    doc.save().unwrap();
+    assert_eq!(
+        read(&path),
+        text.replacen(r#"ka="0.4""#, r#"ka="0.25""#, 1),
+        "only ka changed"
+    );
+}
+
+/// A scene of `n` small spheres in a grid, seen by a small camera.
+fn many_spheres(n: usize) -> String {
+    let side = (n as f64).sqrt().ceil() as usize;
+    let mut text = String::from("<scene>\n");
+    for i in 0..n {
+        let (x, y) = ((i % side) as f64, (i / side) as f64);
+        text.push_str(&format!(
+            "<sphere><transformation><scale factor=\"0.3\"/><translate x=\"{}\" y=\"{}\" z=\"{}\"/></transformation></sphere>\n",
+            x - side as f64 / 2.0,
+            y - side as f64 / 2.0,
+            side as f64
+        ));
+    }
+    text.push_str("<light x=\"0\" y=\"-5\" z=\"-5\"/>\n<camera width=\"64\" height=\"48\" eyeDistance=\"1\"/>\n<model type=\"phong\"/>\n</scene>\n");
+    text
+}
+
+fn until_done(harness: &mut Harness<'_, RayOfLightApp>, limit: Duration) {
+    step_until(harness, limit, "the picture", |app| {
+        matches!(app.preview().state(), RenderState::Done { .. })
+    });
+}
+
+#[test]
+fn item_8_esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
+    let (_dir, path) = file_with(&many_spheres(200_000));
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(&path).unwrap(),
+        Persisted::in_memory(),
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    until_done(&mut harness, Duration::from_secs(60));
+    let before = harness.state().preview().image().clone();
+    // An edit, and Esc while the scene is being prepared again: no pixel
+    // of the new scene has come yet.
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    assert_eq!(harness.state().preview().state(), &RenderState::Waiting);
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
+    assert!(status_says(&harness, "cancelled (Esc)"));
+    assert!(status_says(&harness, "F5 renders again"));
+    // Nothing renders by itself, and nothing says "done".
+    std::thread::sleep(Duration::from_millis(1500));
+    harness.run_steps(3);
+    assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
+    assert_eq!(harness.state().preview().image(), &before);
+    // F5: the scene on screen, as the CLI renders it.
+    harness.key_press(egui::Key::F5);
+    harness.run_steps(1);
+    until_done(&mut harness, Duration::from_secs(60));
+    let scene = harness.state().document().scene().clone();
+    let expected =
+        rayoflight::render::render(&scene, &rayoflight::render::auto(&scene).options).unwrap();
+    assert_eq!(harness.state().preview().image(), &expected);
+}
+
+#[test]
+fn item_10_esc_closes_the_help_and_o_hides_the_overlays() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(&path).unwrap(),
+        Persisted::in_memory(),
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    until_done(&mut harness, Duration::from_secs(30));
+    harness.key_press(egui::Key::F1);
+    harness.run_steps(2);
+    assert!(harness.query_by_label("Keys and mouse").is_some());
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert!(
+        harness.query_by_label("Keys and mouse").is_none(),
+        "Esc closed it"
+    );
+    assert!(harness.state().light_marker(0).is_some(), "a marker drawn");
+    harness.key_press(egui::Key::O);
+    harness.run_steps(2);
+    assert!(!harness.state().overlays_shown());
+    assert!(harness.state().light_marker(0).is_none(), "no marker");
+    harness.key_press(egui::Key::O);
+    harness.run_steps(2);
+    assert!(harness.state().light_marker(0).is_some());
+}
+
+#[test]
+fn item_10_a_large_file_opens_beside_the_window_and_esc_stops_waiting() {
+    let text = many_spheres(60_000);
+    assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
+    let (_dir, path) = file_with(&text);
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::empty(),
+        Persisted::in_memory(),
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    harness.run_steps(2);
+    // Esc while it loads: the window stops waiting; the late result is
+    // dropped.
+    harness
+        .state_mut()
+        .run(rayoflight::gui::app::Command::OpenFile(path.clone()));
+    harness.run_steps(1);
+    assert!(harness.state().is_loading(), "the window did not wait");
+    assert!(harness.state().document().path().is_none());
+    assert!(status_says(&harness, "Esc stops"));
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert!(!harness.state().is_loading());
+    assert!(status_says(&harness, "stopped opening"));
+    std::thread::sleep(Duration::from_secs(3));
+    harness.run_steps(3);
+    assert!(harness.state().document().path().is_none(), "dropped");
+    // Again, waited for: the scene comes.
+    harness
+        .state_mut()
+        .run(rayoflight::gui::app::Command::OpenFile(path.clone()));
+    harness.run_steps(1);
+    assert!(harness.state().is_loading());
+    step_until(
+        &mut harness,
+        Duration::from_secs(30),
+        "the file opened",
+        |app| !app.is_loading(),
+    );
+    let doc = harness.state().document();
+    assert_eq!(doc.path(), Some(path.as_path()));
+    assert_eq!(doc.scene().objects.len(), 60_000);
+}
+
+#[test]
+fn item_10_the_status_says_reading_while_a_large_changed_file_is_read() {
+    let text = many_spheres(60_000);
+    let (_dir, path) = file_with(&text);
+    let doc = Document::open(&path).unwrap();
+    let (rx, _watcher) = watch(&path, &doc);
+    let theirs = text.replace("<model type=\"phong\"/>", "<model type=\"lambert\"/>");
+    replace_atomically(&path, &theirs);
+    match rx.recv_timeout(Duration::from_secs(10)) {
+        Ok(FileEvent::Reading) => {}
+        other => panic!("reading first: {other:?}"),
+    }
+    match rx.recv_timeout(Duration::from_secs(20)) {
+        Ok(FileEvent::Loaded(read)) => assert_eq!(read.text, theirs),
+        other => panic!("then what it read: {other:?}"),
+    }
 }

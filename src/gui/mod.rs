@@ -37,6 +37,10 @@ pub mod worker;
 
 use std::path::Path;
 
+/// Files at least this large open on a thread of their own, the window
+/// showing at once (a million spheres are 170 MB and take seconds).
+pub const BACKGROUND_BYTES: u64 = 4 << 20;
+
 #[derive(Debug, thiserror::Error)]
 pub enum GuiError {
     #[error("no display: set DISPLAY or WAYLAND_DISPLAY, or render without a window with --no-gui")]
@@ -79,7 +83,15 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
         return Err(GuiError::NoDisplay);
     }
     let persisted = settings::Persisted::user();
-    let doc = first_document(scene, &persisted.settings)?;
+    // A large file opens once the window is there.
+    let later = scene
+        .map(Path::to_owned)
+        .or_else(|| persisted.settings.last_file.clone())
+        .filter(|p| std::fs::metadata(p).is_ok_and(|m| m.is_file() && m.len() >= BACKGROUND_BYTES));
+    let doc = match &later {
+        Some(_) => document::Document::empty(),
+        None => first_document(scene, &persisted.settings)?,
+    };
     let options = eframe::NativeOptions {
         viewport: egui::ViewportBuilder::default()
             .with_inner_size(persisted.settings.window.unwrap_or([1200.0, 800.0]))
@@ -94,6 +106,9 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
         Box::new(move |cc| {
             let mut app = app::RayOfLightApp::new(&cc.egui_ctx, doc, persisted);
             app.end_on_signals();
+            if let Some(path) = later {
+                app.run(app::Command::OpenFile(path));
+            }
             Ok(Box::new(app))
         }),
     )

@@ -14,6 +14,9 @@ use std::time::{Duration, Instant};
 #[derive(Debug, Clone, PartialEq)]
 pub enum RenderState {
     Idle,
+    /// A render was asked for and has not sent its first pixels yet (the
+    /// scene is being prepared): the picture on screen is older.
+    Waiting,
     Rendering {
         scale: u32,
         tiles_done: usize,
@@ -122,10 +125,19 @@ impl Preview {
         Some((fraction, left))
     }
 
-    /// The render in progress was cancelled: its late events are dropped
-    /// (their generation is old) and the state says so.
+    /// A newer render was asked for: until its first pass starts, the
+    /// picture is of an older scene, and the state says so.
+    pub fn requested(&mut self) {
+        self.state = RenderState::Waiting;
+    }
+
+    /// The render in progress (or asked for) was cancelled: its late events
+    /// are dropped (their generation is old) and the state says so.
     pub fn cancel(&mut self) {
-        if matches!(self.state, RenderState::Rendering { .. }) {
+        if matches!(
+            self.state,
+            RenderState::Rendering { .. } | RenderState::Waiting
+        ) {
             self.state = RenderState::Cancelled;
         }
     }

@@ -51,6 +51,9 @@ pub enum FileEvent {
     Broken(LoadError),
     /// It is gone (deleted or renamed away).
     Missing,
+    /// A large file ([`crate::gui::BACKGROUND_BYTES`]) changed and is being
+    /// read: one of the others follows.
+    Reading,
 }
 
 type Watcher = Debouncer<notify::RecommendedWatcher, RecommendedCache>;
@@ -218,6 +221,13 @@ impl SceneWatcher {
                 if missed && seen.lock().is_ok_and(|s| s.0 == now) {
                     return;
                 }
+                // A large file takes a while: say so first, and then
+                // always say how it ended.
+                let large = std::fs::metadata(&target)
+                    .is_ok_and(|m| m.len() >= crate::gui::BACKGROUND_BYTES);
+                if large {
+                    on_event(FileEvent::Reading);
+                }
                 let event = read(&target, &last);
                 if let FileEvent::Loaded(read) = &event {
                     last.clone_from(&read.scene.objects);
@@ -226,10 +236,10 @@ impl SceneWatcher {
                 let key = match &event {
                     FileEvent::Loaded(read) => hash(&("loaded", read.fingerprint())),
                     FileEvent::Broken(e) => hash(&("broken", e.to_string())),
-                    FileEvent::Missing => hash(&"missing"),
+                    FileEvent::Missing | FileEvent::Reading => hash(&"missing"),
                 };
                 if let Ok(mut seen) = seen.lock() {
-                    if *seen == (now.clone(), Some(key)) {
+                    if *seen == (now.clone(), Some(key)) && !large {
                         return;
                     }
                     *seen = (now, Some(key));

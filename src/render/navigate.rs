@@ -24,7 +24,7 @@ pub const MAX_PITCH: f64 = 89.0 * std::f64::consts::PI / 180.0;
 /// Why a camera cannot be navigated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
 #[error(
-    "the camera's transformation has a non-uniform scale or a shear, which a viewport move would lose: edit its steps in the panel"
+    "orbit, pan and dolly keep a camera's shape, and this one has a shear or an uneven scale: edit its steps in the panel"
 )]
 pub struct NotRigid;
 
@@ -154,6 +154,118 @@ fn angles(rotation: &DMat3) -> (f64, f64, f64) {
     (yaw, pitch, roll)
 }
 
+/// What part of a pixel a value set by a gesture (a drag of the camera, a
+/// light, an object) may move when it is rounded: well under what shows.
+pub const GESTURE_PRECISION: f64 = 1.0 / 16.0;
+
+/// The shortest decimal within `tolerance` of `v` (0 within `tolerance`
+/// of 0; `v` itself when the tolerance is not positive): the value a
+/// gesture means, without the float noise of the arithmetic that got it
+/// (`-1.2000000000000002` is `-1.2`).
+pub fn shortest_within(v: f64, tolerance: f64) -> f64 {
+    if !(tolerance > 0.0 && v.is_finite()) {
+        return v;
+    }
+    if v.abs() <= tolerance {
+        return 0.0;
+    }
+    for digits in 0..17 {
+        let r: f64 = format!("{v:.digits$}").parse().unwrap_or(v);
+        if (r - v).abs() <= tolerance {
+            return r;
+        }
+    }
+    v
+}
+
+/// `new` (a gesture's value) rounded to `tolerance`, or `old` (the value
+/// before the gesture) itself when the gesture left it within that: a
+/// value brought back, or one the gesture did not move, keeps its text.
+pub fn settle(new: f64, old: f64, tolerance: f64) -> f64 {
+    if (new - old).abs() <= tolerance {
+        old
+    } else {
+        shortest_within(new, tolerance)
+    }
+}
+
+/// [`settle`] for each coordinate.
+pub fn settle_vec(new: DVec3, old: DVec3, tolerance: f64) -> DVec3 {
+    DVec3::new(
+        settle(new.x, old.x, tolerance),
+        settle(new.y, old.y, tolerance),
+        settle(new.z, old.z, tolerance),
+    )
+}
+
+/// `steps` (a gesture's transformation) with each value settled against
+/// the step of the same kind at the same place in `old` ([`settle`]):
+/// lengths and positions within `distance`, angles within `angle`, scale
+/// factors within a relative 1e-9. Steps that do nothing once settled
+/// (`rotate-z angle="0"`, `scale factor="1"`) are left out.
+pub fn settle_steps(
+    steps: &[TransformStep],
+    old: &[TransformStep],
+    distance: f64,
+    angle: f64,
+) -> Vec<TransformStep> {
+    use TransformStep as S;
+    let factor = |f: f64, o: Option<f64>| {
+        let tolerance = f.abs() * 1e-9;
+        match o {
+            Some(o) => settle(f, o, tolerance),
+            None if (f - 1.0).abs() <= tolerance => 1.0,
+            None => shortest_within(f, tolerance),
+        }
+    };
+    // The n-th step of a kind pairs with the n-th of that kind in `old`.
+    let same_kind = |a: &TransformStep, b: &TransformStep| {
+        std::mem::discriminant(a) == std::mem::discriminant(b)
+    };
+    steps
+        .iter()
+        .enumerate()
+        .filter_map(|(k, step)| {
+            let nth = steps[..k].iter().filter(|s| same_kind(s, step)).count();
+            let before = old.iter().filter(|s| same_kind(s, step)).nth(nth);
+            let settled = match (*step, before.copied()) {
+                (S::Translate(v), Some(S::Translate(o))) => {
+                    S::Translate(settle_vec(v, o, distance))
+                }
+                (S::Translate(v), _) => S::Translate(settle_vec(v, DVec3::ZERO, distance)),
+                (S::Scale(v), Some(S::Scale(o))) => {
+                    S::Scale(settle_vec(v, o, 1e-9 * v.abs().max_element()))
+                }
+                (S::Scale(v), _) => S::Scale(v),
+                (S::RotateX(a), Some(S::RotateX(o))) => S::RotateX(settle(a, o, angle)),
+                (S::RotateY(a), Some(S::RotateY(o))) => S::RotateY(settle(a, o, angle)),
+                (S::RotateZ(a), Some(S::RotateZ(o))) => S::RotateZ(settle(a, o, angle)),
+                (S::RotateX(a), _) => S::RotateX(settle(a, 0.0, angle)),
+                (S::RotateY(a), _) => S::RotateY(settle(a, 0.0, angle)),
+                (S::RotateZ(a), _) => S::RotateZ(settle(a, 0.0, angle)),
+                (S::UniformScale(f), Some(S::UniformScale(o))) => {
+                    S::UniformScale(factor(f, Some(o)))
+                }
+                (S::UniformScale(f), _) => S::UniformScale(factor(f, None)),
+            };
+            // A step the text had stays, whatever it does.
+            let identity = match settled {
+                S::Translate(v) => v == DVec3::ZERO,
+                S::RotateX(a) | S::RotateY(a) | S::RotateZ(a) => a == 0.0,
+                S::UniformScale(f) => f == 1.0,
+                S::Scale(v) => v == DVec3::ONE,
+            };
+            (!identity || before.is_some_and(|b| *b == settled)).then_some(settled)
+        })
+        .collect()
+}
+
+/// The angle one pixel spans at the centre of the picture: 2 / min(width,
+/// height) camera units seen from eyeDistance.
+pub fn pixel_angle(camera: &Camera) -> f64 {
+    2.0 / f64::from(camera.width.min(camera.height)) / camera.eye_distance
+}
+
 /// The world size of one pixel at `depth` world units in front of the eye.
 ///
 /// A pixel is s = 2 / min(width, height) camera units on the screen, which
@@ -162,6 +274,40 @@ fn angles(rotation: &DMat3) -> (f64, f64, f64) {
 pub fn pixel_size(camera: &Camera, depth: f64) -> f64 {
     let s = 2.0 / f64::from(camera.width.min(camera.height));
     s * depth / camera.eye_distance
+}
+
+/// `point` moved by (`dx`, `dy`) pixels across the picture at its own
+/// depth in camera space: what dragging it on screen means. It needs only
+/// the camera's projection, so it works for any camera transformation (a
+/// sheared or non-uniformly scaled one too, which cannot be orbited).
+/// `None` for a point at or behind the eye.
+///
+/// In camera space a pixel at depth q.z + e from the eye spans
+/// s · (q.z + e) / e camera units (by similar triangles, as in
+/// [`project`]).
+pub fn moved_on_screen(camera: &Camera, point: DVec3, dx: f64, dy: f64) -> Option<DVec3> {
+    let q = camera.transform.to_object().transform_point3(point);
+    let e = camera.eye_distance;
+    let depth = q.z + e;
+    if depth.is_nan() || depth <= 0.0 {
+        return None;
+    }
+    let s = 2.0 / f64::from(camera.width.min(camera.height));
+    let k = s * depth / e;
+    let moved = camera
+        .transform
+        .to_world()
+        .transform_point3(q + DVec3::new(dx * k, dy * k, 0.0));
+    moved.is_finite().then_some(moved)
+}
+
+/// The world size of one pixel at `point` (the smaller of a step across
+/// and a step down, which differ for a non-uniformly scaled camera);
+/// `None` for a point at or behind the eye.
+pub fn pixel_at(camera: &Camera, point: DVec3) -> Option<f64> {
+    let across = moved_on_screen(camera, point, 1.0, 0.0)?;
+    let down = moved_on_screen(camera, point, 0.0, 1.0)?;
+    Some((across - point).length().min((down - point).length()))
 }
 
 /// Where a world point shows in the picture, in pixels from its top-left
@@ -200,6 +346,61 @@ mod tests {
 
     fn close(a: DVec3, b: DVec3) -> bool {
         (a - b).length() < 1e-12 * (1.0 + a.length())
+    }
+
+    #[test]
+    fn a_gestures_values_are_the_shortest_decimals_within_its_precision() {
+        assert_eq!(shortest_within(-1.2000000000000002, 1e-3), -1.2);
+        assert_eq!(shortest_within(0.123456, 1e-3), 0.123);
+        assert_eq!(shortest_within(1.27e-14, 1e-6), 0.0);
+        assert_eq!(shortest_within(2.5, 0.0), 2.5, "no precision, no rounding");
+        // Unmoved, or brought back: the value before, exactly.
+        assert_eq!(settle(-2.0000000001, -2.0, 1e-3), -2.0);
+        assert_eq!(settle(1.23456789, 1.23456789, 1e-3), 1.23456789);
+        assert_eq!(settle(1.9, 1.23456789, 1e-3), 1.9);
+    }
+
+    #[test]
+    fn orbits_leave_no_float_noise_and_no_identity_steps() {
+        let c = camera(vec![TransformStep::Translate(DVec3::new(0.0, -3.0, -8.0))]);
+        let start = Pose::of(&c).unwrap();
+        // Many small orbits there and back, as a user's drags.
+        let mut pose = start;
+        let pivot = DVec3::new(1.0, 0.5, 2.0);
+        for k in 0..50 {
+            pose = pose.orbit(pivot, 0.3, 0.0).orbit(pivot, 0.0, 0.2);
+            pose = pose.orbit(pivot, 0.0, -0.2).orbit(pivot, -0.3, 0.0);
+            if k % 7 == 0 {
+                pose = pose.dolly(DVec3::Z, 0.1).dolly(DVec3::Z, -0.1);
+            }
+        }
+        let raw = pose.steps();
+        assert!(raw.len() > 1, "noise there to clean: {raw:?}");
+        let settled = settle_steps(&raw, c.transform.steps(), 1e-3, 1e-4);
+        assert_eq!(settled, c.transform.steps(), "back where it was: {raw:?}");
+        // A real turn: short values, no scale or roll of noise.
+        let turned = start.orbit(DVec3::ZERO, 0.5, 0.0);
+        let settled = settle_steps(&turned.steps(), c.transform.steps(), 1e-3, 1e-4);
+        let text = format!("{settled:?}");
+        assert!(
+            !settled.iter().any(|s| matches!(
+                s,
+                TransformStep::UniformScale(_)
+                    | TransformStep::RotateZ(_)
+                    | TransformStep::RotateX(_)
+            )),
+            "{text}"
+        );
+        for step in &settled {
+            let values: Vec<f64> = match *step {
+                TransformStep::Translate(v) => v.to_array().to_vec(),
+                TransformStep::RotateY(a) => vec![a],
+                _ => unreachable!(),
+            };
+            for v in values {
+                assert!(crate::scene::edit::number_text(v).len() <= 8, "{text}");
+            }
+        }
     }
 
     #[test]

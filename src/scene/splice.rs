@@ -1036,6 +1036,11 @@ impl Editor<'_, '_> {
             }
             return Ok(());
         };
+        if o == e {
+            // Back to the steps the text has (a camera moved and brought
+            // back): its text says it already, whatever the origins.
+            return Ok(());
+        }
         let steps = self.doc.node(node).children.clone();
         if steps.len() != o.len() || origins.len() != e.len() {
             return Err(internal("a transformation's steps do not match its text"));

@@ -61,6 +61,11 @@ pub enum Command {
     Explain,
     /// Show this render pass in place of the picture (View › Pass).
     ShowPass(crate::render::Pass),
+    /// Render the scene again (F5): after a cancelled render.
+    Render,
+    /// Show or hide what is drawn over the picture: light markers, the
+    /// selection's outline, the explained ray's path (O).
+    Overlays,
 }
 
 /// Every key and mouse action, for the help window (F1).
@@ -90,7 +95,12 @@ pub const HELP: &[(&str, &str)] = &[
     ("F / 1", "fit the picture / show it 1:1"),
     (
         "Esc",
-        "cancel the move or the explain click, else the render in progress",
+        "cancel the move or the explain click, close this list, else stop the render",
+    ),
+    ("F5", "render again (after Esc)"),
+    (
+        "O",
+        "show or hide the overlays: light markers, outline, ray path",
     ),
     ("Ctrl+Z", "undo"),
     ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
@@ -202,17 +212,22 @@ impl RayOfLightApp {
             Command::ZoomIn => self.view.zoom_by(1.25),
             Command::ZoomOut => self.view.zoom_by(1.0 / 1.25),
             Command::CancelRender => {
-                // Esc puts back an object being moved, else stops the
-                // render.
+                // Esc puts back an object being moved, else disarms the
+                // explain click, closes the help, stops opening a file or
+                // stops the render, the first that applies.
                 if self.grab.is_some() {
                     self.grab_end(false);
                 } else if self.explain_armed {
                     self.explain_armed = false;
-                } else {
+                } else if self.help_open {
+                    self.help_open = false;
+                } else if !self.cancel_loading() {
                     self.worker.cancel();
                     self.preview.cancel();
                 }
             }
+            Command::Render => self.request_render(),
+            Command::Overlays => self.overlays = !self.overlays,
             Command::Grab => {
                 let pointer = self.ctx.input(|i| i.pointer.hover_pos());
                 self.grab_start(pointer);
@@ -268,6 +283,8 @@ impl RayOfLightApp {
                     (Key::F1, Command::Help),
                     (Key::G, Command::Grab),
                     (Key::E, Command::Explain),
+                    (Key::F5, Command::Render),
+                    (Key::O, Command::Overlays),
                 ] {
                     if i.key_pressed(key) && i.modifiers.is_none() {
                         commands.push(command);
@@ -364,6 +381,18 @@ impl RayOfLightApp {
                 pick(ui, true, "Study…", Command::Study);
                 pick(ui, true, "Keys and mouse…  F1", Command::Help);
                 pick(ui, true, "Explain pixel  E", Command::Explain);
+                let overlays = self.overlays;
+                if ui
+                    .add(egui::Button::selectable(overlays, "Overlays  O"))
+                    .on_hover_text(
+                        "light markers, the selection's outline, the explained ray's path",
+                    )
+                    .clicked()
+                {
+                    chosen.set(Some(Command::Overlays));
+                    ui.close();
+                }
+                pick(ui, true, "Render again  F5", Command::Render);
                 ui.menu_button("Pass", |ui| {
                     for pass in crate::render::Pass::ALL {
                         let button = egui::Button::selectable(pass == shown_pass, pass.name());

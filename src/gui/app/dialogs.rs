@@ -60,15 +60,77 @@ impl PathPrompt {
 impl RayOfLightApp {
     /// Replaces the document by the file at `path` (the caller asked about
     /// unsaved edits). A file that does not load opens with its error shown.
+    /// Opens `path`: at once when it is small, else on a thread of its
+    /// own while the window goes on (a million spheres take seconds to
+    /// read), with the status saying so and Esc to stop waiting.
     pub(super) fn open(&mut self, path: &Path) {
-        match Document::open(path) {
+        let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
+        if bytes < crate::gui::BACKGROUND_BYTES {
+            match Document::open(path) {
+                Ok(doc) => self.replace_document(doc),
+                Err(e) => self.notify(e.to_string()),
+            }
+            return;
+        }
+        let id = self.loading.as_ref().map_or(1, |l| l.id + 1);
+        self.loading = Some(Loading {
+            id,
+            path: path.to_owned(),
+            bytes,
+            started: Instant::now(),
+        });
+        let (tx, ctx, path) = (
+            self.background_tx.clone(),
+            self.ctx.clone(),
+            path.to_owned(),
+        );
+        let _ = std::thread::Builder::new()
+            .name("open".to_owned())
+            .spawn(move || {
+                let _ = tx.send(Background::Opened(id, Box::new(Document::open(&path))));
+                ctx.request_repaint();
+            });
+    }
+
+    /// A background open ended.
+    pub(super) fn opened(&mut self, id: u64, result: Result<Document, crate::scene::LoadError>) {
+        // Cancelled, or another open since: dropped.
+        if self.loading.as_ref().is_none_or(|l| l.id != id) {
+            return;
+        }
+        self.loading = None;
+        match result {
             Ok(doc) => self.replace_document(doc),
             Err(e) => self.notify(e.to_string()),
         }
     }
 
+    /// Esc while a file is being opened: stop waiting for it.
+    pub(super) fn cancel_loading(&mut self) -> bool {
+        let Some(loading) = self.loading.take() else {
+            return false;
+        };
+        self.notify(format!(
+            "stopped opening {} (File › Open opens it)",
+            loading.path.display()
+        ));
+        true
+    }
+
     pub(super) fn save(&mut self) {
         self.save_then(None);
+    }
+
+    /// The status of a background open: "opening big.xml (170 MB)… 2 s —
+    /// Esc stops".
+    pub(super) fn loading_status(&self) -> Option<String> {
+        let loading = self.loading.as_ref()?;
+        Some(format!(
+            "opening {} ({:.0} MB)… {:.0} s — Esc stops",
+            loading.path.display(),
+            loading.bytes as f64 / 1e6,
+            loading.started.elapsed().as_secs_f64().floor()
+        ))
     }
 
     /// Starts saving on a thread of its own (a million objects take
@@ -469,6 +531,15 @@ impl RayOfLightApp {
             }
         }
     }
+}
+
+/// A file being opened on a thread of its own.
+pub(super) struct Loading {
+    /// Which open this is: a later one (or Esc) drops the earlier's result.
+    pub(super) id: u64,
+    pub(super) path: PathBuf,
+    pub(super) bytes: u64,
+    pub(super) started: Instant,
 }
 
 /// A save under way (see [`RayOfLightApp::save_then`]).

@@ -46,6 +46,7 @@ impl RayOfLightApp {
         let generation =
             self.worker
                 .request_passes(Arc::new(self.doc.scene().clone()), request, passes);
+        self.preview.requested();
         self.in_flight = interacting.then(|| (generation, Instant::now()));
         self.study.superseded(generation);
         if self.study.open {
@@ -120,11 +121,13 @@ impl RayOfLightApp {
                 Background::Saved(job, outcome) => self.saved(*job, outcome),
                 Background::Exported(path, result) => self.exported(&path, result),
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
+                Background::Opened(id, result) => self.opened(id, *result),
             }
         }
     }
 
     pub(super) fn file_event(&mut self, event: FileEvent) {
+        self.reading = matches!(event, FileEvent::Reading);
         match event {
             FileEvent::Loaded(read) => match self.doc.file_read(*read) {
                 Reload::Replaced => self.after_edit(),
@@ -139,6 +142,7 @@ impl RayOfLightApp {
                 self.doc.file_broken(&error);
             }
             FileEvent::Missing => self.doc.file_missing(),
+            FileEvent::Reading => {}
         }
     }
 

@@ -69,6 +69,8 @@ enum Background {
     Saved(Box<SaveJob>, SaveOutcome),
     /// A render pass for (pass, render generation).
     Pass((render::Pass, u64), Box<render::PassImage>),
+    /// A file opened in the background (the load's number, the document).
+    Opened(u64, Box<Result<Document, crate::scene::LoadError>>),
 }
 
 pub struct RayOfLightApp {
@@ -136,6 +138,8 @@ pub struct RayOfLightApp {
     wheel_at: Option<Instant>,
     /// The keys-and-mouse window is shown.
     help_open: bool,
+    /// Light markers, the outline and the explained path are drawn (O).
+    overlays: bool,
     /// The next click on the picture explains its pixel (E).
     explain_armed: bool,
     /// The explained pixel, in its window.
@@ -157,6 +161,10 @@ pub struct RayOfLightApp {
     title: String,
     /// The user chose to quit without saving.
     allow_close: bool,
+    /// The watcher is reading a large file that changed.
+    reading: bool,
+    /// A file being opened in the background, if any.
+    loading: Option<dialogs::Loading>,
     /// The journal of unsaved edits, when the app keeps one.
     hot_exit: Option<hot_exit::HotExit>,
     /// A signal asked the app to end (see [`RayOfLightApp::end_on_signals`]).
@@ -197,6 +205,8 @@ impl RayOfLightApp {
             title: String::new(),
             allow_close: false,
             hot_exit: journal.map(hot_exit::HotExit::new),
+            loading: None,
+            reading: false,
             signalled: Arc::new(AtomicBool::new(false)),
             stats: stats_wanted(std::env::var_os("RAYOFLIGHT_STATS").as_deref()),
             last_stats: Instant::now(),
@@ -228,6 +238,7 @@ impl RayOfLightApp {
             outline_wanted: None,
             wheel_at: None,
             help_open: false,
+            overlays: true,
             explain_armed: false,
             explained: None,
             pass: render::Pass::Final,
@@ -318,6 +329,11 @@ impl RayOfLightApp {
         &self.doc
     }
 
+    /// A file is being opened in the background.
+    pub fn is_loading(&self) -> bool {
+        self.loading.is_some()
+    }
+
     /// A save is running (on its own thread).
     pub fn is_saving(&self) -> bool {
         self.saving.is_some()
@@ -326,6 +342,11 @@ impl RayOfLightApp {
     /// The object selected in the picture or the panel.
     pub fn selected_object(&self) -> Option<usize> {
         self.selection.object
+    }
+
+    /// Whether the overlays are drawn (View › Overlays, O).
+    pub fn overlays_shown(&self) -> bool {
+        self.overlays
     }
 
     /// The field marked in the panel (a term of an explained pixel).
@@ -395,7 +416,10 @@ impl RayOfLightApp {
         self.shortcuts(&ctx);
         let title = format!(
             "RayOfLight — {}{}",
-            self.doc.title(),
+            match &self.loading {
+                Some(loading) => format!("loading {}…", loading.path.display()),
+                None => self.doc.title(),
+            },
             if self.doc.has_unsaved_edits() {
                 " •"
             } else {

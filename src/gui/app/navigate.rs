@@ -8,7 +8,9 @@
 
 use super::*;
 use crate::math::TransformStep;
-use crate::render::navigate::{Pose, pixel_size};
+use crate::render::navigate::{
+    GESTURE_PRECISION, Pose, moved_on_screen, pixel_angle, pixel_at, pixel_size, settle_steps,
+};
 use crate::scene::edit::{Edit, Owner};
 use glam::DVec3;
 
@@ -28,12 +30,15 @@ pub(super) enum Gesture {
 }
 
 /// A drag of the camera under way.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub(super) struct Navigation {
     gesture: Gesture,
     /// The camera when the drag started: each frame moves it from there by
     /// the whole drag, so nothing drifts.
     start: Pose,
+    /// Its steps then: values the drag leaves within a fraction of a pixel
+    /// keep their text.
+    start_steps: Vec<TransformStep>,
     pivot: DVec3,
     /// World size of one image pixel at the pivot's depth.
     pixel: f64,
@@ -50,9 +55,10 @@ pub(super) struct Grab {
     /// Where the pointer was when the move started (set at its first
     /// position over the picture).
     pointer: Option<Pos2>,
+    /// Its centre in world space when the move started.
+    centre: DVec3,
     /// World size of one image pixel at the object's depth.
     pixel: f64,
-    pose: Pose,
 }
 
 impl RayOfLightApp {
@@ -63,17 +69,20 @@ impl RayOfLightApp {
             return self.notify("select an object first (click it), then G moves it".into());
         };
         let scene = self.doc.scene();
-        let (Some(o), Ok(pose)) = (scene.objects.get(object), Pose::of(&scene.camera)) else {
+        let Some(o) = scene.objects.get(object) else {
             return;
         };
         let centre = o.transform.to_world().translation;
-        let depth = (centre - pose.eye(scene.camera.eye_distance)).dot(pose.forward());
+        // Through the camera's projection: any camera, sheared too.
+        let Some(pixel) = pixel_at(&scene.camera, centre) else {
+            return self.notify("the object is behind the eye: it cannot follow the mouse".into());
+        };
         self.grab = Some(Grab {
             object,
             start: o.transform.steps().to_vec(),
             pointer,
-            pixel: pixel_size(&scene.camera, depth.abs()),
-            pose,
+            centre,
+            pixel,
         });
         self.notify("moving: click to place, Esc or right click to cancel".into());
     }
@@ -84,9 +93,16 @@ impl RayOfLightApp {
         let Some(grab) = &mut self.grab else { return };
         let start = *grab.pointer.get_or_insert(pointer);
         let total = pointer - start;
-        let scale = image_per_point * grab.pixel;
-        let delta = grab.pose.right() * (f64::from(total.x) * scale)
-            + grab.pose.down() * (f64::from(total.y) * scale);
+        let camera = &self.doc.scene().camera;
+        let Some(moved) = moved_on_screen(
+            camera,
+            grab.centre,
+            f64::from(total.x) * image_per_point,
+            f64::from(total.y) * image_per_point,
+        ) else {
+            return;
+        };
+        let delta = moved - grab.centre;
         let mut steps = grab.start.clone();
         // World moves come last: a trailing translate takes them, or one is
         // added.
@@ -97,6 +113,14 @@ impl RayOfLightApp {
         if total == Vec2::ZERO {
             return;
         }
+        // Rounded to a fraction of a pixel there: no float noise written.
+        let camera = &self.doc.scene().camera;
+        let steps = settle_steps(
+            &steps,
+            &grab.start,
+            grab.pixel * GESTURE_PRECISION,
+            pixel_angle(camera) * GESTURE_PRECISION,
+        );
         let edit = Edit::Transform(Owner::Object(grab.object), steps);
         match self.doc.apply_step(vec![edit], true) {
             Ok(()) => self.after_edit(),
@@ -158,6 +182,7 @@ impl RayOfLightApp {
                 self.navigation = Some(Navigation {
                     gesture,
                     start,
+                    start_steps: camera.transform.steps().to_vec(),
                     pivot,
                     pixel,
                 });
@@ -169,7 +194,7 @@ impl RayOfLightApp {
     /// The drag has moved `total` screen points since it started; an image
     /// pixel is `image_per_point` of them.
     pub(super) fn navigation_drag(&mut self, total: Vec2, image_per_point: f64) {
-        let Some(nav) = self.navigation else {
+        let Some(nav) = self.navigation.clone() else {
             return;
         };
         let (dx, dy) = (f64::from(total.x), f64::from(total.y));
@@ -186,7 +211,7 @@ impl RayOfLightApp {
                 nav.start.pan(-x * nav.pixel, -y * nav.pixel)
             }
         };
-        self.set_camera(&pose, true);
+        self.set_camera(&pose, &nav.start_steps, nav.pixel, true);
     }
 
     pub(super) fn navigation_end(&mut self) {
@@ -208,7 +233,11 @@ impl RayOfLightApp {
         let eye = pose.eye(camera.eye_distance);
         let direction = (target - eye).normalize_or_zero();
         let step = distance * (1.0 - (-f64::from(scroll) / 200.0).exp());
-        self.set_camera(&pose.dolly(direction, step), true);
+        let (before, pixel) = (
+            camera.transform.steps().to_vec(),
+            pixel_size(camera, (distance - step).abs()),
+        );
+        self.set_camera(&pose.dolly(direction, step), &before, pixel, true);
         self.wheel_at = Some(Instant::now());
     }
 
@@ -228,8 +257,20 @@ impl RayOfLightApp {
         }
     }
 
-    fn set_camera(&mut self, pose: &Pose, dragging: bool) {
-        self.apply_camera(Edit::Transform(Owner::Camera, pose.steps()), dragging);
+    /// Moves the camera to `pose`, from the steps `before` the gesture:
+    /// rounded to a fraction of a `pixel` (the world size of one at the
+    /// point the gesture holds) and of a pixel's angle, values left within
+    /// that keeping their text ([`settle_steps`]). The rounded camera is
+    /// the one applied, so the saved file renders what is shown.
+    fn set_camera(&mut self, pose: &Pose, before: &[TransformStep], pixel: f64, dragging: bool) {
+        let camera = &self.doc.scene().camera;
+        let steps = settle_steps(
+            &pose.steps(),
+            before,
+            pixel * GESTURE_PRECISION,
+            pixel_angle(camera) * GESTURE_PRECISION,
+        );
+        self.apply_camera(Edit::Transform(Owner::Camera, steps), dragging);
     }
 
     fn apply_camera(&mut self, edit: Edit, dragging: bool) {

@@ -5,7 +5,7 @@
 //! (an undoable edit of the light's x, y, z, one step per drag).
 
 use super::*;
-use crate::render::navigate::{Pose, pixel_size, project};
+use crate::render::navigate::{GESTURE_PRECISION, moved_on_screen, pixel_at, project, settle_vec};
 use crate::scene::edit::{Axis, Edit, Field, Value};
 use glam::DVec3;
 
@@ -166,25 +166,29 @@ impl RayOfLightApp {
                 Color32::WHITE,
             );
             if response.drag_started() {
-                let depth = Pose::of(&camera)
-                    .map(|pose| (position - pose.eye(camera.eye_distance)).dot(pose.forward()))
-                    .unwrap_or(0.0);
                 self.light_drag = Some(LightDrag {
                     light: n,
                     start: position,
-                    pixel: pixel_size(&camera, depth),
+                    pixel: pixel_at(&camera, position).unwrap_or(0.0),
                 });
             }
+            // The light follows the pointer across the view, at its depth
+            // (through the camera's projection: any camera, sheared too).
             if response.dragged()
                 && let Some(drag) = self.light_drag.filter(|d| d.light == n)
-                && let Ok(pose) = Pose::of(&camera)
+                && let Some(moved) = {
+                    let total = response.total_drag_delta().unwrap_or_default();
+                    moved_on_screen(
+                        &camera,
+                        drag.start,
+                        f64::from(total.x) * image_per_point,
+                        f64::from(total.y) * image_per_point,
+                    )
+                }
             {
-                let total = response.total_drag_delta().unwrap_or_default();
-                let (dx, dy) = (
-                    f64::from(total.x) * image_per_point * drag.pixel,
-                    f64::from(total.y) * image_per_point * drag.pixel,
-                );
-                let moved = drag.start + pose.right() * dx + pose.down() * dy;
+                // Rounded to a fraction of a pixel there (no float noise in
+                // the file); a coordinate the drag left alone keeps its text.
+                let moved = settle_vec(moved, drag.start, drag.pixel * GESTURE_PRECISION);
                 let edits = [Axis::X, Axis::Y, Axis::Z]
                     .into_iter()
                     .map(|axis| {

@@ -121,7 +121,9 @@ impl RayOfLightApp {
                 Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
                 Color32::WHITE,
             );
-            self.draw_outline(&painter, rect);
+            if self.overlays {
+                self.draw_outline(&painter, rect);
+            }
             // Pixel inspector, pick and explain (E then a click, or
             // Alt+click).
             self.hovered = None;
@@ -146,11 +148,13 @@ impl RayOfLightApp {
             }
             let to_screen =
                 |x: f64, y: f64| rect.min + Vec2::new(x as f32, y as f32) / image_size * size;
-            self.draw_explained_path(&painter.with_clip_rect(rect.intersect(area)), to_screen);
+            if self.overlays {
+                self.draw_explained_path(&painter.with_clip_rect(rect.intersect(area)), to_screen);
+            }
             // Markers belong on a picture of the camera's size (not the
             // blank one shown before the first render, nor an old size).
             let camera = &self.doc.scene().camera;
-            if (w, h) == (camera.width, camera.height) {
+            if self.overlays && (w, h) == (camera.width, camera.height) {
                 self.light_markers(ui, area, to_screen, image_per_point);
             } else {
                 self.markers.clear();

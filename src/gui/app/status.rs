@@ -29,6 +29,7 @@ impl RayOfLightApp {
             ui.horizontal(|ui| {
                 match self.preview.state() {
                     RenderState::Idle => ui.label("idle"),
+                    RenderState::Waiting => ui.label("rendering…"),
                     RenderState::Rendering { scale, .. } => {
                         let (fraction, left) = self.preview.progress().unwrap_or((0.0, None));
                         let what = if *scale == 1 {
@@ -54,7 +55,9 @@ impl RayOfLightApp {
                     }
                     RenderState::Done { .. } => ui.label("done"),
                     RenderState::Failed(message) => ui.colored_label(Color32::RED, message),
-                    RenderState::Cancelled => ui.label("cancelled (Esc)"),
+                    RenderState::Cancelled => ui.label(
+                        "cancelled (Esc): the picture may be of an older scene — F5 renders again",
+                    ),
                 };
                 ui.label(if self.rendered_dragging {
                     self.methods.dragging.as_ref().map_or("", |m| m.name)
@@ -73,6 +76,7 @@ impl RayOfLightApp {
                 ui.label(format!("{}×{}", camera.width, camera.height));
                 ui.separator();
                 ui.label(match self.doc.state() {
+                    FileState::Builtin if self.doc.is_placeholder() => "no scene yet".to_owned(),
                     FileState::Builtin => "built-in example".to_owned(),
                     FileState::Missing => "file missing: waiting for it to come back".to_owned(),
                     FileState::Watching if self.doc.error().is_some() => {
@@ -81,6 +85,9 @@ impl RayOfLightApp {
                         } else {
                             "file has errors".to_owned()
                         }
+                    }
+                    FileState::Watching if self.reading => {
+                        "the file changed: reading it…".to_owned()
                     }
                     FileState::Watching if self.doc.has_unsaved_edits() => {
                         "unsaved edits (Ctrl+S saves)".to_owned()
@@ -132,9 +139,16 @@ impl RayOfLightApp {
                     ));
                     ui.ctx().request_repaint_after(Duration::from_millis(250));
                 }
+                if let Some(loading) = self.loading_status() {
+                    ui.separator();
+                    ui.label(loading);
+                    ui.ctx().request_repaint_after(Duration::from_millis(250));
+                }
                 if let Some((notice, _)) = &self.notice {
                     ui.separator();
-                    ui.label(notice.as_str());
+                    // Cut to the bar's width with "…"; all of it on hover.
+                    ui.add(egui::Label::new(notice.as_str()).truncate())
+                        .on_hover_text(notice.as_str());
                 }
             });
         });

@@ -195,6 +195,15 @@ impl Document {
         }
     }
 
+    /// Nothing yet: an empty scene, no file, nothing to edit or save (while
+    /// the first file loads in the background).
+    pub fn empty() -> Document {
+        let mut doc = Document::placeholder(Path::new("loading.xml"));
+        doc.path = None;
+        doc.state = FileState::Builtin;
+        doc
+    }
+
     /// An empty scene standing in for a file that has not loaded yet.
     fn placeholder(path: &Path) -> Document {
         let text = "<scene><camera width=\"320\" height=\"240\" eyeDistance=\"1\"/></scene>";
