@@ -938,3 +938,25 @@ fn item_10_the_status_says_reading_while_a_large_changed_file_is_read() {
         other => panic!("then what it read: {other:?}"),
     }
 }
+
+#[test]
+fn item_10_a_load_says_how_far_it_has_got() {
+    let (_dir, path) = file_with(&many_spheres(60_000));
+    let progress = std::sync::Arc::new(scene::LoadProgress::default());
+    let seen = std::thread::scope(|s| {
+        let loader = s.spawn(|| scene::load_counting(&path, &[], Some(&progress)));
+        let mut seen = Vec::new();
+        while !loader.is_finished() {
+            seen.push(progress.fraction());
+            std::thread::sleep(Duration::from_millis(2));
+        }
+        assert_eq!(loader.join().unwrap().unwrap().1.objects.len(), 60_000);
+        seen
+    });
+    assert!(seen.windows(2).all(|w| w[0] <= w[1]), "it only goes up");
+    assert!(
+        seen.iter().any(|f| *f > 0.0 && *f < 1.0),
+        "something between: {seen:?}"
+    );
+    assert_eq!(progress.fraction(), 1.0);
+}

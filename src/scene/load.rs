@@ -71,6 +71,42 @@ pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
 /// [`load_with_text`], sharing objects with `like` as [`parse_sharing`]
 /// does (the app reading its file again after a change).
 pub fn load_sharing(path: &Path, like: &[Arc<Object>]) -> Result<(String, Scene), LoadError> {
+    load_counting(path, like, None)
+}
+
+/// How far a load has got, for a progress bar: bytes of the file read and
+/// then parsed, out of twice its size (set by [`load_counting`], read from
+/// any thread).
+#[derive(Debug, Default)]
+pub struct LoadProgress {
+    done: std::sync::atomic::AtomicU64,
+    total: std::sync::atomic::AtomicU64,
+}
+
+impl LoadProgress {
+    /// The fraction done, 0 to 1 (0 before the size is known).
+    pub fn fraction(&self) -> f64 {
+        use std::sync::atomic::Ordering::Relaxed;
+        let total = self.total.load(Relaxed);
+        if total == 0 {
+            return 0.0;
+        }
+        (self.done.load(Relaxed) as f64 / total as f64).min(1.0)
+    }
+
+    fn set(&self, done: u64, total: u64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.total.store(total, Relaxed);
+        self.done.store(done, Relaxed);
+    }
+}
+
+/// [`load_sharing`], saying how far it has got in `progress`.
+pub fn load_counting(
+    path: &Path,
+    like: &[Arc<Object>],
+    progress: Option<&LoadProgress>,
+) -> Result<(String, Scene), LoadError> {
     let fail = |kind| LoadError::new(path, None, kind);
     let io = |e: std::io::Error| {
         fail(LoadErrorKind::Io {
@@ -100,9 +136,25 @@ pub fn load_sharing(path: &Path, like: &[Arc<Object>]) -> Result<(String, Scene)
     let mut bytes = Vec::with_capacity(usize::try_from(meta.len()).unwrap_or(0));
     // Special files report a length of 0 and may never end: read one byte
     // past the limit at most.
-    file.take(MAX_FILE_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(io)?;
+    let mut limited = file.take(MAX_FILE_BYTES + 1);
+    match progress {
+        None => {
+            limited.read_to_end(&mut bytes).map_err(io)?;
+        }
+        // In pieces, counted.
+        Some(progress) => {
+            let total = 2 * meta.len();
+            let mut piece = vec![0; 1 << 20];
+            loop {
+                let n = limited.read(&mut piece).map_err(io)?;
+                if n == 0 {
+                    break;
+                }
+                bytes.extend_from_slice(&piece[..n]);
+                progress.set(bytes.len() as u64, total);
+            }
+        }
+    }
     let read = u64::try_from(bytes.len()).unwrap_or(u64::MAX);
     if read > MAX_FILE_BYTES {
         return Err(too_large(read));
@@ -112,7 +164,15 @@ pub fn load_sharing(path: &Path, like: &[Arc<Object>]) -> Result<(String, Scene)
             offset: e.utf8_error().valid_up_to(),
         })
     })?;
-    let scene = parse_sharing(&text, path, like)?;
+    let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let mut parser = Parser::new(body, path);
+    parser.like = like;
+    parser.progress = progress;
+    let scene = parser.document()?;
+    if let Some(progress) = progress {
+        let total = 2 * text.len() as u64;
+        progress.set(total, total);
+    }
     Ok((text, scene))
 }
 
@@ -234,6 +294,10 @@ struct Parser<'a> {
     max_lights: usize,
     /// Objects to share where equal ([`parse_sharing`]).
     like: &'a [Arc<Object>],
+    /// Where to say how far the parse has got ([`load_counting`]).
+    progress: Option<&'a LoadProgress>,
+    /// Events read, to update `progress` every so many.
+    events: u32,
 }
 
 impl<'a> Parser<'a> {
@@ -253,6 +317,8 @@ impl<'a> Parser<'a> {
             max_objects: MAX_OBJECTS,
             max_lights: MAX_LIGHTS,
             like: &[],
+            progress: None,
+            events: 0,
         }
     }
 
@@ -296,6 +362,13 @@ impl<'a> Parser<'a> {
     fn next(&mut self) -> Result<Node<'a>, LoadError> {
         loop {
             let before = self.reader_offset();
+            self.events = self.events.wrapping_add(1);
+            if self.events.is_multiple_of(4096)
+                && let Some(progress) = self.progress
+            {
+                let len = self.text.len() as u64;
+                progress.set(len + before as u64, 2 * len);
+            }
             let event = match self.reader.read_event() {
                 Ok(event) => event,
                 Err(e) => {

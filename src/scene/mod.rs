@@ -21,8 +21,8 @@ pub mod splice;
 
 pub use error::{LoadError, LoadErrorKind, Position};
 pub use load::{
-    MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_sharing, load_with_text, parse,
-    parse_sharing,
+    LoadProgress, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, load, load_counting,
+    load_sharing, load_with_text, parse, parse_sharing,
 };
 
 use crate::math::Transform;

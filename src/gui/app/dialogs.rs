@@ -73,11 +73,13 @@ impl RayOfLightApp {
             return;
         }
         let id = self.loading.as_ref().map_or(1, |l| l.id + 1);
+        let progress = Arc::new(crate::scene::LoadProgress::default());
         self.loading = Some(Loading {
             id,
             path: path.to_owned(),
             bytes,
             started: Instant::now(),
+            progress: Arc::clone(&progress),
         });
         let (tx, ctx, path) = (
             self.background_tx.clone(),
@@ -87,7 +89,8 @@ impl RayOfLightApp {
         let _ = std::thread::Builder::new()
             .name("open".to_owned())
             .spawn(move || {
-                let _ = tx.send(Background::Opened(id, Box::new(Document::open(&path))));
+                let doc = Document::open_counting(&path, Some(&progress));
+                let _ = tx.send(Background::Opened(id, Box::new(doc)));
                 ctx.request_repaint();
             });
     }
@@ -121,15 +124,18 @@ impl RayOfLightApp {
         self.save_then(None);
     }
 
-    /// The status of a background open: "opening big.xml (170 MB)… 2 s —
-    /// Esc stops".
-    pub(super) fn loading_status(&self) -> Option<String> {
+    /// The status of a background open: how far it has got, and
+    /// "opening big.xml (170 MB)… 2 s — Esc stops".
+    pub(super) fn loading_status(&self) -> Option<(f32, String)> {
         let loading = self.loading.as_ref()?;
-        Some(format!(
-            "opening {} ({:.0} MB)… {:.0} s — Esc stops",
-            loading.path.display(),
-            loading.bytes as f64 / 1e6,
-            loading.started.elapsed().as_secs_f64().floor()
+        Some((
+            loading.progress.fraction() as f32,
+            format!(
+                "opening {} ({:.0} MB)… {:.0} s — Esc stops",
+                loading.path.display(),
+                loading.bytes as f64 / 1e6,
+                loading.started.elapsed().as_secs_f64().floor()
+            ),
         ))
     }
 
@@ -540,6 +546,8 @@ pub(super) struct Loading {
     pub(super) path: PathBuf,
     pub(super) bytes: u64,
     pub(super) started: Instant,
+    /// How far the load has got.
+    pub(super) progress: Arc<crate::scene::LoadProgress>,
 }
 
 /// A save under way (see [`RayOfLightApp::save_then`]).

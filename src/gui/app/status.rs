@@ -139,8 +139,13 @@ impl RayOfLightApp {
                     ));
                     ui.ctx().request_repaint_after(Duration::from_millis(250));
                 }
-                if let Some(loading) = self.loading_status() {
+                if let Some((fraction, loading)) = self.loading_status() {
                     ui.separator();
+                    ui.add(
+                        egui::ProgressBar::new(fraction)
+                            .desired_width(120.0)
+                            .show_percentage(),
+                    );
                     ui.label(loading);
                     ui.ctx().request_repaint_after(Duration::from_millis(250));
                 }

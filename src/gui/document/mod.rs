@@ -171,7 +171,16 @@ impl Document {
     /// all the same, on an empty scene with the error shown, and is picked
     /// up when it is fixed; only a directory is refused.
     pub fn open(path: &Path) -> Result<Document, LoadError> {
-        match scene::load_with_text(path) {
+        Document::open_counting(path, None)
+    }
+
+    /// [`Document::open`], saying how far the load has got in `progress`
+    /// (a large file opened beside the window).
+    pub fn open_counting(
+        path: &Path,
+        progress: Option<&scene::LoadProgress>,
+    ) -> Result<Document, LoadError> {
+        match scene::load_counting(path, &[], progress) {
             Ok((text, scene)) => Ok(Document::from_text(
                 Some(path.to_owned()),
                 text,
