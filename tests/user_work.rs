@@ -960,3 +960,90 @@ fn item_10_a_load_says_how_far_it_has_got() {
     );
     assert_eq!(progress.fraction(), 1.0);
 }
+
+#[test]
+fn item_10_the_app_says_reading_while_a_large_changed_file_is_read() {
+    let text = many_spheres(60_000);
+    let (_dir, path) = file_with(&text);
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(&path).unwrap(),
+        Persisted::in_memory(),
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    until_done(&mut harness, Duration::from_secs(60));
+    let theirs = text.replace("<model type=\"phong\"/>", "<model type=\"lambert\"/>");
+    replace_atomically(&path, &theirs);
+    let start = Instant::now();
+    while !status_says(&harness, "reading it") {
+        assert!(start.elapsed() < Duration::from_secs(10), "reading shown");
+        harness.step();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    step_until(
+        &mut harness,
+        Duration::from_secs(20),
+        "the new file",
+        |app| app.document().scene().model.illumination == scene::Illumination::Lambert,
+    );
+    harness.run_steps(2);
+    assert!(!status_says(&harness, "reading it"));
+    assert!(status_says(&harness, "watching, saved"));
+}
+
+#[test]
+fn item_10_an_idle_window_says_idle_not_a_stale_frame_rate() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let app = RayOfLightApp::new(
+        &egui::Context::default(),
+        Document::open(&path).unwrap(),
+        Persisted::in_memory(),
+    );
+    let mut harness = Harness::builder()
+        .with_size(egui::vec2(1200.0, 900.0))
+        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    until_done(&mut harness, Duration::from_secs(30));
+    for _ in 0..10 {
+        harness.step();
+    }
+    assert!(status_says(&harness, " fps"), "frames drawn: a rate");
+    // No frame for over a second, then the one the app asked for.
+    std::thread::sleep(Duration::from_millis(1200));
+    harness.step();
+    assert!(!status_says(&harness, " fps"), "no stale rate");
+    assert!(harness.query_by_label("idle").is_some());
+}
+
+#[test]
+fn item_3_discarding_the_edits_removes_their_journal() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    // Open the built-in example, and answer "Discard edits".
+    harness
+        .state_mut()
+        .run(rayoflight::gui::app::Command::OpenBuiltin);
+    harness.run_steps(2);
+    harness.get_by_label("Discard edits").click();
+    harness.run_steps(2);
+    step_until(
+        &mut harness,
+        Duration::from_secs(2),
+        "the journal removed",
+        |_| journal_entries(&folder).is_empty(),
+    );
+    assert_eq!(read(&path), EXAMPLE);
+    // Nothing comes back on the next start.
+    let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(!harness.state().document().has_unsaved_edits());
+}
