@@ -8,15 +8,17 @@
 //! rest:
 //! - [`command`]: the [`Command`] enum of menus and keys, and the one place
 //!   that carries it out;
-//! - `dialogs`: open, save (on a thread of its own), export, and the modal
-//!   questions;
+//! - `dialogs`: open (a large file on a thread of its own), save (on a
+//!   thread of its own), export, and the modal questions;
+//! - `hot_exit`: the journal of unsaved edits kept as they are made,
+//!   restored when a scene opens; the clean end on SIGTERM, SIGINT, SIGHUP;
 //! - `events`: render requests and what the worker, the watcher and the
 //!   dialogs send back;
 //! - `picture`: the picture, its zoom and pan, the pick;
 //! - `navigate`: orbit, pan and dolly the camera, move the selected object
 //!   (G) with the mouse;
 //! - `overlay`: the selection's outline and the light markers (dragged to
-//!   move lights);
+//!   move lights), hidden with View › Overlays (O);
 //! - `explain`: the explained pixel's window and its path over the
 //!   picture (E, Alt+click);
 //! - `passes`: View › Pass, a render pass shown in place of the picture;
