@@ -540,9 +540,11 @@ fn item_10_rayoflight_stats_0_is_off() {
 
 // ----- unsaved work outlives the process (item 3) -----
 
-fn app_with_journal(doc: Document, journal: &Path) -> Harness<'static, RayOfLightApp> {
+/// The app on `doc`, its journal in `journal` (none without), three
+/// frames drawn.
+fn app_on(doc: Document, journal: Option<&Path>) -> Harness<'static, RayOfLightApp> {
     let persisted = Persisted {
-        journal: Some(journal.to_owned()),
+        journal: journal.map(Path::to_owned),
         ..Persisted::in_memory()
     };
     let app = RayOfLightApp::new(&egui::Context::default(), doc, persisted);
@@ -551,6 +553,10 @@ fn app_with_journal(doc: Document, journal: &Path) -> Harness<'static, RayOfLigh
         .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
     harness.run_steps(3);
     harness
+}
+
+fn app_with_journal(doc: Document, journal: &Path) -> Harness<'static, RayOfLightApp> {
+    app_on(doc, Some(journal))
 }
 
 /// Steps the app until `done` holds; returns how long it took (at most
@@ -808,14 +814,7 @@ fn until_done(harness: &mut Harness<'_, RayOfLightApp>, limit: Duration) {
 #[test]
 fn item_8_esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
     let (_dir, path) = file_with(&many_spheres(200_000));
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::open(&path).unwrap(),
-        Persisted::in_memory(),
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
     until_done(&mut harness, Duration::from_secs(60));
     let before = harness.state().preview().image().clone();
     // An edit, and Esc while the scene is being prepared again: no pixel
@@ -846,14 +845,7 @@ fn item_8_esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
 #[test]
 fn item_10_esc_closes_the_help_and_o_hides_the_overlays() {
     let (_dir, path) = file_with(EXAMPLE);
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::open(&path).unwrap(),
-        Persisted::in_memory(),
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
     until_done(&mut harness, Duration::from_secs(30));
     harness.key_press(egui::Key::F1);
     harness.run_steps(2);
@@ -879,15 +871,7 @@ fn item_10_a_large_file_opens_beside_the_window_and_esc_stops_waiting() {
     let text = many_spheres(60_000);
     assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
     let (_dir, path) = file_with(&text);
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::empty(),
-        Persisted::in_memory(),
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
-    harness.run_steps(2);
+    let mut harness = app_on(Document::empty(), None);
     // Esc while it loads: the window stops waiting; the late result is
     // dropped.
     harness
@@ -965,14 +949,7 @@ fn item_10_a_load_says_how_far_it_has_got() {
 fn item_10_the_app_says_reading_while_a_large_changed_file_is_read() {
     let text = many_spheres(60_000);
     let (_dir, path) = file_with(&text);
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::open(&path).unwrap(),
-        Persisted::in_memory(),
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
     until_done(&mut harness, Duration::from_secs(60));
     let theirs = text.replace("<model type=\"phong\"/>", "<model type=\"lambert\"/>");
     replace_atomically(&path, &theirs);
@@ -996,14 +973,7 @@ fn item_10_the_app_says_reading_while_a_large_changed_file_is_read() {
 #[test]
 fn item_10_an_idle_window_says_idle_not_a_stale_frame_rate() {
     let (_dir, path) = file_with(EXAMPLE);
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::open(&path).unwrap(),
-        Persisted::in_memory(),
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
     until_done(&mut harness, Duration::from_secs(30));
     for _ in 0..10 {
         harness.step();
