@@ -33,6 +33,13 @@ pub fn special_kind(meta: &Metadata) -> Option<&'static str> {
     Some("not a regular file")
 }
 
+/// `path` made absolute against the current folder (without resolving
+/// links or `..`), or as given when the current folder is unknown: the
+/// one name the app keeps a file under (watcher, recent files, journal).
+pub fn absolute(path: &Path) -> PathBuf {
+    std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
+}
+
 /// What makes two paths one file: on Unix its device and inode (a
 /// symbolic link or a hard link is the file itself), elsewhere its
 /// canonical path; a path that cannot be read stands for itself.

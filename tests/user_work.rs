@@ -295,13 +295,7 @@ fn settle(doc: &mut Document) {
         let choices: Vec<Choice> = pending
             .conflicts()
             .iter()
-            .map(|c| {
-                if c.can_keep_yours {
-                    Choice::Mine
-                } else {
-                    Choice::Theirs
-                }
-            })
+            .map(rayoflight::scene::merge::Conflict::mine_if_possible)
             .collect();
         doc.resolve(&choices).unwrap();
     }

@@ -88,7 +88,7 @@ pub enum JournalError {
 /// Where the journal of `scene` is, in `folder`: (`KEY.json`,
 /// `KEY.base.xml`).
 pub fn files(folder: &Path, scene: &Path) -> (PathBuf, PathBuf) {
-    let scene = std::path::absolute(scene).unwrap_or_else(|_| scene.to_owned());
+    let scene = crate::files::absolute(scene);
     let mut h = std::hash::DefaultHasher::new();
     std::hash::Hash::hash(scene.as_os_str(), &mut h);
     let stem: String = scene
@@ -194,7 +194,7 @@ pub fn read(folder: &Path, scene: &Path) -> Result<Option<Restored>, JournalErro
     };
     let json: Json = serde_json::from_str(&text).map_err(|e| damaged(e.to_string()))?;
     let entry = from_json(&json).map_err(damaged)?;
-    let wanted = std::path::absolute(scene).unwrap_or_else(|_| scene.to_owned());
+    let wanted = crate::files::absolute(scene);
     if entry.scene != wanted {
         // Another file's journal under this name: never applied here.
         return Ok(None);
@@ -277,16 +277,12 @@ fn steps_xml(steps: &[TransformStep]) -> Result<String, String> {
     let transform =
         Transform::from_steps(steps.to_vec()).map_err(|_| "a singular transformation")?;
     let mut s = holder();
-    let mut sphere = scene::parse(
-        "<scene><sphere/><camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>",
-        Path::new("journal"),
-    )
-    .expect("valid")
-    .objects[0]
-        .as_ref()
-        .clone();
-    sphere.transform = transform;
-    s.objects.push(std::sync::Arc::new(sphere));
+    s.objects.push(std::sync::Arc::new(scene::Object {
+        shape: scene::Shape::Sphere,
+        color: crate::math::Vec3::ONE,
+        material: scene::Material::default(),
+        transform,
+    }));
     Ok(splice::to_xml(&s))
 }
 

@@ -46,7 +46,7 @@ impl Recent {
     /// Puts `path` first and stores the list (best effort: a read-only
     /// home directory only loses the list).
     pub fn push(&mut self, path: &Path) {
-        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+        let path = crate::files::absolute(path);
         self.paths.retain(|p| p != &path);
         self.paths.insert(0, path);
         self.paths.truncate(MAX_RECENT);

@@ -190,7 +190,7 @@ impl SceneWatcher {
         document_read: Option<u64>,
         on_event: impl Fn(FileEvent) + Send + Sync + 'static,
     ) -> Result<SceneWatcher, WatchError> {
-        let path = std::path::absolute(path).unwrap_or_else(|_| path.to_owned());
+        let path = crate::files::absolute(path);
         let on_event = Arc::new(on_event);
         let error = |source| WatchError {
             path: path.clone(),

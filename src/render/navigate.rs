@@ -286,19 +286,26 @@ pub fn pixel_size(camera: &Camera, depth: f64) -> f64 {
 /// s · (q.z + e) / e camera units (by similar triangles, as in
 /// [`project`]).
 pub fn moved_on_screen(camera: &Camera, point: DVec3, dx: f64, dy: f64) -> Option<DVec3> {
-    let q = camera.transform.to_object().transform_point3(point);
-    let e = camera.eye_distance;
-    let depth = q.z + e;
-    if depth.is_nan() || depth <= 0.0 {
-        return None;
-    }
-    let s = 2.0 / f64::from(camera.width.min(camera.height));
-    let k = s * depth / e;
+    let (q, depth, s) = in_camera_space(camera, point)?;
+    let k = s * depth / camera.eye_distance;
     let moved = camera
         .transform
         .to_world()
         .transform_point3(q + DVec3::new(dx * k, dy * k, 0.0));
     moved.is_finite().then_some(moved)
+}
+
+/// `point` in camera space (q), its depth in front of the eye (q.z + e),
+/// and a pixel's size on the screen (s = 2 / min(width, height) camera
+/// units); `None` for a point at or behind the eye.
+fn in_camera_space(camera: &Camera, point: DVec3) -> Option<(DVec3, f64, f64)> {
+    let q = camera.transform.to_object().transform_point3(point);
+    let depth = q.z + camera.eye_distance;
+    if depth.is_nan() || depth <= 0.0 {
+        return None;
+    }
+    let s = 2.0 / f64::from(camera.width.min(camera.height));
+    Some((q, depth, s))
 }
 
 /// The world size of one pixel at `point` (the smaller of a step across
@@ -318,13 +325,8 @@ pub fn pixel_at(camera: &Camera, point: DVec3) -> Option<f64> {
 /// line from the eye to q meets the screen at q.xy · e / (q.z + e), which is
 /// (x − width/2) · s in pixels x.
 pub fn project(camera: &Camera, point: DVec3) -> Option<(f64, f64)> {
-    let q = camera.transform.to_object().transform_point3(point);
+    let (q, depth, s) = in_camera_space(camera, point)?;
     let e = camera.eye_distance;
-    let depth = q.z + e;
-    if depth.is_nan() || depth <= 0.0 {
-        return None;
-    }
-    let s = 2.0 / f64::from(camera.width.min(camera.height));
     let x = q.x * e / depth / s + f64::from(camera.width) / 2.0;
     let y = q.y * e / depth / s + f64::from(camera.height) / 2.0;
     (x.is_finite() && y.is_finite()).then_some((x, y))

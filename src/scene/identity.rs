@@ -58,12 +58,8 @@ pub fn alike_lights(a: &Light, b: &Light) -> bool {
     a.position == b.position || a.color == b.color
 }
 
-/// Elements compared by `same`: for Myers' diff.
-struct By<'a, T, F> {
-    items: &'a [T],
-    same: &'a F,
-}
-
+/// An element compared by `same`: for Myers' diff, which wants
+/// `PartialEq`.
 struct Item<'a, T, F> {
     item: &'a T,
     same: &'a F,
@@ -75,16 +71,8 @@ impl<T, F: Fn(&T, &T) -> bool> PartialEq for Item<'_, T, F> {
     }
 }
 
-impl<'a, T, F> By<'a, T, F> {
-    fn items(&self) -> Vec<Item<'a, T, F>> {
-        self.items
-            .iter()
-            .map(|item| Item {
-                item,
-                same: self.same,
-            })
-            .collect()
-    }
+fn items<'a, T, F>(items: &'a [T], same: &'a F) -> Vec<Item<'a, T, F>> {
+    items.iter().map(|item| Item { item, same }).collect()
 }
 
 fn matching<T>(
@@ -94,20 +82,29 @@ fn matching<T>(
     alike: impl Fn(&T, &T) -> bool,
 ) -> Matching {
     let mut matched = vec![None; old.len()];
-    let a = By {
-        items: old,
-        same: &same,
+    // The runs equal at both ends are matched at once (Myers' diff would
+    // trim them too): an edit in a million elements wraps and diffs only
+    // what lies between.
+    let prefix = old.iter().zip(new).take_while(|(a, b)| same(a, b)).count();
+    let suffix = old[prefix..]
+        .iter()
+        .rev()
+        .zip(new[prefix..].iter().rev())
+        .take_while(|(a, b)| same(a, b))
+        .count();
+    for (k, slot) in matched.iter_mut().enumerate().take(prefix) {
+        *slot = Some(k);
     }
-    .items();
-    let b = By {
-        items: new,
-        same: &same,
+    for k in 1..=suffix {
+        matched[old.len() - k] = Some(new.len() - k);
     }
-    .items();
+    let a = items(&old[prefix..old.len() - suffix], &same);
+    let b = items(&new[prefix..new.len() - suffix], &same);
     let mut hook = Replace::new(Capture::new());
     let deadline = Instant::now() + DEADLINE;
     // Capture never fails.
     let _ = myers::diff_deadline_raw(&mut hook, &a, 0..a.len(), &b, 0..b.len(), Some(deadline));
+    // The ops count from the start of the middle.
     for op in hook.into_inner().into_ops() {
         match op {
             DiffOp::Equal {
@@ -116,7 +113,7 @@ fn matching<T>(
                 len,
             } => {
                 for k in 0..len {
-                    matched[old_index + k] = Some(new_index + k);
+                    matched[prefix + old_index + k] = Some(prefix + new_index + k);
                 }
             }
             DiffOp::Replace {
@@ -124,14 +121,17 @@ fn matching<T>(
                 old_len,
                 new_index,
                 new_len,
-            } => match_changed(
-                old,
-                new,
-                old_index..old_index + old_len,
-                new_index..new_index + new_len,
-                &alike,
-                &mut matched,
-            ),
+            } => {
+                let (old_index, new_index) = (prefix + old_index, prefix + new_index);
+                match_changed(
+                    old,
+                    new,
+                    old_index..old_index + old_len,
+                    new_index..new_index + new_len,
+                    &alike,
+                    &mut matched,
+                )
+            }
             DiffOp::Delete { .. } | DiffOp::Insert { .. } => {}
         }
     }

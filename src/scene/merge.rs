@@ -56,6 +56,18 @@ pub struct Conflict {
     pub can_keep_yours: bool,
 }
 
+impl Conflict {
+    /// "Keep all of mine" for this conflict: the edit where it can still
+    /// be applied, the file's version where its element is gone.
+    pub fn mine_if_possible(&self) -> Choice {
+        if self.can_keep_yours {
+            Choice::Mine
+        } else {
+            Choice::Theirs
+        }
+    }
+}
+
 /// The merged scene (with origins into `theirs`' text), the edits that were
 /// applied (the unsaved edits from now on), and the conflicts left open.
 #[derive(Debug, Clone)]

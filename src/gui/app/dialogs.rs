@@ -474,13 +474,7 @@ impl RayOfLightApp {
                     done = Some(
                         conflicts
                             .iter()
-                            .map(|c| {
-                                if c.can_keep_yours {
-                                    Choice::Mine
-                                } else {
-                                    Choice::Theirs
-                                }
-                            })
+                            .map(crate::scene::merge::Conflict::mine_if_possible)
                             .collect(),
                     );
                 }

@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use super::RayOfLightApp;
+use crate::files::absolute;
 use crate::gui::journal::{self, Entry, Job, JournalError, Writer};
 
 /// The journal as the app keeps it.
@@ -211,8 +212,4 @@ impl RayOfLightApp {
             None => message.to_owned(),
         });
     }
-}
-
-fn absolute(path: &Path) -> PathBuf {
-    std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
 }

@@ -320,10 +320,7 @@ impl RayOfLightApp {
         settings.window = window.or(settings.window);
         settings.aa = self.aa;
         settings.study_runs = self.study.runs;
-        settings.last_file = self
-            .doc
-            .path()
-            .map(|p| std::path::absolute(p).unwrap_or_else(|_| p.to_owned()));
+        settings.last_file = self.doc.path().map(crate::files::absolute);
         settings
     }
 
