@@ -19,7 +19,10 @@
 //! - [`split`], [`assemble`]: past one machine: regions of even cost for
 //!   many tasks, and their parts put back together, checked; [`sheet`]:
 //!   the renders of a sweep side by side.
-//! - [`files`]: special files and symbolic links, for reading and writing.
+//! - [`files`]: special files, symbolic links, permissions and locks, for
+//!   reading and writing.
+//! - [`interrupt`]: SIGINT, SIGTERM and SIGHUP stop a write or a render
+//!   cleanly, nothing left behind.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
 //! - [`measure`]: render time, medians, image differences, CSV: measured
@@ -40,6 +43,7 @@ pub mod files;
 pub mod geometry;
 #[cfg(feature = "gui")]
 pub mod gui;
+pub mod interrupt;
 pub mod math;
 pub mod measure;
 pub mod output;

@@ -1,7 +1,13 @@
 //! Writing images: the format follows the file's extension, and files are
 //! written atomically (a temporary file in the target directory, renamed
 //! into place), so a failure never leaves a partial file nor touches an
-//! existing one.
+//! existing one. [`write_atomic_with`] is every file's one way out: links
+//! followed only as the kernel would for another user's link
+//! ([`crate::files::follow_for_writing`]), a file the caller may not
+//! write refused ([`crate::files::may_write`]), a replaced file's owner,
+//! group, mode and extended attributes kept, a file of several hard links
+//! updated in place, and a signal ([`crate::interrupt`]) stopping it with
+//! the temporary file removed.
 
 use crate::part::Part;
 use crate::render::{Pass, PassImage};
@@ -54,7 +60,7 @@ pub enum OutputError {
     EmptyName,
     #[error("{}: is {kind}, not an image file", path.display())]
     Special { path: PathBuf, kind: &'static str },
-    #[error("{}: is a directory, not an image file", path.display())]
+    #[error("{}: is a directory", path.display())]
     IsDirectory { path: PathBuf },
     #[error("{}: the folder {} does not exist", path.display(), folder.display())]
     NoFolder { path: PathBuf, folder: PathBuf },
@@ -68,6 +74,15 @@ pub enum OutputError {
     },
     #[error("{}: the file is read-only", path.display())]
     ReadOnly { path: PathBuf },
+    #[error("{}: permission denied: you may not write this file", path.display())]
+    NotWritable { path: PathBuf },
+    #[error("{}: {source}", path.display())]
+    Link {
+        path: PathBuf,
+        source: crate::files::LinkError,
+    },
+    #[error("{}: interrupted: nothing was written", path.display())]
+    Interrupted { path: PathBuf },
     #[error(
         "{}: {format} cannot hold a {width}×{height} image ({})",
         path.display(),
@@ -145,27 +160,23 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
             limit,
         });
     }
-    let target = crate::files::through_links(path);
-    match std::fs::metadata(&target) {
-        Ok(meta) if meta.is_dir() => {
-            return Err(OutputError::IsDirectory {
-                path: path.to_owned(),
-            });
-        }
-        Ok(meta) => {
-            if let Some(kind) = crate::files::special_kind(&meta) {
-                return Err(OutputError::Special {
-                    path: path.to_owned(),
-                    kind,
-                });
-            }
-            if meta.permissions().readonly() {
-                return Err(OutputError::ReadOnly {
-                    path: path.to_owned(),
-                });
-            }
-        }
-        Err(_) => {}
+    let target = crate::files::follow_for_writing(path).map_err(|source| OutputError::Link {
+        path: path.to_owned(),
+        source,
+    })?;
+    if let Some(meta) = existing(path, &target)?
+        && let Some(kind) = crate::files::special_kind(&meta)
+    {
+        // Through /dev/stdout or /proc/self/fd/N: the shell's pipe.
+        let kind = if kind == "a FIFO" && target.starts_with("/proc") {
+            "a pipe"
+        } else {
+            kind
+        };
+        return Err(OutputError::Special {
+            path: path.to_owned(),
+            kind,
+        });
     }
     let folder = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
@@ -186,6 +197,7 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
         }
         Ok(_) => {}
     }
+    let _cleanly = crate::interrupt::cleanly();
     tempfile::Builder::new()
         .prefix(".rayoflight-")
         .suffix(".tmp")
@@ -398,10 +410,42 @@ fn encode_gif(image: &RgbImage) -> Result<Vec<u8>, image::ImageError> {
     Ok(bytes)
 }
 
+/// What is in the way of writing `target` (where `path` leads): nothing
+/// (`None`), or an existing file the caller may replace or a special file
+/// to write into (its metadata). A directory, a read-only file and a file
+/// the caller may not write are refused, naming `path`.
+fn existing(path: &Path, target: &Path) -> Result<Option<std::fs::Metadata>, OutputError> {
+    let Ok(meta) = std::fs::metadata(target) else {
+        return Ok(None);
+    };
+    if meta.is_dir() {
+        return Err(OutputError::IsDirectory {
+            path: path.to_owned(),
+        });
+    }
+    if meta.is_file() {
+        // Renaming over a file ignores the file's own permissions: refuse
+        // what writing into it would refuse (for root too, a file without
+        // any write bit).
+        if meta.permissions().readonly() {
+            return Err(OutputError::ReadOnly {
+                path: path.to_owned(),
+            });
+        }
+        if !crate::files::may_write(target) {
+            return Err(OutputError::NotWritable {
+                path: path.to_owned(),
+            });
+        }
+    }
+    Ok(Some(meta))
+}
+
 /// Writes `bytes` to `path` through a temporary file in the same directory,
 /// synced, then renamed over `path`. On any failure the temporary file is
 /// removed and an existing `path` is left as it was. A symbolic link is
-/// followed: the file it points to is replaced, the link is kept.
+/// followed (as [`crate::files::follow_for_writing`] allows): the file it
+/// points to is replaced, the link is kept.
 ///
 /// An existing path that is not a regular file (`/dev/stdout`, a FIFO,
 /// `/dev/full`) is written directly: renaming over it would replace the
@@ -415,23 +459,49 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
 /// temporary path to read it back, and may refuse it: the temporary file
 /// is removed and the old file left as it was. A path that is not a
 /// regular file is written directly and not checked.
+///
+/// A replaced file keeps its owner and group (as far as the caller may
+/// give them), its mode and its extended attributes. A file with several
+/// hard links is not replaced but rewritten in place once the new bytes
+/// are complete and checked, so that every name keeps showing the same
+/// file; a copy of the old bytes (`.NAME.XXXXXX.rayoflight-backup`) waits
+/// beside it until then, and stays, named in the error, if the rewrite
+/// fails and the old bytes cannot be put back. A signal
+/// ([`crate::interrupt`]) stops the write with
+/// [`OutputError::Interrupted`], nothing changed.
 pub fn write_atomic_with<E: From<OutputError>>(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
     check: impl FnOnce(&Path) -> Result<(), E>,
 ) -> Result<(), E> {
-    let io_error = |source| OutputError::Io {
+    let io_error = |source: std::io::Error| {
+        // The stop may come back wrapped by an encoder: a failure after a
+        // signal is the signal's.
+        if crate::interrupt::is_stop(&source) || crate::interrupt::requested() {
+            OutputError::Interrupted {
+                path: path.to_owned(),
+            }
+        } else {
+            OutputError::Io {
+                path: path.to_owned(),
+                source,
+            }
+        }
+    };
+    let interrupted = || {
+        E::from(OutputError::Interrupted {
+            path: path.to_owned(),
+        })
+    };
+    // From here a signal is recorded, not fatal: the temporary file must go.
+    let _cleanly = crate::interrupt::cleanly();
+    let target = crate::files::follow_for_writing(path).map_err(|source| OutputError::Link {
         path: path.to_owned(),
         source,
-    };
-    // A symbolic link is written through: its target gets the new bytes
-    // and the link stays a link.
-    let target = crate::files::through_links(path);
+    })?;
+    let old = existing(path, &target)?;
     let path = target.as_path();
-    if let Ok(meta) = std::fs::metadata(path)
-        && !meta.is_file()
-        && !meta.is_dir()
-    {
+    if let Some(meta) = old.as_ref().filter(|m| !m.is_file()) {
         // A FIFO nobody reads would block the open forever: probe it
         // without blocking first. The probe stays open until the bytes are
         // written, so that the reader does not see the end of the data
@@ -452,33 +522,21 @@ pub fn write_atomic_with<E: From<OutputError>>(
                     })?,
             )
         } else {
+            let _ = meta;
             None
         };
-        let mut file = std::fs::OpenOptions::new()
+        let file = std::fs::OpenOptions::new()
             .write(true)
             .open(path)
             .map_err(io_error)?;
-        write(&mut file).map_err(io_error)?;
-        return Ok(file.flush().map_err(io_error)?);
+        let mut w = crate::interrupt::Checked(file);
+        write(&mut w).map_err(io_error)?;
+        return Ok(w.flush().map_err(io_error)?);
     }
     let dir = match path.parent() {
         Some(p) if !p.as_os_str().is_empty() => p,
         _ => Path::new("."),
     };
-    if path.is_dir() {
-        return Err(E::from(io_error(std::io::Error::new(
-            std::io::ErrorKind::IsADirectory,
-            "is a directory",
-        ))));
-    }
-    // Renaming over a file ignores the file's own permissions: refuse a
-    // read-only file here, as writing into it would fail.
-    if std::fs::metadata(path).is_ok_and(|m| m.permissions().readonly()) {
-        return Err(E::from(io_error(std::io::Error::new(
-            std::io::ErrorKind::PermissionDenied,
-            "the file is read-only",
-        ))));
-    }
     let mut builder = tempfile::Builder::new();
     builder.prefix(".rayoflight-").suffix(".tmp");
     // A new file gets the usual mode (0666 less the umask, as the kernel
@@ -493,20 +551,86 @@ pub fn write_atomic_with<E: From<OutputError>>(
                 .map_or(e, std::io::Error::from_raw_os_error),
         )
     })?;
-    // A replaced file keeps its own permissions.
-    if let Ok(meta) = std::fs::metadata(path) {
-        file.as_file()
-            .set_permissions(meta.permissions())
-            .map_err(io_error)?;
+    if let Some(meta) = &old {
+        crate::files::keep_attributes(path, meta, file.as_file()).map_err(io_error)?;
     }
     {
-        let mut w = BufWriter::new(file.as_file_mut());
+        let mut w = BufWriter::new(crate::interrupt::Checked(file.as_file_mut()));
         write(&mut w).map_err(io_error)?;
         w.flush().map_err(io_error)?;
     }
     file.as_file().sync_all().map_err(io_error)?;
     check(file.path())?;
+    if crate::interrupt::requested() {
+        return Err(interrupted());
+    }
+    if old.as_ref().is_some_and(several_names) {
+        rewrite_in_place(path, dir, file.as_file_mut()).map_err(io_error)?;
+        return Ok(());
+    }
     file.persist(path).map_err(|e| io_error(e.error))?;
+    Ok(())
+}
+
+/// Whether the file has other hard links than the one being written.
+fn several_names(meta: &std::fs::Metadata) -> bool {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::MetadataExt::nlink(meta) > 1
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = meta;
+        false
+    }
+}
+
+/// Puts `new`'s bytes into the file `path` itself (its inode, which other
+/// hard links share), as vim's `backupcopy=yes` does: a copy of the old
+/// bytes is made beside it first, the new bytes written over the old and
+/// synced, then the copy removed. If that write fails (a full disk) the
+/// old bytes are put back; if even that fails, the copy stays and the
+/// error names it.
+fn rewrite_in_place(path: &Path, dir: &Path, new: &mut std::fs::File) -> std::io::Result<()> {
+    use std::io::{Seek, SeekFrom};
+    let name = path
+        .file_name()
+        .map_or_else(|| "file".to_owned(), |n| n.to_string_lossy().into_owned());
+    let mut backup = tempfile::Builder::new()
+        .prefix(&format!(".{name}."))
+        .suffix(".rayoflight-backup")
+        .tempfile_in(dir)?;
+    let mut file = std::fs::OpenOptions::new()
+        .read(true)
+        .write(true)
+        .open(path)?;
+    let old_len = std::io::copy(&mut file, backup.as_file_mut())?;
+    backup.as_file().sync_all()?;
+    if crate::interrupt::requested() {
+        return Err(crate::interrupt::error());
+    }
+    // From here the rewrite is finished, signal or not: it is short, and
+    // a half-written file is what must never be left.
+    let copy = |from: &mut std::fs::File, to: &mut std::fs::File| -> std::io::Result<()> {
+        from.seek(SeekFrom::Start(0))?;
+        to.seek(SeekFrom::Start(0))?;
+        let len = std::io::copy(from, to)?;
+        to.set_len(len)?;
+        to.sync_all()
+    };
+    if let Err(e) = copy(new, &mut file) {
+        if copy(backup.as_file_mut(), &mut file).is_err() || file.metadata()?.len() != old_len {
+            let kept = backup.keep().map(|(_, p)| p).unwrap_or_default();
+            return Err(std::io::Error::new(
+                e.kind(),
+                format!(
+                    "{e}; the file is damaged, its old bytes are in {}",
+                    kept.display()
+                ),
+            ));
+        }
+        return Err(e);
+    }
     Ok(())
 }
 

@@ -27,6 +27,7 @@
 //! POV-Ray's parser reads back to the same `f64` (`1e-7`, `1e20` included).
 
 use std::fmt::Write as _;
+use std::path::Path;
 
 use glam::{DAffine3, DVec3};
 
@@ -43,33 +44,75 @@ pub fn export(scene: &Scene) -> String {
     export_named(scene, None)
 }
 
-/// Like [`export`], naming the source scene (a file name) in the header
-/// comment and in the suggested render command.
-pub fn export_named(scene: &Scene, source: Option<&str>) -> String {
+/// The files a translation names in its header comment: the scene it
+/// came from, and the file it is written to (whose render command it
+/// gives: `+I` that file, `+O` its name with `-pov.png`, beside it, so that
+/// POV-Ray's image never overwrites RayOfLight's own `NAME.png`).
+#[derive(Debug, Clone, Copy)]
+pub struct Header<'a> {
+    pub scene: &'a Path,
+    pub written_to: &'a Path,
+}
+
+/// Like [`export`], with the [`Header`]'s names in the header comment and
+/// its render command. The names come from outside: each is written so
+/// that it stays inside its comment line (no control character: a newline
+/// would start POV-Ray code) and is one word for a shell.
+pub fn export_named(scene: &Scene, header: Option<Header>) -> String {
     let mut out = String::new();
-    write_scene(&mut out, scene, source).expect("writing to a String cannot fail");
+    write_scene(&mut out, scene, header).expect("writing to a String cannot fail");
     out
 }
 
-fn write_scene(out: &mut String, scene: &Scene, source: Option<&str>) -> std::fmt::Result {
+/// `name` as a comment holds it: every control character (a line break
+/// would end the comment) and Unicode line separator shown as `?`.
+fn in_comment(name: &str) -> String {
+    name.chars()
+        .map(
+            |c| match c.is_control() || matches!(c, '\u{2028}' | '\u{2029}') {
+                true => '?',
+                false => c,
+            },
+        )
+        .collect()
+}
+
+/// `word` as one word for a shell: single-quoted unless it only holds
+/// characters no shell treats apart.
+fn shell_word(word: &str) -> String {
+    if !word.is_empty() && word.chars().all(plain) {
+        return word.to_owned();
+    }
+    format!("'{}'", word.replace('\'', "'\\''"))
+}
+
+/// A character that needs no quoting anywhere (shell or POV-Ray).
+fn plain(c: char) -> bool {
+    c.is_ascii_alphanumeric() || "+-_./=,:@%".contains(c)
+}
+
+/// POV-Ray's option naming the file `name` (`+I`/`+O`, or the INI-style
+/// `Input_File_Name="…"` that takes spaces), as one shell word; `None`
+/// when no option can hold it (a double quote, a control character).
+fn pov_option(short: &str, long: &str, name: &str) -> Option<String> {
+    if name.chars().all(plain) {
+        return Some(format!("{short}{name}"));
+    }
+    if name.chars().any(|c| c == '"' || c.is_control()) {
+        return None;
+    }
+    Some(shell_word(&format!("{long}=\"{name}\"")))
+}
+
+fn write_scene(out: &mut String, scene: &Scene, header: Option<Header>) -> std::fmt::Result {
     let model = scene.model;
     let cam = &scene.camera;
-    let stem = source
-        .map(|s| {
-            let name = std::path::Path::new(s)
-                .file_stem()
-                .and_then(|n| n.to_str())
-                .unwrap_or("scene");
-            name.to_string()
-        })
-        .unwrap_or_else(|| "scene".to_string());
-
     writeln!(
         out,
         "// POV-Ray 3.7 translation of a RayOfLight scene (contract section 8)."
     )?;
-    if let Some(source) = source {
-        writeln!(out, "// Source: {}", source.replace(['\n', '\r'], " "))?;
+    if let Some(h) = header {
+        writeln!(out, "// Source: {}", in_comment(&h.scene.to_string_lossy()))?;
     }
     writeln!(
         out,
@@ -80,12 +123,38 @@ fn write_scene(out: &mut String, scene: &Scene, source: Option<&str>) -> std::fm
         scene.objects.len(),
         scene.lights.len()
     )?;
-    writeln!(
-        out,
-        "// Render: povray {POV_FLAGS} +W{w} +H{h} +I{stem}.pov +O{stem}.png",
-        w = cam.width,
-        h = cam.height
-    )?;
+    let (input, image) = match header {
+        Some(h) => {
+            let image = h.written_to.with_file_name(format!(
+                "{}-pov.png",
+                h.written_to
+                    .file_stem()
+                    .map_or("scene".into(), |s| s.to_string_lossy())
+            ));
+            (
+                h.written_to.to_string_lossy().into_owned(),
+                image.to_string_lossy().into_owned(),
+            )
+        }
+        None => ("scene.pov".to_owned(), "scene-pov.png".to_owned()),
+    };
+    let (w, h) = (cam.width, cam.height);
+    match (
+        pov_option("+I", "Input_File_Name", &input),
+        pov_option("+O", "Output_File_Name", &image),
+    ) {
+        (Some(input), Some(image)) => writeln!(
+            out,
+            "// Render: povray {POV_FLAGS} +W{w} +H{h} {input} {image}"
+        )?,
+        _ => writeln!(
+            out,
+            "// Render: povray {POV_FLAGS} +W{w} +H{h} +I<this file> +O<an image>: \
+             this file's name holds a double quote or a control character, \
+             which POV-Ray's command line cannot take ({})",
+            in_comment(&input)
+        )?,
+    }
     if model.reflection_depth() + 1 > POV_MAX_TRACE_LEVEL {
         writeln!(
             out,
@@ -358,9 +427,16 @@ mod tests {
 
     #[test]
     fn whitted_scene_has_every_term() {
-        let pov = export_named(&scene(Illumination::Whitted), Some("scenes/a.xml"));
+        let header = Header {
+            scene: Path::new("scenes/a.xml"),
+            written_to: Path::new("out/b.pov"),
+        };
+        let pov = export_named(&scene(Illumination::Whitted), Some(header));
         assert!(pov.contains("// Source: scenes/a.xml"), "{pov}");
-        assert!(pov.contains("+W320 +H160 +Ia.pov +Oa.png"), "{pov}");
+        assert!(
+            pov.contains("+W320 +H160 +Iout/b.pov +Oout/b-pov.png\n"),
+            "{pov}"
+        );
         assert!(pov.contains("\n#version 3.7;\n"), "{pov}");
         assert!(pov.contains("max_trace_level 4"), "{pov}");
         assert!(pov.contains("adc_bailout 0"));
@@ -384,6 +460,39 @@ mod tests {
         assert!(pov.contains("plane { z, 0"));
         assert_eq!(pov.matches("no_shadow").count(), 2);
         assert_eq!(pov.matches("pigment { rgb 1 }").count(), 2);
+    }
+
+    #[test]
+    fn names_stay_in_their_comment_and_are_one_shell_word() {
+        let header = Header {
+            scene: Path::new("a\n#fopen F \"pwned.txt\" write\r.xml"),
+            written_to: Path::new("it's \u{1b}[2J\n#debug.pov"),
+        };
+        let pov = export_named(&scene(Illumination::Phong), Some(header));
+        let head: Vec<&str> = pov.lines().take_while(|l| !l.is_empty()).collect();
+        assert!(head.iter().all(|l| l.starts_with("// ")), "{pov}");
+        assert!(!pov.contains('\u{1b}') && !pov.contains('\r'), "{pov}");
+        assert!(
+            pov.contains("// Source: a?#fopen F \"pwned.txt\" write?.xml\n"),
+            "{pov}"
+        );
+        assert!(
+            pov.contains("+I<this file> +O<an image>: this file's name holds"),
+            "{pov}"
+        );
+        assert!(pov.contains("(it's ?[2J?#debug.pov)\n"), "{pov}");
+        let spaced = Header {
+            scene: Path::new("a.xml"),
+            written_to: Path::new("it's here.pov"),
+        };
+        let pov = export_named(&scene(Illumination::Phong), Some(spaced));
+        assert!(
+            pov.contains(
+                "+H160 'Input_File_Name=\"it'\\''s here.pov\"' \
+                 'Output_File_Name=\"it'\\''s here-pov.png\"'\n"
+            ),
+            "{pov}"
+        );
     }
 
     #[test]

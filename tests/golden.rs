@@ -278,7 +278,12 @@ fn committed_reference_is_reproducible_with_pov_ray() {
     let home = dir.path().join("home");
     std::fs::create_dir_all(home.join(".povray/3.7")).unwrap();
     std::fs::write(home.join(".povray/3.7/povray.conf"), "").unwrap();
-    let pov = rayoflight::pov::export_named(&scene, Some(&format!("{name}.xml")));
+    let (xml, written) = (format!("{name}.xml"), format!("{name}.pov"));
+    let header = rayoflight::pov::Header {
+        scene: Path::new(&xml),
+        written_to: Path::new(&written),
+    };
+    let pov = rayoflight::pov::export_named(&scene, Some(header));
     std::fs::write(dir.path().join(format!("{name}.pov")), pov).unwrap();
     let output = Command::new("povray")
         .current_dir(dir.path())

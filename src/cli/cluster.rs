@@ -38,16 +38,8 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
     }
     // A signal stops the assembly between two rows, its temporary file
     // removed (the default action would leave it behind).
-    let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
-    #[cfg(unix)]
-    for signal in [
-        signal_hook::consts::SIGINT,
-        signal_hook::consts::SIGTERM,
-        signal_hook::consts::SIGHUP,
-    ] {
-        signal_hook::flag::register(signal, std::sync::Arc::clone(&stop)).map_err(fail)?;
-    }
-    assemble::assemble_until(parts, out, &stop).map_err(fail)?;
+    let _cleanly = rayoflight::interrupt::cleanly();
+    assemble::assemble_until(parts, out, rayoflight::interrupt::flag()).map_err(fail)?;
     Ok(())
 }
 

@@ -63,12 +63,16 @@ impl EditArg {
 
 /// Applies `edits` to `edited` in order. The first one the scene refuses
 /// (a path naming nothing in it, a value out of range) stops there.
-pub fn apply(edited: &mut Edited, edits: &[EditArg]) -> Result<(), EditError> {
+/// Returns the engine's edits, as applied (to replay them elsewhere with
+/// [`rayoflight::scene::merge`]).
+pub fn apply(edited: &mut Edited, edits: &[EditArg]) -> Result<Vec<Edit>, EditError> {
+    let mut applied = Vec::with_capacity(edits.len());
     for arg in edits {
         let edit = arg.edit(edited.scene());
         edited.apply(&edit)?;
+        applied.push(edit);
     }
-    Ok(())
+    Ok(applied)
 }
 
 #[cfg(test)]

@@ -10,12 +10,13 @@ mod edit;
 mod explain;
 mod progress;
 mod study;
+mod terminal;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
 use rayoflight::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
-use rayoflight::scene::splice;
-use rayoflight::{files, measure, output, pov, render, scene};
+use rayoflight::scene::{merge, splice};
+use rayoflight::{files, interrupt, measure, output, pov, render, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -47,7 +48,18 @@ fn usage(message: String) -> Failure {
 }
 
 pub fn main() -> ExitCode {
-    match run(std::env::args_os().skip(1)) {
+    let code = report(run(std::env::args_os().skip(1)));
+    // A signal that stopped the work: the status a shell gives a process
+    // the signal ended (130 for Ctrl+C, 143 for SIGTERM).
+    match interrupt::caught() {
+        Some(signal) => ExitCode::from(128u8.saturating_add(signal as u8)),
+        None => code,
+    }
+}
+
+/// Prints what failed, and gives the exit status.
+fn report(result: Result<(), Failure>) -> ExitCode {
+    match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(Failure::Usage(UsageError::NoScene)) => {
             eprintln!("{USAGE}");
@@ -58,22 +70,28 @@ pub fn main() -> ExitCode {
                 Some(name) => format!("rayoflight {name} --help"),
                 None => "rayoflight --help".to_owned(),
             };
-            eprintln!("rayoflight: {message}; see '{help}'");
+            error_line(&format!("rayoflight: {message}; see '{help}'"));
             ExitCode::from(2)
         }
         Err(Failure::Usage(UsageError::Edit { scene, error })) => {
-            eprintln!("rayoflight: {}: {error}", scene.display());
+            error_line(&format!("rayoflight: {}: {error}", scene.display()));
             ExitCode::from(2)
         }
         Err(Failure::Error(msg)) => {
-            eprintln!("{msg}");
+            error_line(&msg);
             ExitCode::from(1)
         }
     }
 }
 
 fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure> {
-    match args::parse(args)? {
+    let command = args::parse(args)?;
+    // SIGINT, SIGTERM and SIGHUP stop a render or a write cleanly (the
+    // app, which saves unsaved edits on them, has its own handlers).
+    if !matches!(&command, Command::Render(r) if opens_app(r)) {
+        interrupt::install().map_err(fail)?;
+    }
+    match command {
         Command::Print(text) => print_line(text.trim_end()),
         Command::ExportPov { scene, out } => export_pov(&scene, out),
         Command::Edit(args) => edit_scene(&args),
@@ -110,7 +128,7 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
 /// cut list for a whole one.
 fn print_line(text: &str) -> Result<(), Failure> {
     let mut out = std::io::stdout().lock();
-    match writeln!(out, "{text}").and_then(|()| out.flush()) {
+    match writeln!(out, "{}", terminal::shown(text, true)).and_then(|()| out.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Failure::Error(format!(
             "rayoflight: cannot write to stdout: {e}"
         ))),
@@ -118,9 +136,31 @@ fn print_line(text: &str) -> Result<(), Failure> {
     }
 }
 
-fn render_scene(r: RenderArgs) -> Result<(), Failure> {
+/// Whether `r` opens the desktop app rather than rendering here.
+fn opens_app(r: &RenderArgs) -> bool {
     #[cfg(feature = "gui")]
-    if !r.headless() {
+    return !r.headless();
+    #[cfg(not(feature = "gui"))]
+    {
+        let _ = r;
+        false
+    }
+}
+
+/// What the edge says when a signal stopped a render before any file
+/// was written.
+fn interrupted() -> Failure {
+    Failure::Error("rayoflight: interrupted: nothing was written".to_owned())
+}
+
+/// An error on stderr: one line, whatever the file names in it hold.
+fn error_line(message: &str) {
+    eprintln!("{}", terminal::shown(message, false));
+}
+
+fn render_scene(r: RenderArgs) -> Result<(), Failure> {
+    if opens_app(&r) {
+        #[cfg(feature = "gui")]
         return open_app(r.scene.as_deref());
     }
     // No scene: the headless CLI prints its usage.
@@ -155,8 +195,10 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     // Render time as the bench and the study measure it (rayoflight::measure).
     let pool = measure::RenderPool::new(request.threads).map_err(fail)?;
     let counted = render::Progress::default();
-    let never = render::Cancel::never();
-    let cancelled = || Failure::Error("the render was cancelled".to_owned());
+    // A signal stops the render at its next tile, or the write.
+    let _cleanly = interrupt::cleanly();
+    let never = render::Cancel::on_signal();
+    let cancelled = interrupted;
     let elapsed = if output::takes_pass(r.pass, &out) {
         let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
             measure::pass_timed(scene, request, r.pass, &pool, &never, &counted)
@@ -207,19 +249,87 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
 
 /// `rayoflight edit`: applies the edits and writes the scene's text back
 /// with only what they change changed, in place or to `-out`.
+///
+/// In place, the scene is locked ([`files::lock_for_update`]) from the
+/// read to the rename, so that concurrent `edit`s and the app's saves take
+/// turns and none loses another's changes. A program that takes no lock
+/// (an editor) is caught by reading the file again just before the rename:
+/// the edits are then merged onto its text by the app's engine
+/// ([`merge`]) and written again; a conflict writes nothing.
 fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
-    let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
-    let mut edited = Edited::new(loaded);
-    edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
-    let new_text = splice::save(&text, &args.scene, &edited)
-        .map_err(|e| Failure::Error(format!("{}: {e}", args.scene.display())))?;
+    let _cleanly = interrupt::cleanly();
     let out = args.out.as_deref().unwrap_or(&args.scene);
-    // Edits that change nothing (a value set to the one it has) leave the
-    // scene file untouched, its modification time included.
-    if new_text == text && files::same_file(&args.scene, out) {
-        return Ok(());
+    let in_place = files::same_file(&args.scene, out);
+    let _lock = match in_place {
+        true => files::lock_for_update(&args.scene).map_err(|e| {
+            Failure::Error(format!("{}: cannot lock it: {e}", args.scene.display()))
+        })?,
+        false => None,
+    };
+    let (mut text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
+    let base = loaded.clone();
+    let mut edited = Edited::new(loaded);
+    let edits = edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
+    for _ in 0..MAX_REREADS {
+        let new_text = splice::save(&text, &args.scene, &edited)
+            .map_err(|e| Failure::Error(format!("{}: {e}", args.scene.display())))?;
+        // Edits that change nothing (a value set to the one it has) leave
+        // the scene file untouched, its modification time included.
+        if new_text == text && in_place {
+            return Ok(());
+        }
+        let written = output::write_atomic_with(
+            out,
+            |w| w.write_all(new_text.as_bytes()),
+            |_| match in_place
+                && std::fs::read(&args.scene).ok().as_deref() != Some(text.as_bytes())
+            {
+                true => Err(Rewrite::Changed),
+                false => Ok(()),
+            },
+        );
+        match written {
+            Ok(()) => return Ok(()),
+            Err(Rewrite::Output(e)) => return Err(fail(e)),
+            Err(Rewrite::Changed) => {}
+        }
+        // Another program wrote the file since it was read: replay the
+        // edits onto its version.
+        let (their_text, theirs) = scene::load_with_text(&args.scene).map_err(fail)?;
+        let merged = merge::merge(&base, &theirs, &edits, &Default::default());
+        if let Some(c) = merged.conflicts.first() {
+            return Err(Failure::Error(format!(
+                "{}: another program changed the file meanwhile: {}: yours {}, the file's {}; nothing was written",
+                args.scene.display(),
+                c.path,
+                c.yours,
+                c.theirs
+            )));
+        }
+        text = their_text;
+        edited = merged.edited;
     }
-    output::write_atomic(out, new_text.as_bytes()).map_err(fail)
+    Err(Failure::Error(format!(
+        "{}: another program keeps changing the file ({MAX_REREADS} times while it was edited); nothing was written",
+        args.scene.display()
+    )))
+}
+
+/// How many times `edit` merges onto a file that another program keeps
+/// writing before it gives up.
+const MAX_REREADS: usize = 8;
+
+/// Why `edit`'s write did not happen.
+enum Rewrite {
+    Output(output::OutputError),
+    /// The scene is not the text that was read any more.
+    Changed,
+}
+
+impl From<output::OutputError> for Rewrite {
+    fn from(e: output::OutputError) -> Rewrite {
+        Rewrite::Output(e)
+    }
 }
 
 /// An edit `scene` refuses: a usage error (exit 2) that names the scene.
@@ -232,8 +342,11 @@ fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
     refuse_same_file(scene_path, &out)?;
     let scene = scene::load(scene_path).map_err(fail)?;
-    let name = scene_path.file_name().map(|n| n.to_string_lossy());
-    let text = pov::export_named(&scene, name.as_deref());
+    let header = pov::Header {
+        scene: scene_path,
+        written_to: &out,
+    };
+    let text = pov::export_named(&scene, Some(header));
     output::write_atomic(&out, text.as_bytes()).map_err(fail)
 }
 

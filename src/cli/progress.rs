@@ -121,7 +121,7 @@ impl Steps {
         self.bar.suspend(|| {
             use std::io::Write;
             let mut out = std::io::stdout();
-            let _ = write!(out, "{text}");
+            let _ = write!(out, "{}", super::terminal::shown(text, true));
             let _ = out.flush();
         });
     }

@@ -40,6 +40,8 @@ pub fn tiles(width: u32, height: u32, size: u32) -> Vec<Tile> {
 pub struct Cancel {
     newest: Option<Arc<AtomicU64>>,
     generation: u64,
+    /// Cancelled too by a signal ([`crate::interrupt::requested`]).
+    on_signal: bool,
 }
 
 impl Cancel {
@@ -48,6 +50,17 @@ impl Cancel {
         Cancel {
             newest: None,
             generation: 0,
+            on_signal: false,
+        }
+    }
+
+    /// A token cancelled by SIGINT, SIGTERM or SIGHUP once
+    /// [`crate::interrupt::install`] has been called (the CLI); hold a
+    /// [`crate::interrupt::Cleanly`] guard while rendering with it.
+    pub fn on_signal() -> Cancel {
+        Cancel {
+            on_signal: true,
+            ..Cancel::never()
         }
     }
 
@@ -57,6 +70,7 @@ impl Cancel {
         Cancel {
             newest: Some(newest),
             generation,
+            on_signal: false,
         }
     }
 
@@ -64,6 +78,7 @@ impl Cancel {
         self.newest
             .as_ref()
             .is_some_and(|n| n.load(Ordering::Relaxed) != self.generation)
+            || (self.on_signal && crate::interrupt::requested())
     }
 }
 

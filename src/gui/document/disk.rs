@@ -37,6 +37,10 @@ pub enum SaveError {
     Edit(#[from] EditError),
     #[error("{0}")]
     Output(#[from] crate::output::OutputError),
+    /// Another program wrote the file between the save's read and its
+    /// rename (the save reads it again just before): nothing was written.
+    #[error("another program changed the file while it was being saved")]
+    ChangedMeanwhile,
 }
 
 /// The file as read from disk, and what the document needs of its text:

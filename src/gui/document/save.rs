@@ -5,11 +5,12 @@
 //! 1. [`Document::save_job`] takes what the save needs — the source text,
 //!    its scene, the edited scene, the fingerprint of the file as last
 //!    read or written — all shared, nothing copied;
-//! 2. [`SaveJob::run`], on any thread, reads the file's fingerprint: the
-//!    file as known is written (the edits spliced into the source and
-//!    streamed, the new file read back and checked before it replaces the
-//!    old one), a file changed by another program is read and handed back
-//!    unwritten;
+//! 2. [`SaveJob::run`], on any thread, locks the file (as `rayoflight
+//!    edit` does, [`crate::files::lock_for_update`]) and reads its
+//!    fingerprint: the file as known is written (the edits spliced into
+//!    the source and streamed, the new file read back and checked, and the
+//!    old one read again, before it is replaced), a file changed by another
+//!    program is read and handed back unwritten;
 //! 3. [`Document::save_done`] takes the outcome: the edits made while it
 //!    ran stay unsaved; a changed file is merged with the edits (asking on
 //!    conflicts) and written by a new job.
@@ -61,19 +62,18 @@ impl SaveJob {
     /// Writes the edited scene to the file unless another program changed
     /// it; never writes over text the app has not read.
     pub fn run(&self) -> SaveOutcome {
+        // Held from this read to the rename: a `rayoflight edit` or
+        // another save waits. (A file that cannot be opened is found out
+        // by the fingerprint below.)
+        let _lock = crate::files::lock_for_update(&self.path);
         match fingerprint_file(&self.path) {
             // Nothing unsaved and the file as we know it: nothing to do.
             Ok(seen) if Some(seen) == self.disk && !self.dirty => SaveOutcome::Unchanged,
-            Ok(seen) if Some(seen) == self.disk => self.write(),
-            Ok(_) => match scene::load_sharing(&self.path, &self.version.edited.scene().objects) {
-                Ok((text, theirs)) => {
-                    SaveOutcome::FileChanged(Box::new(FileRead::new(text, theirs)))
-                }
-                Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(e))),
-            },
+            Ok(seen) if Some(seen) == self.disk => self.write(Some(seen)),
+            Ok(_) => self.read_theirs(),
             // A file deleted since: writing brings it back.
             Err(FingerprintError::Io(e)) if e.kind() == std::io::ErrorKind::NotFound => {
-                self.write()
+                self.write(None)
             }
             // A FIFO or device in its place is never opened.
             Err(e) => {
@@ -82,19 +82,38 @@ impl SaveJob {
         }
     }
 
-    fn write(&self) -> SaveOutcome {
-        match write_scene(&self.path, &self.version) {
+    /// Writes the version; `expected`: the fingerprint the file must
+    /// still have just before the rename (`None`: there was no file).
+    fn write(&self, expected: Option<u64>) -> SaveOutcome {
+        match write_scene(&self.path, &self.version, expected) {
             Ok(written) => SaveOutcome::Written(written),
+            // A program that takes no lock wrote it meanwhile: merge.
+            Err(SaveError::ChangedMeanwhile) => self.read_theirs(),
             Err(e) => SaveOutcome::Failed(e),
+        }
+    }
+
+    /// The file another program wrote, read for a merge.
+    fn read_theirs(&self) -> SaveOutcome {
+        match scene::load_sharing(&self.path, &self.version.edited.scene().objects) {
+            Ok((text, theirs)) => SaveOutcome::FileChanged(Box::new(FileRead::new(text, theirs))),
+            Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(e))),
         }
     }
 }
 
-/// Streams `version`'s edited scene spliced into its source to `path`; the new file is read back and must load as the edited scene
-/// before it replaces the old one. No copy of the text is built: on a file
-/// of a million objects the text is 170 MB. Returns the new file's
-/// fingerprint (`None` for a device or FIFO, not read back).
-fn write_scene(path: &Path, version: &Version) -> Result<Option<u64>, SaveError> {
+/// Streams `version`'s edited scene spliced into its source to `path`;
+/// the new file is read back and must load as the edited scene before it
+/// replaces the old one, and the old one must still have the fingerprint
+/// `expected` when there is one ([`SaveError::ChangedMeanwhile`]). No copy
+/// of the text is built: on a file of a million objects the text is
+/// 170 MB. Returns the new file's fingerprint (`None` for a device or
+/// FIFO, not read back).
+fn write_scene(
+    path: &Path,
+    version: &Version,
+    expected: Option<u64>,
+) -> Result<Option<u64>, SaveError> {
     let edited = &version.edited;
     let rewrite = splice::plan(&version.source, &version.source_scene, edited)?;
     let mut written = None;
@@ -108,6 +127,11 @@ fn write_scene(path: &Path, version: &Version) -> Result<Option<u64>, SaveError>
                     source,
                 })?;
             splice::check(&text, path, edited)?;
+            if let Some(expected) = expected
+                && fingerprint_file(path).ok() != Some(expected)
+            {
+                return Err(SaveError::ChangedMeanwhile);
+            }
             written = Some(fingerprint(text.as_bytes()));
             Ok(())
         },
@@ -182,7 +206,7 @@ impl Document {
         if self.placeholder {
             return Err(SaveError::NothingLoaded);
         }
-        let written = write_scene(path, &self.shown)?;
+        let written = write_scene(path, &self.shown, None)?;
         self.path = Some(path.to_owned());
         self.state = FileState::Watching;
         self.error = None;

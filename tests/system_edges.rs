@@ -1,0 +1,626 @@
+//! The CLI at the system's edges (issue 26), through the built binary:
+//! links another user planted in a shared folder, files of other users,
+//! hard links, concurrent writers, signals, names that hold code or
+//! terminal escapes, a loop of links.
+//!
+//! Tests that act as other users need root (CI runs as root): they make
+//! those users' files themselves and run the binary with `setpriv`. The
+//! users are numbers (1 is Debian's `daemon`, 65534 `nobody`; 4001, 4002
+//! and the group 4000 need no entry in /etc/passwd).
+#![cfg(unix)]
+
+mod common;
+
+use common::{TINY, files_in, stderr};
+use std::fs;
+use std::os::unix::fs::{MetadataExt, PermissionsExt, symlink};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+const BIN: &str = env!("CARGO_BIN_EXE_rayoflight");
+
+fn is_root() -> bool {
+    rustix::process::geteuid().is_root()
+}
+
+/// Whether a test that needs root can run: it must in CI.
+fn root_or_skip(test: &str) -> bool {
+    if is_root() {
+        return true;
+    }
+    assert!(
+        std::env::var_os("CI").is_none(),
+        "{test} needs root, and CI runs as root"
+    );
+    eprintln!("{test}: skipped, it needs root");
+    false
+}
+
+/// A folder every user may enter and read (a tempdir is 0700).
+fn open_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).unwrap();
+    dir
+}
+
+/// The binary run as `uid`:`gid` (with `groups` as its other groups) in
+/// `dir`.
+fn run_as(uid: u32, gid: u32, groups: &[u32], dir: &Path, args: &[&str]) -> Output {
+    let mut cmd = Command::new("setpriv");
+    cmd.arg(format!("--reuid={uid}"))
+        .arg(format!("--regid={gid}"));
+    if groups.is_empty() {
+        cmd.arg("--clear-groups");
+    } else {
+        let list: Vec<String> = groups.iter().map(u32::to_string).collect();
+        cmd.arg(format!("--groups={}", list.join(",")));
+    }
+    cmd.arg(BIN)
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("setpriv runs")
+}
+
+/// A shell command run as `uid` (the kernel's own verdict, for comparison).
+fn shell_as(uid: u32, dir: &Path, script: &str) -> Output {
+    Command::new("setpriv")
+        .args([
+            &format!("--reuid={uid}"),
+            &format!("--regid={uid}"),
+            "--clear-groups",
+            "sh",
+            "-c",
+            script,
+        ])
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn rayoflight(dir: &Path, args: &[&str]) -> Output {
+    common::rayoflight(dir, args)
+}
+
+fn chown(path: &Path, uid: u32, gid: u32) {
+    std::os::unix::fs::lchown(path, Some(uid), Some(gid)).unwrap();
+}
+
+fn mode(path: &Path, mode: u32) {
+    fs::set_permissions(path, fs::Permissions::from_mode(mode)).unwrap();
+}
+
+/// Sets `fs.protected_symlinks` for as long as it lives, then puts the old
+/// value back; `None` where /proc/sys cannot be written (a container).
+struct ProtectedSymlinks(String);
+
+const PROTECTED: &str = "/proc/sys/fs/protected_symlinks";
+
+impl ProtectedSymlinks {
+    fn on() -> Option<ProtectedSymlinks> {
+        let old = fs::read_to_string(PROTECTED).ok()?;
+        fs::write(PROTECTED, "1").ok()?;
+        Some(ProtectedSymlinks(old.trim().to_owned()))
+    }
+}
+
+impl Drop for ProtectedSymlinks {
+    fn drop(&mut self) {
+        let _ = fs::write(PROTECTED, &self.0);
+    }
+}
+
+/// Item 1: in a sticky folder everyone may write, a link that another user
+/// planted is not followed by any command that writes (render, edit -out,
+/// export-pov -out) — as the kernel's rule refuses `echo x > link` — and
+/// the file it points to is untouched. The caller's own link, and the
+/// folder owner's, are followed.
+#[test]
+fn links_another_user_planted_in_a_shared_folder_are_not_followed() {
+    if !root_or_skip("links_another_user_planted_in_a_shared_folder_are_not_followed") {
+        return;
+    }
+    let dir = open_dir();
+    let root = dir.path();
+    fs::write(root.join("scene.xml"), TINY).unwrap();
+    mode(&root.join("scene.xml"), 0o644);
+    // The victim's file, which user 65534 may write through its folder.
+    let victim = root.join("victim");
+    fs::create_dir(&victim).unwrap();
+    mode(&victim, 0o777);
+    let important = victim.join("important.txt");
+    fs::write(&important, "important\n").unwrap();
+    mode(&important, 0o666);
+    // The shared folder, root's, sticky and writable by all; user 1 plants
+    // a link to the victim's file.
+    let shared = root.join("shared");
+    fs::create_dir(&shared).unwrap();
+    mode(&shared, 0o1777);
+    let planted = shared.join("x.png");
+    symlink(&important, &planted).unwrap();
+    chown(&planted, 1, 1);
+
+    let kernel = ProtectedSymlinks::on();
+    if kernel.is_some() {
+        // The oracle: the kernel refuses the same write.
+        let o = shell_as(65534, root, "echo x > shared/x.png");
+        assert!(!o.status.success(), "the kernel followed the link");
+    }
+    for args in [
+        vec!["scene.xml", "-out", "shared/x.png"],
+        vec![
+            "edit",
+            "scene.xml",
+            "--set",
+            "camera.width=8",
+            "-out",
+            "shared/x.png",
+        ],
+        vec!["export-pov", "scene.xml", "-out", "shared/x.png"],
+    ] {
+        let o = run_as(65534, 65534, &[], root, &args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert_eq!(
+            stderr(&o),
+            "shared/x.png: not followed: the symbolic link shared/x.png is another user's, \
+             in the shared folder shared (sticky and writable by all): the kernel's \
+             fs.protected_symlinks rule\n",
+            "{args:?}"
+        );
+        assert_eq!(fs::read_to_string(&important).unwrap(), "important\n");
+        assert!(fs::symlink_metadata(&planted).unwrap().is_symlink());
+        assert_eq!(files_in(&shared), ["x.png"], "{args:?} left a file");
+    }
+    drop(kernel);
+
+    // The caller's own link is followed: the file it points to is replaced.
+    let own = shared.join("own.png");
+    symlink(&important, &own).unwrap();
+    chown(&own, 65534, 65534);
+    let o = run_as(
+        65534,
+        65534,
+        &[],
+        root,
+        &["scene.xml", "-out", "shared/own.png"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(fs::read(&important).unwrap().starts_with(b"\x89PNG"));
+    assert!(fs::symlink_metadata(&own).unwrap().is_symlink());
+
+    // So is a link of the folder's owner.
+    let theirs = root.join("theirs");
+    fs::create_dir(&theirs).unwrap();
+    chown(&theirs, 1, 1);
+    mode(&theirs, 0o1777);
+    let target = victim.join("b.pov");
+    fs::write(&target, "old").unwrap();
+    mode(&target, 0o666);
+    symlink(&target, theirs.join("b.pov")).unwrap();
+    chown(&theirs.join("b.pov"), 1, 1);
+    let o = run_as(
+        65534,
+        65534,
+        &[],
+        root,
+        &["export-pov", "scene.xml", "-out", "theirs/b.pov"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        fs::read_to_string(&target)
+            .unwrap()
+            .contains("#version 3.7;")
+    );
+}
+
+/// Item 3: in a setgid folder that a group may write, a member may not
+/// replace another member's private image nor their read-only-for-others
+/// scene (the kernel's `access(W_OK)`, not the folder's permission, is
+/// what counts), and nothing changes owner. A file the member may write is
+/// replaced keeping its group and mode; root keeps the owner too, and the
+/// extended attributes.
+#[test]
+fn a_file_the_caller_may_not_write_is_not_replaced_and_replaced_files_keep_their_owner() {
+    if !root_or_skip("a_file_the_caller_may_not_write_is_not_replaced") {
+        return;
+    }
+    let (a, b, group) = (4001, 4002, 4000);
+    let dir = open_dir();
+    let root = dir.path();
+    let shared = root.join("team");
+    fs::create_dir(&shared).unwrap();
+    chown(&shared, a, group);
+    mode(&shared, 0o2775);
+    let file = |name: &str, text: &[u8], m: u32| {
+        let p = shared.join(name);
+        fs::write(&p, text).unwrap();
+        chown(&p, a, group);
+        mode(&p, m);
+        p
+    };
+    let image = file("private.png", b"a's image", 0o600);
+    let scene = file("scene.xml", TINY.as_bytes(), 0o644);
+    let other = file("other.xml", TINY.as_bytes(), 0o644);
+
+    let o = run_as(
+        b,
+        b,
+        &[group],
+        &shared,
+        &["other.xml", "-out", "private.png"],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o),
+        "private.png: permission denied: you may not write this file\n"
+    );
+    let o = run_as(
+        b,
+        b,
+        &[group],
+        &shared,
+        &["edit", "scene.xml", "--set", "camera.width=8"],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(
+        stderr(&o),
+        "scene.xml: permission denied: you may not write this file\n"
+    );
+    assert_eq!(fs::read(&image).unwrap(), b"a's image");
+    assert_eq!(fs::read_to_string(&scene).unwrap(), TINY);
+    for p in [&image, &scene] {
+        let m = fs::metadata(p).unwrap();
+        assert_eq!((m.uid(), m.gid()), (a, group), "{}", p.display());
+    }
+    assert_eq!(files_in(&shared), ["other.xml", "private.png", "scene.xml"]);
+
+    // A file of a's that the group may write: b replaces it; b cannot give
+    // it back to a, but it keeps its group and mode.
+    let group_file = file("group.png", b"old", 0o664);
+    let o = run_as(b, b, &[group], &shared, &["other.xml", "-out", "group.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let m = fs::metadata(&group_file).unwrap();
+    assert_eq!((m.gid(), m.mode() & 0o7777), (group, 0o664));
+    assert!(fs::read(&group_file).unwrap().starts_with(b"\x89PNG"));
+
+    // Root replaces a's file: owner, group, mode and attributes stay.
+    let kept = file("kept.xml", TINY.as_bytes(), 0o640);
+    let xattr = rustix::fs::setxattr(
+        &kept,
+        "user.rayoflight-test",
+        b"hello",
+        rustix::fs::XattrFlags::empty(),
+    )
+    .is_ok();
+    let o = rayoflight(&shared, &["edit", "kept.xml", "--set", "camera.width=8"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(fs::read_to_string(&kept).unwrap().contains("width=\"8\""));
+    let m = fs::metadata(&kept).unwrap();
+    assert_eq!((m.uid(), m.gid(), m.mode() & 0o7777), (a, group, 0o640));
+    if xattr {
+        let mut value = [0u8; 16];
+        let n = rustix::fs::getxattr(&kept, "user.rayoflight-test", &mut value[..]).unwrap();
+        assert_eq!(&value[..n], b"hello");
+    } else {
+        eprintln!("this file system keeps no user attributes: not checked");
+    }
+    let _ = other;
+}
+
+/// Item 4: `edit` on a file with two names writes the file itself: the
+/// other name sees the new text, the inode is the same, no copy is left.
+/// A render over an image with two names does the same.
+#[test]
+fn hard_links_keep_sharing_the_new_text() {
+    let dir = tempfile::tempdir().unwrap();
+    let a = dir.path().join("a.xml");
+    fs::write(&a, TINY).unwrap();
+    fs::hard_link(&a, dir.path().join("b.xml")).unwrap();
+    let inode = fs::metadata(&a).unwrap().ino();
+    let o = rayoflight(dir.path(), &["edit", "a.xml", "--set", "camera.width=8"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let b = fs::read_to_string(dir.path().join("b.xml")).unwrap();
+    assert!(b.contains("width=\"8\""), "{b}");
+    assert_eq!(fs::read_to_string(&a).unwrap(), b);
+    assert_eq!(fs::metadata(&a).unwrap().ino(), inode);
+    assert_eq!(fs::metadata(&a).unwrap().nlink(), 2);
+    assert_eq!(files_in(dir.path()), ["a.xml", "b.xml"]);
+
+    fs::write(dir.path().join("img.png"), "old").unwrap();
+    fs::hard_link(dir.path().join("img.png"), dir.path().join("copy.png")).unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "a.xml", "-out", "img.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let copy = fs::read(dir.path().join("copy.png")).unwrap();
+    assert!(copy.starts_with(b"\x89PNG"));
+    assert_eq!(fs::read(dir.path().join("img.png")).unwrap(), copy);
+    assert_eq!(
+        files_in(dir.path()),
+        ["a.xml", "b.xml", "copy.png", "img.png"]
+    );
+}
+
+/// `n` spheres, each with its own `ka`.
+fn spheres(n: usize) -> String {
+    let mut text = String::from("<scene>\n");
+    for i in 0..n {
+        text.push_str(&format!(
+            "  <sphere><material ka=\"0.1\" kd=\"0.5\" ks=\"0.2\" m=\"10\"/>\
+             <transformation><translate x=\"{i}\" z=\"30\"/></transformation></sphere>\n"
+        ));
+    }
+    text.push_str("  <light x=\"0\" y=\"-3\" z=\"-3\"/>\n");
+    text.push_str("  <camera width=\"16\" height=\"12\" eyeDistance=\"2\"/>\n</scene>\n");
+    text
+}
+
+fn spawn(dir: &Path, args: &[&str]) -> Child {
+    Command::new(BIN)
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap()
+}
+
+/// Item 5: twenty `edit`s at once, each setting another sphere's `ka`:
+/// every one of the twenty changes is in the file.
+#[test]
+fn concurrent_edits_keep_every_change() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("q.xml");
+    fs::write(&path, spheres(20)).unwrap();
+    let children: Vec<Child> = (1..=20)
+        .map(|i| {
+            let set = format!("object[{i}].material.ka=0.{}1", 10 + i);
+            spawn(dir.path(), &["edit", "q.xml", "--set", &set])
+        })
+        .collect();
+    for child in children {
+        let o = child.wait_with_output().unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let text = fs::read_to_string(&path).unwrap();
+    for i in 1..=20 {
+        assert!(
+            text.contains(&format!("ka=\"0.{}1\"", 10 + i)),
+            "edit {i} lost"
+        );
+    }
+    assert_eq!(files_in(dir.path()), ["q.xml"]);
+}
+
+/// Waits until a temporary file of ours appears in `dir` (or `child`
+/// ends); returns whether one did.
+fn wait_for_temporary(dir: &Path, child: &mut Child) -> bool {
+    let start = Instant::now();
+    while start.elapsed() < Duration::from_secs(60) {
+        if files_in(dir).iter().any(|n| n.starts_with(".rayoflight-")) {
+            return true;
+        }
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_micros(200));
+    }
+    false
+}
+
+fn signal(child: &Child, signal: rustix::process::Signal) {
+    let pid = rustix::process::Pid::from_child(child);
+    rustix::process::kill_process(pid, signal).unwrap();
+}
+
+/// Item 5, a writer that takes no lock (an editor saving by rename): it
+/// writes between `edit`'s read and its rename (the edit is stopped there
+/// with SIGSTOP while the editor writes). `edit` reads the file again
+/// before renaming, merges its change onto the editor's and keeps both.
+#[test]
+fn a_writer_without_the_lock_is_merged_not_lost() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("q.xml");
+    // Big enough that writing it takes far longer than noticing it.
+    let text = spheres(150_000);
+    fs::write(&path, &text).unwrap();
+    let mut child = spawn(
+        dir.path(),
+        &["edit", "q.xml", "--set", "object[2].material.ka=0.75"],
+    );
+    assert!(wait_for_temporary(dir.path(), &mut child), "no write seen");
+    signal(&child, rustix::process::Signal::STOP);
+    // The editor's save: a new light, through a rename.
+    let theirs = text.replace("  <camera", "  <light x=\"9\" y=\"9\" z=\"9\"/>\n  <camera");
+    let editor = dir.path().join("editor.tmp");
+    fs::write(&editor, &theirs).unwrap();
+    fs::rename(&editor, &path).unwrap();
+    signal(&child, rustix::process::Signal::CONT);
+    let o = child.wait_with_output().unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let now = fs::read_to_string(&path).unwrap();
+    assert!(
+        now.contains("<light x=\"9\" y=\"9\" z=\"9\"/>"),
+        "the editor's light lost"
+    );
+    assert_eq!(now.matches("ka=\"0.75\"").count(), 1, "the edit lost");
+    assert_eq!(files_in(dir.path()), ["q.xml"]);
+}
+
+/// Item 6: SIGINT, SIGTERM and SIGHUP sent when the temporary file appears
+/// (render, a --region part, edit, sheet): the temporary file is gone, the
+/// old file untouched, the exit says so with 128 + the signal.
+#[test]
+fn a_signal_during_a_write_leaves_nothing_behind() {
+    use rustix::process::Signal;
+    let dir = tempfile::tempdir().unwrap();
+    let big = TINY.replace(
+        "width=\"16\" height=\"12\"",
+        "width=\"2400\" height=\"1800\"",
+    );
+    fs::write(dir.path().join("big.xml"), &big).unwrap();
+    fs::write(dir.path().join("q.xml"), spheres(150_000)).unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "big.xml", "-out", "a.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    fs::copy(dir.path().join("a.png"), dir.path().join("b.png")).unwrap();
+    let cases: [(&[&str], &str, Signal, i32); 5] = [
+        (
+            &["--no-gui", "big.xml", "-out", "old.png"],
+            "old.png",
+            Signal::TERM,
+            143,
+        ),
+        (
+            &["--no-gui", "big.xml", "-out", "old.png"],
+            "old.png",
+            Signal::INT,
+            130,
+        ),
+        (
+            &[
+                "--no-gui",
+                "big.xml",
+                "--region",
+                "0,0,2400,1700",
+                "-out",
+                "old.png",
+            ],
+            "old.png",
+            Signal::HUP,
+            129,
+        ),
+        (
+            &["edit", "q.xml", "--set", "camera.width=8"],
+            "q.xml",
+            Signal::TERM,
+            143,
+        ),
+        (
+            &["sheet", "-out", "old.png", "a.png", "b.png"],
+            "old.png",
+            Signal::TERM,
+            143,
+        ),
+    ];
+    for (args, target, sig, status) in cases {
+        let old_png = b"the old file".to_vec();
+        fs::write(dir.path().join("old.png"), &old_png).unwrap();
+        let before = fs::read(dir.path().join(target)).unwrap();
+        let listing = files_in(dir.path());
+        let mut child = spawn(dir.path(), args);
+        assert!(
+            wait_for_temporary(dir.path(), &mut child),
+            "{args:?}: no write seen"
+        );
+        signal(&child, sig);
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(status), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).ends_with("interrupted: nothing was written\n"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+        assert_eq!(
+            fs::read(dir.path().join(target)).unwrap(),
+            before,
+            "{args:?}"
+        );
+        assert_eq!(files_in(dir.path()), listing, "{args:?} left a file");
+    }
+}
+
+/// Item 2: a scene file whose name holds a newline and POV-Ray code:
+/// `export-pov`'s header keeps it inside a comment, names the file written
+/// and an image beside it that is not RayOfLight's, and its command, run
+/// by a shell, renders with POV-Ray and writes nothing else.
+#[test]
+fn a_file_name_never_becomes_pov_ray_code() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "s\n#fopen F \"pwned.txt\" write\n#write (F, \"x\")\n#fclose F\n.xml";
+    fs::write(dir.path().join(name), TINY).unwrap();
+    let o = rayoflight(dir.path(), &["export-pov", name, "-out", "my scene's.pov"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let pov = fs::read_to_string(dir.path().join("my scene's.pov")).unwrap();
+    let header: Vec<&str> = pov.lines().take_while(|l| !l.is_empty()).collect();
+    assert!(header.iter().all(|l| l.starts_with("// ")), "{pov}");
+    let command = header
+        .iter()
+        .find_map(|l| l.strip_prefix("// Render: "))
+        .expect("a render command");
+    assert!(
+        command.ends_with(
+            "'Input_File_Name=\"my scene'\\''s.pov\"' 'Output_File_Name=\"my scene'\\''s-pov.png\"'"
+        ),
+        "{command}"
+    );
+    if Command::new("povray").arg("--version").output().is_err() {
+        assert!(std::env::var_os("CI").is_none(), "CI installs povray");
+        return;
+    }
+    // POV-Ray reads its configuration from HOME: an empty one.
+    let home = dir.path().join("home");
+    fs::create_dir_all(home.join(".povray/3.7")).unwrap();
+    fs::write(home.join(".povray/3.7/povray.conf"), "").unwrap();
+    let o = Command::new("sh")
+        .args(["-c", &format!("{command} -D")])
+        .current_dir(dir.path())
+        .env("HOME", &home)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.path().join("my scene's-pov.png").exists());
+    assert!(!dir.path().join("pwned.txt").exists());
+}
+
+/// Item 2, the terminal: an error naming a file whose name holds escape
+/// sequences and newlines is one line, the escapes shown, not obeyed.
+#[test]
+fn errors_show_escapes_in_names_on_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "evil\u{1b}]0;owned\u{7}\n\u{1b}[2Jname.xml";
+    fs::write(dir.path().join(name), "<scene>").unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", name]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert_eq!(err.matches('\n').count(), 1, "{err:?}");
+    assert!(!err.contains('\u{1b}') && !err.contains('\u{7}'), "{err:?}");
+    assert!(
+        err.starts_with("evil\\e]0;owned\\x07\\n\\e[2Jname.xml:"),
+        "{err:?}"
+    );
+}
+
+/// Item 16: a loop of links as `-out` is refused before rendering, the
+/// link left as it is; a link to the shell's pipe is named a pipe.
+#[test]
+fn a_loop_of_links_and_a_pipe_are_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.xml"), TINY).unwrap();
+    symlink("loop.png", dir.path().join("loop.png")).unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "s.xml", "-out", "loop.png"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o),
+        "loop.png: a loop of symbolic links (or more than 40 in a row)\n"
+    );
+    assert!(
+        fs::symlink_metadata(dir.path().join("loop.png"))
+            .unwrap()
+            .is_symlink()
+    );
+    assert_eq!(files_in(dir.path()), ["loop.png", "s.xml"]);
+
+    symlink("/dev/stdout", dir.path().join("out.png")).unwrap();
+    let o = Command::new(BIN)
+        .args(["--no-gui", "s.xml", "-out", "out.png"])
+        .current_dir(dir.path())
+        .stdout(Stdio::piped())
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(stderr(&o), "out.png: is a pipe, not an image file\n");
+    let _: PathBuf = dir.path().join("unused");
+}
