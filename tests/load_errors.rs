@@ -85,6 +85,9 @@ const CASES: &[Case] = &[
     ("64_utf8_element_name.xml", Some((3, 15)), &["<sphère>", "unknown element"]),
     ("65_crlf_line_ends.xml", Some((3, 22)), &["<light>", "z=\"a\""]),
     ("66_bom_not_counted.xml", Some((1, 8)), &["<sphere2>"]),
+    // XML reads a lone CR as a line break, and CR LF as one (section 2.11).
+    ("67_cr_line_ends.xml", Some((3, 22)), &["<light>", "z=\"a\""]),
+    ("68_mixed_line_ends.xml", Some((4, 22)), &["<light>", "z=\"a\""]),
 ];
 
 fn malformed(name: &str) -> PathBuf {
@@ -441,6 +444,8 @@ fn no_input_makes_the_loader_panic() {
         "<color/>",
         "x=\"1\"",
         "\u{feff}",
+        "\r",
+        "\r\n",
     ];
     let mut rng = Lcg(0x5eed);
     for _ in 0..20_000 {
@@ -465,7 +470,8 @@ fn no_input_makes_the_loader_panic() {
             let message = e.to_string();
             assert!(!message.contains('\n'), "{message:?}");
             if let Some(p) = e.position() {
-                let lines = text.split('\n').count();
+                // At most one line per LF or CR (CR LF is one break).
+                let lines = text.split(['\n', '\r']).count();
                 assert!(
                     p.line >= 1 && p.line <= lines && p.column >= 1,
                     "{p:?} in {text:?}"

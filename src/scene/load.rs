@@ -433,7 +433,10 @@ impl<'a> Parser<'a> {
             .unwrap_or(before)
             .saturating_add(index);
         let rest = bytes.get(index..).unwrap_or_default();
-        let line = rest.split(|&b| b == b'\n').next().unwrap_or_default();
+        let line = rest
+            .split(|&b| b == b'\n' || b == b'\r')
+            .next()
+            .unwrap_or_default();
         let text = String::from_utf8_lossy(line).trim_end().to_owned();
         Err(self.text_error(at, text))
     }
