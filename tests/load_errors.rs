@@ -88,6 +88,10 @@ const CASES: &[Case] = &[
     // XML reads a lone CR as a line break, and CR LF as one (section 2.11).
     ("67_cr_line_ends.xml", Some((3, 22)), &["<light>", "z=\"a\""]),
     ("68_mixed_line_ends.xml", Some((4, 22)), &["<light>", "z=\"a\""]),
+    // Composing finite steps can overflow: at the step that made it so.
+    ("69_composed_overflow.xml", Some((6, 7)), &["<transformation>", "<translate>", "overflows"]),
+    ("70_scale_overflow.xml", Some((4, 7)), &["<transformation>", "<scale>", "overflows"]),
+    ("71_scale_inverse_overflow.xml", Some((3, 26)), &["<transformation>", "<scale>", "overflows"]),
 ];
 
 fn malformed(name: &str) -> PathBuf {
@@ -257,6 +261,10 @@ fn kinds_are_typed() {
         K::ScaleFactorWithAxes { attribute: "x" }
     );
     assert_eq!(kind("zero_scale"), K::SingularTransform);
+    assert_eq!(
+        kind("composed_overflow"),
+        K::TransformOverflow { step: "translate" }
+    );
     assert_eq!(
         kind("unknown_model"),
         K::UnknownModel {

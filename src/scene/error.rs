@@ -206,10 +206,15 @@ pub enum LoadErrorKind {
     /// `<scale>` with both `factor` and one of `x`, `y`, `z`.
     #[error("<scale> attribute {attribute}: factor cannot be combined with x, y or z")]
     ScaleFactorWithAxes { attribute: &'static str },
-    /// The composed `<transformation>` has no finite inverse (a zero scale,
-    /// or numbers so large that the matrix overflows).
-    #[error("singular <transformation>: its matrix has no finite inverse (a zero scale?)")]
+    /// A zero scale in a `<transformation>`: its matrix has no inverse.
+    #[error("singular <transformation>: a zero scale has no inverse")]
     SingularTransform,
+    /// Composing the `<transformation>` up to this `<step>` made its matrix
+    /// or its inverse non-finite (numbers too large, or a scale too small).
+    #[error(
+        "the composed <transformation> overflows at this <{step}>: its matrix or its inverse is no longer finite"
+    )]
+    TransformOverflow { step: &'static str },
     /// `width * height` is above [`MAX_PIXELS`](super::MAX_PIXELS).
     #[error(
         "<camera> image of {width} x {height} pixels is too large: more than the limit of {limit} pixels"

@@ -24,7 +24,7 @@ use quick_xml::events::{BytesStart, Event};
 
 use super::error::{LoadError, LoadErrorKind, Position};
 use super::{Camera, Color, Illumination, Light, Material, Model, Object, Scene, Shape};
-use crate::math::{Transform, TransformStep, Vec3};
+use crate::math::{Transform, TransformError, TransformStep, Vec3};
 
 /// Largest scene file [`load`] reads: 1 GiB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
@@ -961,6 +961,8 @@ impl<'a> Parser<'a> {
     fn transformation(&mut self, e: &Elem<'a>) -> Result<Transform, LoadError> {
         self.attrs(e, "transformation", NONE)?;
         let mut steps = Vec::new();
+        // Each step's `<` and name, for an overflow's message.
+        let mut places = Vec::new();
         self.children(
             e,
             "transformation",
@@ -968,11 +970,19 @@ impl<'a> Parser<'a> {
             false,
             |p, child, name| {
                 steps.push(p.step(child, name)?);
+                places.push((child.at, name));
                 Ok(())
             },
         )?;
-        Transform::from_steps(steps)
-            .map_err(|_| self.error_at(e.at, LoadErrorKind::SingularTransform))
+        Transform::from_steps(steps).map_err(|err| match err {
+            TransformError::Singular { .. } => {
+                self.error_at(e.at, LoadErrorKind::SingularTransform)
+            }
+            TransformError::Overflow { step } => {
+                let (at, step) = places.get(step).copied().unwrap_or((e.at, "transformation"));
+                self.error_at(at, LoadErrorKind::TransformOverflow { step })
+            }
+        })
     }
 
     fn step(&mut self, e: &Elem<'a>, name: &'static str) -> Result<TransformStep, LoadError> {
