@@ -35,9 +35,10 @@ impl Position {
         let before = text.get(..offset).unwrap_or(text);
         let bytes = before.as_bytes();
         // A CR followed by LF is counted at its LF.
-        let breaks = bytes.iter().enumerate().filter(|&(i, &b)| {
-            b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n'))
-        });
+        let breaks = bytes
+            .iter()
+            .enumerate()
+            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')));
         let line = 1 + breaks.count();
         let line_start = before.rfind(['\n', '\r']).map_or(0, |i| i + 1);
         let column = 1 + before.get(line_start..).map_or(0, |s| s.chars().count());
@@ -367,7 +368,10 @@ mod tests {
         assert_eq!(at(7), (4, 1));
         assert_eq!(at(99), (4, 2));
         // Only CRs: each one a line.
-        assert_eq!(Position::at_offset("\r\r\rx", 3), Position { line: 4, column: 1 });
+        assert_eq!(
+            Position::at_offset("\r\r\rx", 3),
+            Position { line: 4, column: 1 }
+        );
     }
 
     #[test]

@@ -405,11 +405,15 @@ impl<'a> Parser<'a> {
             // bytes + `>`, checked by `check` (quick-xml delimits markup but
             // does not check what is inside).
             let after = self.reader_offset();
-            let inside = |open: usize, close: usize, check: &dyn Fn(&str) -> Result<(), xml::Fault>| {
-                let start = before.saturating_add(open);
-                let inner = self.text.get(start..after.saturating_sub(close)).unwrap_or_default();
-                check(inner).map_err(|f| self.xml_at(start.saturating_add(f.at), f.message))
-            };
+            let inside =
+                |open: usize, close: usize, check: &dyn Fn(&str) -> Result<(), xml::Fault>| {
+                    let start = before.saturating_add(open);
+                    let inner = self
+                        .text
+                        .get(start..after.saturating_sub(close))
+                        .unwrap_or_default();
+                    check(inner).map_err(|f| self.xml_at(start.saturating_add(f.at), f.message))
+                };
             match event {
                 Event::Start(start) => {
                     inside(1, 1, &xml::start_tag)?;
@@ -430,7 +434,12 @@ impl<'a> Parser<'a> {
                     if self.depth == 0 {
                         let what = "a CDATA section";
                         return Err(if self.after_root {
-                            self.error_at(before, LoadErrorKind::ContentAfterRoot { what: what.to_owned() })
+                            self.error_at(
+                                before,
+                                LoadErrorKind::ContentAfterRoot {
+                                    what: what.to_owned(),
+                                },
+                            )
                         } else {
                             self.xml_at(before, format!("{what} outside the <scene> element"))
                         });
@@ -615,7 +624,8 @@ impl<'a> Parser<'a> {
             // A literal non-Char was refused with the tag (`xml::start_tag`):
             // one in the unescaped value came from a character reference.
             if let Cow::Owned(unescaped) = &value
-                && let Err(f) = xml::chars(unescaped, "an attribute value (from a character reference)")
+                && let Err(f) =
+                    xml::chars(unescaped, "an attribute value (from a character reference)")
             {
                 return Err(self.error_at(
                     at,
@@ -781,7 +791,10 @@ impl<'a> Parser<'a> {
         // One byte-order mark is skipped before the parser sees the text
         // (and quick-xml would skip another).
         if self.text.starts_with('\u{feff}') {
-            return Err(self.xml_at(0, "a second byte-order mark: at most one may start the file".to_owned()));
+            return Err(self.xml_at(
+                0,
+                "a second byte-order mark: at most one may start the file".to_owned(),
+            ));
         }
         let root = match self.next()? {
             Node::Open(e) => e,
@@ -1046,7 +1059,10 @@ impl<'a> Parser<'a> {
                 self.error_at(e.at, LoadErrorKind::SingularTransform)
             }
             TransformError::Overflow { step } => {
-                let (at, step) = places.get(step).copied().unwrap_or((e.at, "transformation"));
+                let (at, step) = places
+                    .get(step)
+                    .copied()
+                    .unwrap_or((e.at, "transformation"));
                 self.error_at(at, LoadErrorKind::TransformOverflow { step })
             }
         })

@@ -119,11 +119,10 @@ pub(super) fn start_tag(s: &str) -> Result<(), Fault> {
             };
             return fault(at, message);
         }
-        at = name_end(s, spaced, "an attribute name")
-            .map_err(|f| Fault {
-                message: format!("in <{element}>: {}", f.message),
-                ..f
-            })?;
+        at = name_end(s, spaced, "an attribute name").map_err(|f| Fault {
+            message: format!("in <{element}>: {}", f.message),
+            ..f
+        })?;
         let attribute = s.get(spaced..at).unwrap_or_default();
         at = skip_space(s, at);
         if char_at(s, at) != Some('=') {
@@ -154,7 +153,9 @@ pub(super) fn start_tag(s: &str) -> Result<(), Fault> {
         if let Some(lt) = value.find('<') {
             return fault(
                 start + lt,
-                format!("in <{element}>: attribute {attribute}: '<' is not allowed in a value (write &lt;)"),
+                format!(
+                    "in <{element}>: attribute {attribute}: '<' is not allowed in a value (write &lt;)"
+                ),
             );
         }
         chars(value, "an attribute value").map_err(|f| Fault {
@@ -190,7 +191,10 @@ pub(super) fn processing_instruction(s: &str) -> Result<(), Fault> {
         );
     }
     if let Some(colon) = target.find(':') {
-        return fault(colon, format!("a colon is not allowed in the processing instruction target {target}"));
+        return fault(
+            colon,
+            format!("a colon is not allowed in the processing instruction target {target}"),
+        );
     }
     let rest = s.get(end..).unwrap_or_default();
     match rest.chars().next() {
@@ -201,7 +205,10 @@ pub(super) fn processing_instruction(s: &str) -> Result<(), Fault> {
         }),
         Some(c) => fault(
             end,
-            format!("expected whitespace after the processing instruction target {target}, found {}", shown(c)),
+            format!(
+                "expected whitespace after the processing instruction target {target}, found {}",
+                shown(c)
+            ),
         ),
     }
 }
@@ -246,19 +253,31 @@ pub(super) fn declaration(s: &str, ascii: &dyn Fn() -> bool) -> Result<(), Fault
                 "in the XML declaration: expected version, encoding or standalone",
             );
         };
-        if seen.contains(&name) || seen.iter().any(|s| order.iter().position(|n| n == s) > Some(index)) {
+        if seen.contains(&name)
+            || seen
+                .iter()
+                .any(|s| order.iter().position(|n| n == s) > Some(index))
+        {
             return fault(
                 spaced,
-                format!("in the XML declaration: {name} is repeated or out of order (version, encoding, standalone)"),
+                format!(
+                    "in the XML declaration: {name} is repeated or out of order (version, encoding, standalone)"
+                ),
             );
         }
         if index > 0 && seen.is_empty() {
-            return fault(spaced, "in the XML declaration: the version must come first");
+            return fault(
+                spaced,
+                "in the XML declaration: the version must come first",
+            );
         }
         seen.push(name);
         at = skip_space(s, end);
         if char_at(s, at) != Some('=') {
-            return fault(at, format!("in the XML declaration: expected `=` after {name}"));
+            return fault(
+                at,
+                format!("in the XML declaration: expected `=` after {name}"),
+            );
         }
         at = skip_space(s, at + 1);
         let quote = match char_at(s, at) {
@@ -267,7 +286,10 @@ pub(super) fn declaration(s: &str, ascii: &dyn Fn() -> bool) -> Result<(), Fault
         };
         let start = at + 1;
         let Some(len) = s.get(start..).unwrap_or_default().find(quote) else {
-            return fault(at, format!("in the XML declaration: {name} not closed: missing {quote}"));
+            return fault(
+                at,
+                format!("in the XML declaration: {name} not closed: missing {quote}"),
+            );
         };
         let value = s.get(start..start + len).unwrap_or_default();
         let bad = |what: String| fault(start, format!("in the XML declaration: {what}"));
@@ -281,15 +303,22 @@ pub(super) fn declaration(s: &str, ascii: &dyn Fn() -> bool) -> Result<(), Fault
                 }
             }
             "encoding" => {
-                let well_formed = value.chars().next().is_some_and(|c| c.is_ascii_alphabetic())
+                let well_formed = value
+                    .chars()
+                    .next()
+                    .is_some_and(|c| c.is_ascii_alphabetic())
                     && value
                         .chars()
                         .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'));
                 if !well_formed {
                     return bad(format!("\"{value}\" is not an encoding name"));
                 }
-                let utf8 = value.eq_ignore_ascii_case("UTF-8") || value.eq_ignore_ascii_case("UTF8");
-                let fits = ASCII_ENCODINGS.iter().any(|e| value.eq_ignore_ascii_case(e)) && ascii();
+                let utf8 =
+                    value.eq_ignore_ascii_case("UTF-8") || value.eq_ignore_ascii_case("UTF8");
+                let fits = ASCII_ENCODINGS
+                    .iter()
+                    .any(|e| value.eq_ignore_ascii_case(e))
+                    && ascii();
                 if !utf8 && !fits {
                     return bad(format!(
                         "encoding \"{value}\": the file is read as UTF-8, declare encoding=\"UTF-8\" or none"
@@ -305,7 +334,10 @@ pub(super) fn declaration(s: &str, ascii: &dyn Fn() -> bool) -> Result<(), Fault
         at = start + len + 1;
     }
     if seen.first() != Some(&"version") {
-        return fault(s.len(), "the XML declaration has no version (<?xml version=\"1.0\"?>)");
+        return fault(
+            s.len(),
+            "the XML declaration has no version (<?xml version=\"1.0\"?>)",
+        );
     }
     Ok(())
 }
@@ -361,6 +393,11 @@ mod tests {
         assert!(!ok(" version=\"1.0\" standalone=\"maybe\""));
         assert!(!ok(" version=\"1.0\" standalone=\"no\" encoding=\"UTF-8\""));
         assert!(!ok(" version=\"1.0\" encoding=\"latin1\""));
-        assert_eq!(at(declaration(" version=\"1.0\" encoding=\"latin1\"", &|| true)), None);
+        assert_eq!(
+            at(declaration(" version=\"1.0\" encoding=\"latin1\"", &|| {
+                true
+            })),
+            None
+        );
     }
 }
