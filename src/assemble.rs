@@ -47,6 +47,8 @@ pub enum AssembleError {
     NotPng { path: PathBuf, reason: String },
     #[error("{}: not a part of a render: no '{}' record before its pixels (parts are written by 'rayoflight --region'; a part re-saved by another program is not one)", path.display(), part::KEYWORD)]
     NotAPart { path: PathBuf },
+    #[error("{}: holds two '{}' records: a part has one", path.display(), part::KEYWORD)]
+    TwoRecords { path: PathBuf },
     #[error("{}: is {kind}, not a part", path.display())]
     Special { path: PathBuf, kind: &'static str },
     #[error("interrupted: nothing was written")]
@@ -100,6 +102,33 @@ pub enum AssembleError {
 
 type PngReader = png::Reader<BufReader<File>>;
 
+/// At most one record in the chunks read so far (tEXt, zTXt or iTXt: a
+/// second one, before the pixels or after them, would make the part
+/// ambiguous).
+fn one_record(info: &png::Info, path: &Path) -> Result<(), AssembleError> {
+    let records = info
+        .uncompressed_latin1_text
+        .iter()
+        .filter(|c| c.keyword == part::KEYWORD)
+        .count()
+        + info
+            .compressed_latin1_text
+            .iter()
+            .filter(|c| c.keyword == part::KEYWORD)
+            .count()
+        + info
+            .utf8_text
+            .iter()
+            .filter(|c| c.keyword == part::KEYWORD)
+            .count();
+    if records > 1 {
+        return Err(AssembleError::TwoRecords {
+            path: path.to_owned(),
+        });
+    }
+    Ok(())
+}
+
 /// Opens a part's PNG and reads its header and record.
 fn open(path: &Path) -> Result<(PngReader, PartFile), AssembleError> {
     let read_error = |source| AssembleError::Read {
@@ -124,6 +153,7 @@ fn open(path: &Path) -> Result<(PngReader, PartFile), AssembleError> {
         reason: e.to_string(),
     })?;
     let info = reader.info();
+    one_record(info, path)?;
     let text = info
         .uncompressed_latin1_text
         .iter()
@@ -454,6 +484,7 @@ impl<'a> Rows<'a> {
                 // Its last row: read to the end of its pixels, so that the
                 // last chunk's CRC and the Adler-32 are checked too.
                 reader.finish().map_err(|e| decode_error(e.to_string()))?;
+                one_record(reader.info(), &p.path)?;
             }
         }
         self.y += 1;

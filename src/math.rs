@@ -53,10 +53,18 @@ impl TransformStep {
     }
 }
 
-/// The matrix had no finite inverse (a zero scale, or overflow).
+/// Why a list of steps makes no [`Transform`]; `step` counts from 0.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-#[error("singular transformation")]
-pub struct SingularTransform;
+pub enum TransformError {
+    /// The step scales by zero: the matrix has no inverse.
+    #[error("singular transformation (a zero scale)")]
+    Singular { step: usize },
+    /// Composing the steps up to this one made the matrix or its inverse
+    /// non-finite (numbers too large, or a scale so small that its
+    /// reciprocal is infinite).
+    #[error("the composed transformation overflows")]
+    Overflow { step: usize },
+}
 
 /// Object-to-world transform with its cached inverse and normal matrix.
 #[derive(Debug, Clone, PartialEq)]
@@ -87,17 +95,30 @@ impl Transform {
     /// M = T_n · … · T_1, and its inverse is composed from the steps'
     /// exact inverses, M⁻¹ = T_1⁻¹ · … · T_n⁻¹, rather than by inverting M:
     /// a sphere of radius 1e-300 has a determinant that underflows to 0
-    /// but a perfectly finite inverse. A zero scale (or an overflow) makes
-    /// one of the two non-finite: singular.
-    pub fn from_steps(steps: Vec<TransformStep>) -> Result<Transform, SingularTransform> {
-        let to_world = steps
-            .iter()
-            .fold(DAffine3::IDENTITY, |m, step| step.matrix() * m);
-        let to_object = steps
-            .iter()
-            .fold(DAffine3::IDENTITY, |m, step| m * step.inverse_matrix());
-        if !to_world.is_finite() || !to_object.is_finite() {
-            return Err(SingularTransform);
+    /// but a perfectly finite inverse.
+    ///
+    /// A zero scale is [`TransformError::Singular`]; any other non-finite
+    /// result is [`TransformError::Overflow`] at the first step after
+    /// which the product or its inverse is no longer finite (once
+    /// non-finite, a product stays so: the check per step refuses exactly
+    /// what a check of the result would).
+    pub fn from_steps(steps: Vec<TransformStep>) -> Result<Transform, TransformError> {
+        let mut to_world = DAffine3::IDENTITY;
+        let mut to_object = DAffine3::IDENTITY;
+        for (step, s) in steps.iter().enumerate() {
+            let zero = match *s {
+                TransformStep::UniformScale(f) => f == 0.0,
+                TransformStep::Scale(v) => v.cmpeq(DVec3::ZERO).any(),
+                _ => false,
+            };
+            if zero {
+                return Err(TransformError::Singular { step });
+            }
+            to_world = s.matrix() * to_world;
+            to_object *= s.inverse_matrix();
+            if !to_world.is_finite() || !to_object.is_finite() {
+                return Err(TransformError::Overflow { step });
+            }
         }
         let normal = to_object.matrix3.transpose();
         Ok(Transform {
@@ -186,11 +207,44 @@ mod tests {
     fn zero_scale_is_singular() {
         assert_eq!(
             Transform::from_steps(vec![TransformStep::UniformScale(0.0)]),
-            Err(SingularTransform)
+            Err(TransformError::Singular { step: 0 })
         );
         assert_eq!(
-            Transform::from_steps(vec![TransformStep::Scale(DVec3::new(1.0, 0.0, 1.0))]),
-            Err(SingularTransform)
+            Transform::from_steps(vec![
+                TransformStep::Translate(DVec3::X),
+                TransformStep::Scale(DVec3::new(1.0, -0.0, 1.0))
+            ]),
+            Err(TransformError::Singular { step: 1 })
+        );
+    }
+
+    #[test]
+    fn a_non_finite_composition_overflows_at_the_step_that_made_it() {
+        use TransformStep::*;
+        let over = |steps: Vec<TransformStep>| Transform::from_steps(steps).map(|_| ());
+        let x = DVec3::new(1e308, 0.0, 0.0);
+        assert_eq!(
+            over(vec![Translate(x), Translate(x)]),
+            Err(TransformError::Overflow { step: 1 })
+        );
+        // The inverse overflows: 1 / 1e-320 is infinite.
+        assert_eq!(
+            over(vec![RotateX(1.0), UniformScale(1e-320)]),
+            Err(TransformError::Overflow { step: 1 })
+        );
+        assert_eq!(
+            over(vec![
+                UniformScale(1e200),
+                RotateZ(1.0),
+                UniformScale(1e200),
+                UniformScale(0.0)
+            ]),
+            Err(TransformError::Overflow { step: 2 })
+        );
+        // What undoes itself is fine.
+        assert_eq!(
+            over(vec![UniformScale(1e300), UniformScale(1e-300)]),
+            Ok(())
         );
     }
 

@@ -8,7 +8,7 @@ mod common;
 
 use common::{Rng, rayoflight, stderr, stdout};
 use image::RgbImage;
-use rayoflight::part::Part;
+use rayoflight::part::{self, Part};
 use rayoflight::region::Region;
 use rayoflight::render::{self, RenderOptions};
 use rayoflight::request::RenderRequest;
@@ -700,4 +700,72 @@ fn an_interrupted_assembly_leaves_no_temporary_file() {
         "{:?}",
         common::files_in(&out_dir)
     );
+}
+
+/// CRC-32 of PNG chunks (ISO 3309), to add a chunk to a part by hand.
+fn crc32(bytes: &[u8]) -> u32 {
+    let mut crc = !0u32;
+    for &b in bytes {
+        crc ^= u32::from(b);
+        for _ in 0..8 {
+            crc = if crc & 1 != 0 {
+                (crc >> 1) ^ 0xEDB8_8320
+            } else {
+                crc >> 1
+            };
+        }
+    }
+    !crc
+}
+
+/// `png` with a tEXt chunk `keyword`, `text` inserted at byte `at`.
+fn with_text_chunk(png: &[u8], at: usize, keyword: &str, text: &str) -> Vec<u8> {
+    let mut data = keyword.as_bytes().to_vec();
+    data.push(0);
+    data.extend_from_slice(text.as_bytes());
+    let mut chunk = (data.len() as u32).to_be_bytes().to_vec();
+    let typed: Vec<u8> = b"tEXt".iter().chain(&data).copied().collect();
+    chunk.extend_from_slice(&typed);
+    chunk.extend_from_slice(&crc32(&typed).to_be_bytes());
+    let mut out = png[..at].to_vec();
+    out.extend_from_slice(&chunk);
+    out.extend_from_slice(&png[at..]);
+    out
+}
+
+/// A part with two "RayOfLight part" records is refused, naming the file:
+/// which one would be the part's? (Issue 26, item 18.) Before its pixels
+/// or after them.
+#[test]
+fn a_part_with_two_records_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let scene_file = d.join("scene.xml");
+    fs::write(&scene_file, rayoflight::EXAMPLE_SCENE.replace("600", "16")).unwrap();
+    let halves = [
+        Region::new(0, 0, 16, 8).unwrap(),
+        Region::new(0, 8, 16, 16).unwrap(),
+    ];
+    let parts = render_parts(d, &scene_file, &halves, &[]);
+    let png = fs::read(&parts[1]).unwrap();
+    // The record of the other half: a file that claims to be either.
+    let other = fs::read(&parts[0]).unwrap();
+    let decoder = png::Decoder::new(std::io::Cursor::new(&other));
+    let reader = decoder.read_info().unwrap();
+    let record = reader.info().uncompressed_latin1_text[0].text.clone();
+    let after_header = 8 + 25;
+    let before_end = png.len() - 12;
+    for (name, at) in [("before.png", after_header), ("after.png", before_end)] {
+        let twice = d.join(name);
+        fs::write(&twice, with_text_chunk(&png, at, part::KEYWORD, &record)).unwrap();
+        assert_eq!(
+            refused(d, &[parts[0].clone(), twice.clone()]),
+            format!(
+                "{}: holds two '{}' records: a part has one",
+                twice.display(),
+                part::KEYWORD
+            ),
+            "{name}"
+        );
+    }
 }

@@ -62,6 +62,27 @@ const SNIPPETS: &[&str] = &[
     "\"",
     "'",
     "=",
+    // Well-formedness that quick-xml does not check (issue 26, item 18).
+    "\u{0}",
+    "\u{1}",
+    "\u{c}",
+    "\u{fffe}",
+    "\u{ffff}",
+    "&#1;",
+    "&#xFFFE;",
+    "&#x41;",
+    "\r",
+    "\r\n",
+    "--",
+    "-->",
+    "<!--",
+    "]]>",
+    "<?XML x?>",
+    "<?a:b?>",
+    "<?xml version=\"1.0\" encoding=\"UTF-8\" standalone=\"yes\"?>",
+    "<?xml version=\"1.0\" encoding=\"UTF-16\"?>",
+    " encoding=\"latin1\"",
+    "\"x=\"1\"",
 ];
 
 fn corpus() -> Vec<Vec<u8>> {
@@ -181,6 +202,64 @@ fn fuzz_parse_and_render() {
     let _ = std::panic::take_hook();
     eprintln!("fuzz: {runs} inputs in {seconds} s, no panic");
     assert!(runs > 0);
+}
+
+/// The differential oracle of well-formed XML (issue 26, item 18): every
+/// mutated input that libxml2 (`xmllint --noout`) finds not well-formed
+/// must be refused with a line and column. (The converse need not hold: a
+/// well-formed file can break the scene format.) Inputs go to xmllint in
+/// batches, one process for many files. Time-bounded like the fuzzer
+/// above; in CI a missing xmllint is a failure.
+#[test]
+fn fuzz_against_xmllint() {
+    let seconds = env_or("RAYOFLIGHT_FUZZ_SECONDS", 5);
+    let mut rng = Rng(env_or("RAYOFLIGHT_FUZZ_SEED", 1).max(1));
+    let corpus = corpus();
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("fuzz-xmllint");
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let start = Instant::now();
+    let (mut runs, mut refused_by_xmllint, mut same_line) = (0u64, 0u64, 0u64);
+    while start.elapsed() < Duration::from_secs(seconds) {
+        let batch: Vec<(std::path::PathBuf, Vec<u8>)> = (0..200)
+            .map(|i| {
+                let seed = &corpus[rng.below(corpus.len())];
+                let input = mutate(&mut rng, seed, &corpus);
+                (dir.join(format!("{i}.xml")), input)
+            })
+            .collect();
+        for (path, input) in &batch {
+            std::fs::write(path, input).unwrap();
+        }
+        let paths: Vec<_> = batch.iter().map(|(p, _)| p.clone()).collect();
+        let Some(lines) = common::xmllint(&paths) else {
+            return;
+        };
+        for ((path, input), xmllint) in batch.iter().zip(lines) {
+            runs += 1;
+            let Some(xmllint) = xmllint else { continue };
+            refused_by_xmllint += 1;
+            let ours = scene::load(path).err().and_then(|e| e.position());
+            match ours {
+                Some(p) => same_line += u64::from(p.line == xmllint),
+                None => {
+                    let kept = dir.join(format!("accepted-{runs}.xml"));
+                    std::fs::write(&kept, input).unwrap();
+                    let ours = scene::load(path).map(|_| "loads".to_owned());
+                    panic!(
+                        "xmllint finds {} not well-formed (line {xmllint}) but RayOfLight gives {:?}",
+                        kept.display(),
+                        ours.map_err(|e| e.to_string())
+                    );
+                }
+            }
+        }
+    }
+    eprintln!(
+        "fuzz against xmllint: {runs} inputs in {seconds} s, {refused_by_xmllint} not well-formed, \
+         all refused with a position, {same_line} of them at xmllint's line"
+    );
+    assert!(refused_by_xmllint > 0);
 }
 
 #[test]

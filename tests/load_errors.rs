@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 
 use rayoflight::scene::{self, LoadError, LoadErrorKind, Position};
 
+mod common;
+
 /// File, expected `(line, column)` (`None`: the error has no position), and
 /// words the message must contain.
 type Case = (
@@ -85,6 +87,31 @@ const CASES: &[Case] = &[
     ("64_utf8_element_name.xml", Some((3, 15)), &["<sphère>", "unknown element"]),
     ("65_crlf_line_ends.xml", Some((3, 22)), &["<light>", "z=\"a\""]),
     ("66_bom_not_counted.xml", Some((1, 8)), &["<sphere2>"]),
+    // XML reads a lone CR as a line break, and CR LF as one (section 2.11).
+    ("67_cr_line_ends.xml", Some((3, 22)), &["<light>", "z=\"a\""]),
+    ("68_mixed_line_ends.xml", Some((4, 22)), &["<light>", "z=\"a\""]),
+    // Composing finite steps can overflow: at the step that made it so.
+    ("69_composed_overflow.xml", Some((6, 7)), &["<transformation>", "<translate>", "overflows"]),
+    ("70_scale_overflow.xml", Some((4, 7)), &["<transformation>", "<scale>", "overflows"]),
+    ("71_scale_inverse_overflow.xml", Some((3, 26)), &["<transformation>", "<scale>", "overflows"]),
+    // Not well-formed XML that quick-xml alone lets through (the lines are
+    // xmllint's: `xmllint_finds_the_same_lines`).
+    ("72_two_byte_order_marks.xml", Some((1, 1)), &["byte-order mark"]),
+    ("73_nul_in_comment.xml", Some((3, 10)), &["U+0000", "comment"]),
+    ("74_control_in_comment.xml", Some((3, 8)), &["U+0001", "comment"]),
+    ("75_utf16_declared.xml", Some((1, 31)), &["UTF-16", "UTF-8"]),
+    ("76_attributes_without_space.xml", Some((4, 31)), &["<color>", "whitespace"]),
+    ("77_bad_pi_target.xml", Some((4, 7)), &["xm--", "whitespace"]),
+    ("78_control_in_attribute.xml", Some((3, 14)), &["<light>", "attribute x", "U+000C"]),
+    ("79_reference_to_control.xml", Some((3, 10)), &["<light>", "attribute x", "U+000C", "character reference"]),
+    ("80_cdata_before_root.xml", Some((1, 1)), &["CDATA", "outside"]),
+    ("81_reserved_pi_target.xml", Some((2, 5)), &["xml", "reserved"]),
+    ("82_xml_version_2.xml", Some((1, 16)), &["version", "2.0"]),
+    ("83_standalone_maybe.xml", Some((2, 15)), &["standalone", "maybe"]),
+    ("84_control_in_pi.xml", Some((3, 8)), &["U+0002", "processing instruction"]),
+    ("85_nonchar_in_comment.xml", Some((3, 8)), &["U+FFFF", "comment"]),
+    ("86_declaration_without_space.xml", Some((1, 20)), &["declaration", "whitespace"]),
+    ("87_reference_to_nonchar.xml", Some((3, 22)), &["<light>", "attribute z", "U+FFFE", "character reference"]),
 ];
 
 fn malformed(name: &str) -> PathBuf {
@@ -139,6 +166,40 @@ fn every_malformed_scene_is_refused_at_the_right_place() {
         failures.len(),
         failures.join("\n")
     );
+}
+
+/// Cases whose line is not xmllint's, and why.
+const NOT_XMLLINT_LINE: &[&str] = &[
+    // The file ends inside the culprit: xmllint reports the end of the file,
+    // RayOfLight the element or tag that is not closed.
+    "04_unclosed_tag.xml",
+    "06_unclosed_quote.xml",
+];
+
+/// Every case xmllint (libxml2) finds not well-formed is refused, and at
+/// xmllint's line (but for the few above, where it points elsewhere).
+#[test]
+fn xmllint_finds_the_same_lines() {
+    let files: Vec<PathBuf> = CASES.iter().map(|c| malformed(c.0)).collect();
+    let Some(lines) = common::xmllint(&files) else {
+        return;
+    };
+    let mut failures = Vec::new();
+    let mut compared = 0;
+    for ((name, _, _), xmllint) in CASES.iter().zip(lines) {
+        let Some(xmllint) = xmllint else { continue };
+        let ours = load_err(&malformed(name)).position().map(|p| p.line);
+        if NOT_XMLLINT_LINE.contains(name) {
+            assert!(ours.is_some(), "{name}: refused without a position");
+            continue;
+        }
+        compared += 1;
+        if ours != Some(xmllint) {
+            failures.push(format!("{name}: line {ours:?}, xmllint {xmllint}"));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    assert!(compared >= 25, "{compared} cases compared");
 }
 
 #[test]
@@ -255,6 +316,10 @@ fn kinds_are_typed() {
     );
     assert_eq!(kind("zero_scale"), K::SingularTransform);
     assert_eq!(
+        kind("composed_overflow"),
+        K::TransformOverflow { step: "translate" }
+    );
+    assert_eq!(
         kind("unknown_model"),
         K::UnknownModel {
             value: "raytrace".into()
@@ -308,12 +373,15 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 #[test]
-fn non_utf8_file_is_refused_without_position() {
+fn non_utf8_file_is_refused_at_the_bad_byte() {
     let path = scratch("latin1.xml");
     std::fs::write(&path, b"<scene>\n<!-- \xe9t\xe9 -->\n</scene>\n").expect("write");
     let err = load_err(&path);
     assert_eq!(err.kind, LoadErrorKind::NotUtf8 { offset: 13 });
-    assert_eq!(err.position(), None);
+    // Not well-formed XML (xmllint: "Input is not proper UTF-8"): its
+    // line and column, as for every other such file.
+    assert_eq!(err.position(), Some(Position { line: 2, column: 6 }));
+    assert!(err.to_string().contains(":2:6: "), "{err}");
     assert!(err.to_string().contains("UTF-8"), "{err}");
 }
 
@@ -441,6 +509,8 @@ fn no_input_makes_the_loader_panic() {
         "<color/>",
         "x=\"1\"",
         "\u{feff}",
+        "\r",
+        "\r\n",
     ];
     let mut rng = Lcg(0x5eed);
     for _ in 0..20_000 {
@@ -465,7 +535,8 @@ fn no_input_makes_the_loader_panic() {
             let message = e.to_string();
             assert!(!message.contains('\n'), "{message:?}");
             if let Some(p) = e.position() {
-                let lines = text.split('\n').count();
+                // At most one line per LF or CR (CR LF is one break).
+                let lines = text.split(['\n', '\r']).count();
                 assert!(
                     p.line >= 1 && p.line <= lines && p.column >= 1,
                     "{p:?} in {text:?}"

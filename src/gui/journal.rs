@@ -274,8 +274,7 @@ fn holder() -> Scene {
 
 /// A sphere holding `steps`, as XML.
 fn steps_xml(steps: &[TransformStep]) -> Result<String, String> {
-    let transform =
-        Transform::from_steps(steps.to_vec()).map_err(|_| "a singular transformation")?;
+    let transform = Transform::from_steps(steps.to_vec()).map_err(|e| e.to_string())?;
     let mut s = holder();
     s.objects.push(std::sync::Arc::new(scene::Object {
         shape: scene::Shape::Sphere,

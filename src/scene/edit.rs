@@ -21,7 +21,7 @@ use std::sync::Arc;
 
 use super::load::{MAX_SIDE, NumberError, parse_integer, parse_number};
 use super::{Camera, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, Object, Scene, Shape};
-use crate::math::{Transform, TransformStep, Vec3};
+use crate::math::{Transform, TransformError, TransformStep, Vec3};
 use crate::shading::{Illumination, Light, Material, Model};
 
 /// Why an edit, or a save of edits, could not be done.
@@ -968,7 +968,7 @@ impl Edited {
             Edit::Transform(owner, steps) => {
                 let path = format!("{owner}.transformation");
                 let transform = Transform::from_steps(steps.clone())
-                    .map_err(|_| value_error(&path, SINGULAR))?;
+                    .map_err(|e| value_error(&path, refused(e)))?;
                 let old_steps = transform_of(&self.scene, *owner)?.steps().to_vec();
                 let old_origins = self.step_origins_mut(*owner).map(|o| o.clone());
                 if let Some(origins) = self.step_origins_mut(*owner) {
@@ -1083,7 +1083,7 @@ impl Edited {
                 if let Some(s) = steps.get_mut(step) {
                     set_step_attr(s, attr, v);
                 }
-                let t = Transform::from_steps(steps).map_err(|_| value_error(field, SINGULAR))?;
+                let t = Transform::from_steps(steps).map_err(|e| value_error(field, refused(e)))?;
                 *transform_mut(scene, owner)? = t;
             }
             Field::Color { object, channel } => {
@@ -1172,7 +1172,7 @@ impl Edited {
                     return Err(past_end(steps.len(), "step"));
                 }
                 steps.insert(k, *step);
-                let t = Transform::from_steps(steps).map_err(|_| value_error(item, SINGULAR))?;
+                let t = Transform::from_steps(steps).map_err(|e| value_error(item, refused(e)))?;
                 *transform_mut(&mut self.scene, owner)? = t;
                 let origin = match restore {
                     Restore::Step(origin) => origin,
@@ -1215,7 +1215,7 @@ impl Edited {
                 steps.remove(k);
                 // Removing a step can make the rest overflow (a scale of
                 // 1e300 that another step undid).
-                let t = Transform::from_steps(steps).map_err(|_| value_error(item, SINGULAR))?;
+                let t = Transform::from_steps(steps).map_err(|e| value_error(item, refused(e)))?;
                 *transform_mut(&mut self.scene, owner)? = t;
                 let origin = self.step_origins_mut(owner).and_then(|o| take(o, k));
                 (Element::Step(step), Restore::Step(origin))
@@ -1243,7 +1243,15 @@ fn take<T>(v: &mut Vec<Option<T>>, n: usize) -> Option<T> {
     if n < v.len() { v.remove(n) } else { None }
 }
 
-const SINGULAR: &str = "the transformation would be singular (a zero scale, or an overflow)";
+/// Why an edit's steps make no transformation.
+fn refused(e: TransformError) -> &'static str {
+    match e {
+        TransformError::Singular { .. } => "the transformation would be singular (a zero scale)",
+        TransformError::Overflow { .. } => {
+            "the composed transformation would overflow (its matrix or its inverse not finite)"
+        }
+    }
+}
 
 fn object_mut(scene: &mut Scene, n: usize) -> Result<&mut Object, EditError> {
     object_of(scene, n)?;

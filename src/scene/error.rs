@@ -23,14 +23,24 @@ impl Position {
     /// The line and column of the byte `offset` in `text`. An offset past the
     /// end is the end of the text; one inside a multi-byte character is that
     /// character's position.
+    ///
+    /// Lines end as XML's end-of-line handling says (XML 1.0, 2.11): at LF,
+    /// at CR LF (one break) and at a lone CR. Every `line:column` of the
+    /// project is computed here.
     pub fn at_offset(text: &str, offset: usize) -> Position {
         let mut offset = offset.min(text.len());
         while !text.is_char_boundary(offset) {
             offset -= 1;
         }
         let before = text.get(..offset).unwrap_or(text);
-        let line_start = before.rfind('\n').map_or(0, |i| i + 1);
-        let line = 1 + before.bytes().filter(|&b| b == b'\n').count();
+        let bytes = before.as_bytes();
+        // A CR followed by LF is counted at its LF.
+        let breaks = bytes
+            .iter()
+            .enumerate()
+            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')));
+        let line = 1 + breaks.count();
+        let line_start = before.rfind(['\n', '\r']).map_or(0, |i| i + 1);
         let column = 1 + before.get(line_start..).map_or(0, |s| s.chars().count());
         Position { line, column }
     }
@@ -197,10 +207,15 @@ pub enum LoadErrorKind {
     /// `<scale>` with both `factor` and one of `x`, `y`, `z`.
     #[error("<scale> attribute {attribute}: factor cannot be combined with x, y or z")]
     ScaleFactorWithAxes { attribute: &'static str },
-    /// The composed `<transformation>` has no finite inverse (a zero scale,
-    /// or numbers so large that the matrix overflows).
-    #[error("singular <transformation>: its matrix has no finite inverse (a zero scale?)")]
+    /// A zero scale in a `<transformation>`: its matrix has no inverse.
+    #[error("singular <transformation>: a zero scale has no inverse")]
     SingularTransform,
+    /// Composing the `<transformation>` up to this `<step>` made its matrix
+    /// or its inverse non-finite (numbers too large, or a scale too small).
+    #[error(
+        "the composed <transformation> overflows at this <{step}>: its matrix or its inverse is no longer finite"
+    )]
+    TransformOverflow { step: &'static str },
     /// `width * height` is above [`MAX_PIXELS`](super::MAX_PIXELS).
     #[error(
         "<camera> image of {width} x {height} pixels is too large: more than the limit of {limit} pixels"
@@ -331,6 +346,31 @@ mod tests {
         assert_eq!(
             Position::at_offset(text, 99),
             Position { line: 2, column: 5 }
+        );
+    }
+
+    #[test]
+    fn lines_end_at_lf_crlf_and_a_lone_cr() {
+        // Line 1 "a", CR LF, line 2 "b", CR, line 3 "c", LF, line 4 "d".
+        let text = "a\r\nb\rc\nd";
+        let at = |o| {
+            let p = Position::at_offset(text, o);
+            (p.line, p.column)
+        };
+        assert_eq!(at(0), (1, 1));
+        // The CR of CR LF ends line 1; just after it (before the LF) is
+        // already line 2, as is the character after the pair.
+        assert_eq!(at(1), (1, 2));
+        assert_eq!(at(2), (2, 1));
+        assert_eq!(at(3), (2, 1));
+        assert_eq!(at(4), (2, 2));
+        assert_eq!(at(5), (3, 1));
+        assert_eq!(at(7), (4, 1));
+        assert_eq!(at(99), (4, 2));
+        // Only CRs: each one a line.
+        assert_eq!(
+            Position::at_offset("\r\r\rx", 3),
+            Position { line: 4, column: 1 }
         );
     }
 

@@ -8,6 +8,14 @@
 //! borrow the text: a slice's address minus the text's address is its byte
 //! offset, turned into line and column only when an error is reported.
 //!
+//! quick-xml is lenient: what it does not check of XML 1.0's
+//! well-formedness, [`super::xml`] checks in each piece of markup it
+//! delimits (characters, names, whitespace between attributes, comments,
+//! processing instructions, the XML declaration and its encoding); at most
+//! one byte-order mark, no CDATA section outside the root. A DOCTYPE is
+//! refused on purpose (scene files declare no entities). A file libxml2
+//! finds not well-formed is refused, with its line and column.
+//!
 //! Nothing here panics on any input, and every count the file controls is
 //! checked against its limit before anything is allocated for it.
 
@@ -23,8 +31,9 @@ use quick_xml::events::attributes::AttrError;
 use quick_xml::events::{BytesStart, Event};
 
 use super::error::{LoadError, LoadErrorKind, Position};
+use super::xml;
 use super::{Camera, Color, Illumination, Light, Material, Model, Object, Scene, Shape};
-use crate::math::{Transform, TransformStep, Vec3};
+use crate::math::{Transform, TransformError, TransformStep, Vec3};
 
 /// Largest scene file [`load`] reads: 1 GiB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
@@ -56,8 +65,8 @@ const SCALE_ATTRS: &[&str] = &["factor", "x", "y", "z"];
 /// The size is checked from the file's metadata before reading (and again
 /// while reading, should the file grow): above [`MAX_FILE_BYTES`] it is
 /// refused. A directory, a special file (FIFO, device, socket: refused
-/// before opening it), an unreadable file or one that is not UTF-8 gives an
-/// error without a position.
+/// before opening it) or an unreadable file gives an error without a
+/// position; one that is not UTF-8 is refused at its first bad byte.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
     load_with_text(path).map(|(_, scene)| scene)
 }
@@ -160,9 +169,16 @@ pub fn load_counting(
         return Err(too_large(read));
     }
     let text = String::from_utf8(bytes).map_err(|e| {
-        fail(LoadErrorKind::NotUtf8 {
-            offset: e.utf8_error().valid_up_to(),
-        })
+        let offset = e.utf8_error().valid_up_to();
+        // The valid part is text: the bad byte's line and column in it.
+        let valid = e.as_bytes().get(..offset).unwrap_or_default();
+        let prefix = std::str::from_utf8(valid).unwrap_or_default();
+        let prefix = prefix.strip_prefix('\u{feff}').unwrap_or(prefix);
+        LoadError::new(
+            path,
+            Some(Position::at_offset(prefix, prefix.len())),
+            LoadErrorKind::NotUtf8 { offset },
+        )
     })?;
     let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
     let mut parser = Parser::new(body, path);
@@ -289,6 +305,8 @@ struct Parser<'a> {
     at_start: bool,
     /// `</scene>` (or `<scene/>`) has been read.
     after_root: bool,
+    /// Elements open: 0 outside the root.
+    depth: usize,
     /// [`MAX_OBJECTS`] and [`MAX_LIGHTS`], lowered by unit tests.
     max_objects: usize,
     max_lights: usize,
@@ -314,6 +332,7 @@ impl<'a> Parser<'a> {
             reader,
             at_start: true,
             after_root: false,
+            depth: 0,
             max_objects: MAX_OBJECTS,
             max_lights: MAX_LIGHTS,
             like: &[],
@@ -382,19 +401,58 @@ impl<'a> Parser<'a> {
                 }
             };
             let first = std::mem::replace(&mut self.at_start, false);
+            // The markup's text between `<` + `open` bytes and `close`
+            // bytes + `>`, checked by `check` (quick-xml delimits markup but
+            // does not check what is inside).
+            let after = self.reader_offset();
+            let inside =
+                |open: usize, close: usize, check: &dyn Fn(&str) -> Result<(), xml::Fault>| {
+                    let start = before.saturating_add(open);
+                    let inner = self
+                        .text
+                        .get(start..after.saturating_sub(close))
+                        .unwrap_or_default();
+                    check(inner).map_err(|f| self.xml_at(start.saturating_add(f.at), f.message))
+                };
             match event {
-                Event::Start(start) => return Ok(Node::Open(self.elem(start, before, false))),
-                Event::Empty(start) => return Ok(Node::Open(self.elem(start, before, true))),
-                Event::End(_) => return Ok(Node::Close(before)),
+                Event::Start(start) => {
+                    inside(1, 1, &xml::start_tag)?;
+                    self.depth = self.depth.saturating_add(1);
+                    return Ok(Node::Open(self.elem(start, before, false)));
+                }
+                Event::Empty(start) => {
+                    inside(1, 2, &xml::start_tag)?;
+                    return Ok(Node::Open(self.elem(start, before, true)));
+                }
+                Event::End(_) => {
+                    self.depth = self.depth.saturating_sub(1);
+                    return Ok(Node::Close(before));
+                }
                 Event::Eof => return Ok(Node::Eof),
                 Event::Text(text) => self.check_text(&text, before)?,
-                Event::CData(data) => self.check_text(&data, before)?,
+                Event::CData(data) => {
+                    if self.depth == 0 {
+                        let what = "a CDATA section";
+                        return Err(if self.after_root {
+                            self.error_at(
+                                before,
+                                LoadErrorKind::ContentAfterRoot {
+                                    what: what.to_owned(),
+                                },
+                            )
+                        } else {
+                            self.xml_at(before, format!("{what} outside the <scene> element"))
+                        });
+                    }
+                    self.check_text(&data, before)?;
+                }
                 Event::GeneralRef(reference) => {
                     let text = format!("&{};", String::from_utf8_lossy(&reference));
                     return Err(self.text_error(before, text));
                 }
-                Event::Comment(_) | Event::PI(_) => {}
-                Event::Decl(decl) => {
+                Event::Comment(_) => inside(4, 3, &xml::comment)?,
+                Event::PI(_) => inside(2, 2, &xml::processing_instruction)?,
+                Event::Decl(_) => {
                     if !first || before != 0 {
                         return Err(self.xml_at(
                             before,
@@ -402,9 +460,8 @@ impl<'a> Parser<'a> {
                                 .to_owned(),
                         ));
                     }
-                    if let Err(e) = decl.version() {
-                        return Err(self.xml_at(before, e.to_string()));
-                    }
+                    let ascii = || self.text.is_ascii();
+                    inside(5, 2, &|s| xml::declaration(s, &ascii))?;
                 }
                 Event::DocType(_) => return Err(self.error_at(before, LoadErrorKind::Doctype)),
             }
@@ -433,7 +490,10 @@ impl<'a> Parser<'a> {
             .unwrap_or(before)
             .saturating_add(index);
         let rest = bytes.get(index..).unwrap_or_default();
-        let line = rest.split(|&b| b == b'\n').next().unwrap_or_default();
+        let line = rest
+            .split(|&b| b == b'\n' || b == b'\r')
+            .next()
+            .unwrap_or_default();
         let text = String::from_utf8_lossy(line).trim_end().to_owned();
         Err(self.text_error(at, text))
     }
@@ -561,6 +621,21 @@ impl<'a> Parser<'a> {
                         },
                     )
                 })?;
+            // A literal non-Char was refused with the tag (`xml::start_tag`):
+            // one in the unescaped value came from a character reference.
+            if let Cow::Owned(unescaped) = &value
+                && let Err(f) =
+                    xml::chars(unescaped, "an attribute value (from a character reference)")
+            {
+                return Err(self.error_at(
+                    at,
+                    LoadErrorKind::BadReference {
+                        element,
+                        attribute: name,
+                        message: f.message,
+                    },
+                ));
+            }
             list.push(Attr { name, value, at });
         }
         Ok(Attrs {
@@ -713,6 +788,14 @@ impl<'a> Parser<'a> {
     // ----- the grammar -----
 
     fn document(mut self) -> Result<Scene, LoadError> {
+        // One byte-order mark is skipped before the parser sees the text
+        // (and quick-xml would skip another).
+        if self.text.starts_with('\u{feff}') {
+            return Err(self.xml_at(
+                0,
+                "a second byte-order mark: at most one may start the file".to_owned(),
+            ));
+        }
         let root = match self.next()? {
             Node::Open(e) => e,
             // quick-xml reports an end tag without a start tag itself.
@@ -958,6 +1041,8 @@ impl<'a> Parser<'a> {
     fn transformation(&mut self, e: &Elem<'a>) -> Result<Transform, LoadError> {
         self.attrs(e, "transformation", NONE)?;
         let mut steps = Vec::new();
+        // Each step's `<` and name, for an overflow's message.
+        let mut places = Vec::new();
         self.children(
             e,
             "transformation",
@@ -965,11 +1050,22 @@ impl<'a> Parser<'a> {
             false,
             |p, child, name| {
                 steps.push(p.step(child, name)?);
+                places.push((child.at, name));
                 Ok(())
             },
         )?;
-        Transform::from_steps(steps)
-            .map_err(|_| self.error_at(e.at, LoadErrorKind::SingularTransform))
+        Transform::from_steps(steps).map_err(|err| match err {
+            TransformError::Singular { .. } => {
+                self.error_at(e.at, LoadErrorKind::SingularTransform)
+            }
+            TransformError::Overflow { step } => {
+                let (at, step) = places
+                    .get(step)
+                    .copied()
+                    .unwrap_or((e.at, "transformation"));
+                self.error_at(at, LoadErrorKind::TransformOverflow { step })
+            }
+        })
     }
 
     fn step(&mut self, e: &Elem<'a>, name: &'static str) -> Result<TransformStep, LoadError> {

@@ -18,6 +18,7 @@ pub mod identity;
 mod load;
 pub mod merge;
 pub mod splice;
+mod xml;
 
 pub use error::{LoadError, LoadErrorKind, Position};
 pub use load::{
