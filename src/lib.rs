@@ -20,6 +20,8 @@
 //!   many tasks, and their parts put back together, checked; [`sheet`]:
 //!   the renders of a sweep side by side.
 //! - [`files`]: special files and symbolic links, for reading and writing.
+//! - [`resources`]: memory and open files asked for before the work that
+//!   needs them, refused in one line instead of an abort.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
 //! - [`measure`]: render time, medians, image differences, CSV: measured
@@ -48,6 +50,7 @@ pub mod pov;
 pub mod region;
 pub mod render;
 pub mod request;
+pub mod resources;
 pub mod scene;
 pub mod shading;
 pub mod sheet;
