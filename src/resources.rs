@@ -90,16 +90,65 @@ pub fn available_memory() -> Option<u64> {
     least
 }
 
-/// What this process's control group (v2) may still take: its
-/// `memory.max` less its `memory.current`, where it has a limit.
+/// What this process's control group may still take: its memory limit
+/// less what it uses, not counting the page cache the kernel reclaims
+/// for it (a group that has read many files counts them as used).
+/// Version 2 (`memory.max`) or version 1 (`memory.limit_in_bytes`), at
+/// the group's path or, in a container that shows its group as the root,
+/// at the mount itself; `None` where no limit is set.
 fn cgroup_memory_left() -> Option<u64> {
     let groups = std::fs::read_to_string("/proc/self/cgroup").ok()?;
-    let path = groups.lines().find_map(|l| l.strip_prefix("0::"))?;
-    let dir = std::path::Path::new("/sys/fs/cgroup").join(path.trim_start_matches('/'));
-    let read = |name: &str| std::fs::read_to_string(dir.join(name)).ok();
-    let max: u64 = read("memory.max")?.trim().parse().ok()?;
-    let current: u64 = read("memory.current")?.trim().parse().ok()?;
-    Some(max.saturating_sub(current))
+    let root = std::path::Path::new("/sys/fs/cgroup");
+    let v2 = groups.lines().find_map(|l| l.strip_prefix("0::"));
+    let v1 = groups.lines().find_map(|l| {
+        let (_, rest) = l.split_once(':')?;
+        let (controllers, path) = rest.split_once(':')?;
+        controllers
+            .split(',')
+            .any(|c| c == "memory")
+            .then_some(path)
+    });
+    let number = |dir: &std::path::Path, name: &str| -> Option<u64> {
+        std::fs::read_to_string(dir.join(name))
+            .ok()?
+            .trim()
+            .parse()
+            .ok()
+    };
+    let stat = |dir: &std::path::Path, key: &str| -> u64 {
+        std::fs::read_to_string(dir.join("memory.stat"))
+            .ok()
+            .and_then(|text| {
+                text.lines()
+                    .find_map(|l| l.strip_prefix(key)?.strip_prefix(' ')?.trim().parse().ok())
+            })
+            .unwrap_or(0)
+    };
+    let left = |dir: &std::path::Path, limit: &str, usage: &str, cache: &str| {
+        let limit = number(dir, limit)?;
+        let used = number(dir, usage)?.saturating_sub(stat(dir, cache));
+        Some(limit.saturating_sub(used))
+    };
+    let mut found = None;
+    if let Some(path) = v2 {
+        for dir in [root.join(path.trim_start_matches('/')), root.to_owned()] {
+            found = found.or_else(|| left(&dir, "memory.max", "memory.current", "file"));
+        }
+    }
+    if let Some(path) = v1 {
+        let mount = root.join("memory");
+        for dir in [mount.join(path.trim_start_matches('/')), mount] {
+            found = found.or_else(|| {
+                left(
+                    &dir,
+                    "memory.limit_in_bytes",
+                    "memory.usage_in_bytes",
+                    "total_cache",
+                )
+            });
+        }
+    }
+    found
 }
 
 /// Refuses work whose buffers take `buffers` bytes where
@@ -206,6 +255,8 @@ mod tests {
         assert!(buffer(usize::MAX / 2, 0u8).is_err());
         assert_eq!(buffer(3, 7u8).unwrap(), vec![7, 7, 7]);
         if cfg!(target_os = "linux") {
+            let available = available_memory().expect("/proc/meminfo at least");
+            assert!(available > 1 << 20, "{available}");
             let e = check_memory(u64::MAX / 2).unwrap_err();
             assert!(e.to_string().starts_with("needs "), "{e}");
         }
