@@ -11,6 +11,10 @@
 //! memory holds a few rows, never the image (a 16000×16000 image is 768
 //! MB).
 //!
+//! Every part crossing a row is open while the row is assembled: the
+//! soft limit of open files is raised to the hard one first, and parts
+//! that still need more at once are refused before any pixel is read.
+//!
 //! The image written is the file a one-machine render writes
 //! ([`crate::output::write_png`] for both): `cmp` finds no difference.
 
@@ -96,6 +100,17 @@ pub enum AssembleError {
     Gap { gap: Region, size: (u32, u32) },
     #[error("{}: {reason}", path.display())]
     Decode { path: PathBuf, reason: String },
+    #[error(
+        "{parts} parts cross row {row} of the image and must be open together, but this process may open {limit} files at once ({open} open already; hard limit {}): give fewer parts across the image, or raise the hard limit ('ulimit -Hn'); no pixel was read",
+        hard.map_or("none".to_owned(), |h| h.to_string())
+    )]
+    TooManyOpen {
+        parts: usize,
+        row: u32,
+        limit: u64,
+        hard: Option<u64>,
+        open: u64,
+    },
     #[error(transparent)]
     Output(#[from] OutputError),
 }
@@ -381,6 +396,7 @@ pub fn assemble_until(
     }
     let (width, height) = parts[0].part.image;
     output::check_target(out, width, height)?;
+    check_open_files(&parts)?;
     let (send, receive) =
         std::sync::mpsc::sync_channel::<Result<Vec<u8>, AssembleError>>(QUEUED_ROWS);
     let mut failure: Option<AssembleError> = None;
@@ -428,6 +444,52 @@ pub fn assemble_until(
             parts: parts.len(),
         }),
     }
+}
+
+/// Descriptors besides the parts' that an assembly may hold: the output's
+/// temporary file, its folder probe, a scratch file, the standard streams
+/// and a few the runtime keeps.
+const SPARE_FILES: u64 = 16;
+
+/// The most parts that cross one row, and the first row they do: the
+/// files open together while it is assembled. `parts` in reading order.
+pub fn most_open(parts: &[PartFile]) -> (usize, u32) {
+    // Each part opens at its top row and closes after its bottom one:
+    // the count peaks at some part's top.
+    let mut events: Vec<(u32, i64)> = parts
+        .iter()
+        .flat_map(|p| [(p.part.region.y0, 1), (p.part.region.y1, -1)])
+        .collect();
+    // At one row, the parts that end close before those that start open.
+    events.sort_unstable();
+    let (mut open, mut most, mut row) = (0i64, 0i64, 0);
+    for (y, change) in events {
+        open += change;
+        if open > most {
+            (most, row) = (open, y);
+        }
+    }
+    (most as usize, row)
+}
+
+/// Raises the soft limit of open files to the hard one
+/// ([`crate::resources::raise_open_files`]) and refuses, before any
+/// pixel is read, parts that a row needs open together beyond it.
+fn check_open_files(parts: &[PartFile]) -> Result<(), AssembleError> {
+    let (most, row) = most_open(parts);
+    let Some(files) = crate::resources::raise_open_files() else {
+        return Ok(());
+    };
+    if files.open + most as u64 + SPARE_FILES > files.limit {
+        return Err(AssembleError::TooManyOpen {
+            parts: most,
+            row,
+            limit: files.limit,
+            hard: files.hard,
+            open: files.open,
+        });
+    }
+    Ok(())
 }
 
 /// Rows decoded ahead of the writer, at most: a few hundred kilobytes on
@@ -498,4 +560,35 @@ fn keep(failure: &mut Option<AssembleError>, e: AssembleError) -> std::io::Error
     let message = e.to_string();
     *failure = Some(e);
     std::io::Error::other(message)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_files_open_at_once_are_the_parts_crossing_the_busiest_row() {
+        let part = |x0, y0, x1, y1| PartFile {
+            path: PathBuf::from(format!("{x0},{y0}")),
+            part: Part {
+                region: Region::new(x0, y0, x1, y1).unwrap(),
+                image: (10, 10),
+                render: 0,
+                version: String::new(),
+            },
+        };
+        // Three bands; the middle one cut in four.
+        let parts = [
+            part(0, 0, 10, 3),
+            part(0, 3, 2, 7),
+            part(2, 3, 5, 7),
+            part(5, 3, 9, 7),
+            part(9, 3, 10, 7),
+            part(0, 7, 10, 10),
+        ];
+        // The top band closes before the middle one opens.
+        assert_eq!(most_open(&parts), (4, 3));
+        assert_eq!(most_open(&parts[..1]), (1, 0));
+        assert_eq!(most_open(&[]), (0, 0));
+    }
 }

@@ -23,6 +23,8 @@
 //!   reading and writing.
 //! - [`interrupt`]: SIGINT, SIGTERM and SIGHUP stop a write or a render
 //!   cleanly, nothing left behind.
+//! - [`resources`]: memory and open files asked for before the work that
+//!   needs them, refused in one line instead of an abort.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
 //! - [`bench`]: the benchmark scenes.
 //! - [`measure`]: render time, medians, image differences, CSV: measured
@@ -52,6 +54,7 @@ pub mod pov;
 pub mod region;
 pub mod render;
 pub mod request;
+pub mod resources;
 pub mod scene;
 pub mod shading;
 pub mod sheet;

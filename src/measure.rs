@@ -16,7 +16,8 @@
 //!   [`crate::study::SCENES`]).
 
 use crate::render::{
-    self, Cancel, Pass, PassImage, Progress, RenderError, RenderOptions, RenderStats,
+    self, Cancel, KeptPass, Pass, PassForm, PassImage, Progress, RenderError, RenderOptions,
+    RenderStats,
 };
 use crate::request::RenderRequest;
 use crate::scene::{self, LoadError, Scene};
@@ -124,6 +125,22 @@ pub fn pass_timed(
 ) -> Result<Option<Timed<PassImage>>, RenderError> {
     timed(scene, request, pool, |options| {
         render::render_pass(scene, options, pass, cancel, progress)
+    })
+}
+
+/// Renders one pass of `scene` kept in the form of its file
+/// ([`render::render_pass_as`]) and times it as [`render_timed`] does.
+pub fn kept_pass_timed(
+    scene: &Scene,
+    request: &RenderRequest,
+    pass: Pass,
+    form: PassForm,
+    pool: &RenderPool,
+    cancel: &Cancel,
+    progress: &Progress,
+) -> Result<Option<Timed<KeptPass>>, RenderError> {
+    timed(scene, request, pool, |options| {
+        render::render_pass_as(scene, options, pass, form, cancel, progress)
     })
 }
 

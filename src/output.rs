@@ -10,7 +10,7 @@
 //! the temporary file removed.
 
 use crate::part::Part;
-use crate::render::{Pass, PassImage};
+use crate::render::{KeptPass, Pass, PassForm, PassImage, PassPixels};
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageFormat, RgbImage};
 use std::io::{BufWriter, Write};
@@ -248,6 +248,14 @@ pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
     if format == ImageFormat::Png {
         return save_png(image, &[], path);
     }
+    if format == ImageFormat::OpenExr {
+        // Each channel value / 255, as `image` converts 8 bits to floats.
+        let (width, raw) = (image.width() as usize, image.as_raw());
+        return save_exr(path, image.width(), image.height(), |x, y| {
+            let i = 3 * (y * width + x);
+            [0, 1, 2].map(|c| f32::from(raw[i + c]) / 255.0)
+        });
+    }
     let encoded = encode(image, format).map_err(|source| OutputError::Encode {
         path: path.to_owned(),
         source,
@@ -326,14 +334,127 @@ pub fn save_pass(pass: &PassImage, path: &Path) -> Result<(), OutputError> {
     if format_for(path)? != ImageFormat::OpenExr {
         return save(&pass.to_rgb8(), path);
     }
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    pass.to_rgb32f()
-        .write_to(&mut bytes, ImageFormat::OpenExr)
-        .map_err(|source| OutputError::Encode {
-            path: path.to_owned(),
-            source,
-        })?;
-    write_atomic(path, bytes.get_ref())
+    let (width, values) = (pass.width as usize, &pass.values);
+    save_exr(path, pass.width, pass.height, |x, y| {
+        let i = 3 * (y * width + x);
+        [0, 1, 2].map(|c| crate::render::in_exr(pass.pass, values[i + c]))
+    })
+}
+
+/// Writes a pass rendered in the form of its file
+/// ([`crate::render::render_pass_as`]): the same file as [`save_pass`]
+/// of its whole image.
+pub fn save_kept_pass(pass: &KeptPass, path: &Path) -> Result<(), OutputError> {
+    match &pass.pixels {
+        PassPixels::Picture(image) => save(image, path),
+        PassPixels::Floats(image) => {
+            let (width, values) = (image.width() as usize, image.as_raw());
+            save_exr(path, image.width(), image.height(), |x, y| {
+                let i = 3 * (y * width + x);
+                [values[i], values[i + 1], values[i + 2]]
+            })
+        }
+    }
+}
+
+/// The most memory rendering a `width × height` image for `path` takes,
+/// in bytes, before any margin: the pixels as they are kept while the
+/// render runs (the 8-bit image, or `pass`'s [`PassForm`] where the file
+/// takes the passes' render, [`takes_pass`]), or those pixels and the
+/// encoded file where the format is encoded in memory (PNG is written a
+/// row at a time, EXR block by block). Checked against what the system
+/// gives ([`crate::resources::check_memory`]) before the first ray.
+pub fn bytes_to_render(format: ImageFormat, pass: Option<Pass>, width: u32, height: u32) -> u64 {
+    let pixels = u64::from(width) * u64::from(height);
+    let kept = match pass {
+        Some(pass) => pixel_form(format).bytes_per_pixel(pass),
+        None => 3,
+    };
+    let encoded = match format {
+        ImageFormat::Png | ImageFormat::OpenExr => 0,
+        // The indices and the file, and the table of every 24-bit colour.
+        ImageFormat::Gif => 2 * pixels + (2 << 24),
+        // At most about the pixels themselves.
+        _ => 3 * pixels,
+    };
+    // A depth picture's 8 bytes become its 3 before it is encoded.
+    (kept * pixels).max(3 * pixels + encoded)
+}
+
+/// The form a pass is rendered in for a file of `format`: floats for an
+/// EXR, the 8-bit picture for the rest.
+pub fn pixel_form(format: ImageFormat) -> PassForm {
+    if format == ImageFormat::OpenExr {
+        PassForm::Floats
+    } else {
+        PassForm::Picture
+    }
+}
+
+/// Writes a `width × height` EXR of `pixel(x, y)` (RGB, f32) atomically,
+/// with no copy of the image: the exr crate's writer (RLE in 64×64 tiles,
+/// the file `image` itself writes) pulls each pixel as it encodes. It
+/// seeks back to its table of offsets at the end, so it writes into a
+/// scratch file beside the output (unnamed, gone with the process
+/// whatever happens), which is then copied into place
+/// ([`write_atomic_with`]): the encoded image is never in memory either.
+pub fn save_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    pixel: impl Fn(usize, usize) -> [f32; 3] + Sync,
+) -> Result<(), OutputError> {
+    use exr::prelude::{Image, SpecificChannels, Vec2, WritableImage};
+    use std::io::{Seek, SeekFrom};
+    let io_error = |source| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let mut scratch = scratch_file(path).map_err(io_error)?;
+    let image = Image::from_channels(
+        (width as usize, height as usize),
+        SpecificChannels::rgb(|at: Vec2<usize>| {
+            let [r, g, b] = pixel(at.x(), at.y());
+            (r, g, b)
+        }),
+    );
+    {
+        let mut w = BufWriter::new(&mut scratch);
+        let written = image.write().to_buffered(&mut w).map_err(|e| match e {
+            exr::error::Error::Io(source) => io_error(source),
+            other => OutputError::Encode {
+                path: path.to_owned(),
+                source: image::ImageError::Encoding(image::error::EncodingError::new(
+                    ImageFormat::OpenExr.into(),
+                    other,
+                )),
+            },
+        });
+        written?;
+        w.flush().map_err(io_error)?;
+    }
+    scratch.seek(SeekFrom::Start(0)).map_err(io_error)?;
+    write_atomic_with(
+        path,
+        |w| std::io::copy(&mut scratch, w).map(drop),
+        |_| Ok::<(), OutputError>(()),
+    )
+}
+
+/// An unnamed scratch file for writing `path`: in its folder (the disk
+/// it is going to, where `check_target` found room for a new file), or
+/// the system's temporary folder where that cannot hold one (a device).
+fn scratch_file(path: &Path) -> std::io::Result<std::fs::File> {
+    let target = crate::files::through_links(path);
+    let folder = match target.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+        _ => PathBuf::from("."),
+    };
+    let regular = std::fs::metadata(&target).map_or(true, |m| m.is_file());
+    match regular.then(|| tempfile::tempfile_in(&folder)) {
+        Some(Ok(file)) => Ok(file),
+        _ => tempfile::tempfile(),
+    }
 }
 
 /// The image encoded in memory (JPEG at [`JPEG_QUALITY`]; an 8-bit image
@@ -654,6 +775,43 @@ mod tests {
                 assert_eq!(back, sample(), "{ext} should be lossless");
             }
         }
+    }
+
+    #[test]
+    fn an_exr_written_from_the_pixels_is_the_file_image_encodes() {
+        // The pixels pulled by the encoder, the file streamed from a
+        // scratch file: the same bytes as `image`'s in-memory encoding.
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.exr");
+        save(&sample(), &path).unwrap();
+        let ours = std::fs::read(&path).unwrap();
+        assert_eq!(ours, encode(&sample(), ImageFormat::OpenExr).unwrap());
+        let pass = PassImage {
+            pass: Pass::Depth,
+            width: 3,
+            height: 2,
+            values: (0..18).map(|v| f64::from(v) * 0.1 + 1e-12).collect(),
+        };
+        save_pass(&pass, &path).unwrap();
+        let mut theirs = std::io::Cursor::new(Vec::new());
+        pass.to_rgb32f()
+            .write_to(&mut theirs, ImageFormat::OpenExr)
+            .unwrap();
+        assert_eq!(std::fs::read(&path).unwrap(), theirs.into_inner());
+        // No scratch or temporary file is left beside it.
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+
+    #[test]
+    fn the_memory_to_render_counts_what_each_format_holds() {
+        let px = 1000 * 1000;
+        let bytes = |f, p| bytes_to_render(f, p, 1000, 1000);
+        assert_eq!(bytes(ImageFormat::Png, None), 3 * px);
+        assert_eq!(bytes(ImageFormat::Bmp, None), 6 * px);
+        assert_eq!(bytes(ImageFormat::Png, Some(Pass::Normal)), 3 * px);
+        assert_eq!(bytes(ImageFormat::Png, Some(Pass::Depth)), 8 * px);
+        assert_eq!(bytes(ImageFormat::OpenExr, Some(Pass::Final)), 12 * px);
+        assert_eq!(bytes(ImageFormat::Gif, None), 5 * px + (2 << 24));
     }
 
     #[test]

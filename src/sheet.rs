@@ -20,10 +20,111 @@ pub const MIN_CELL_WIDTH: u32 = 120;
 
 const BACKGROUND: Rgb<u8> = Rgb([48, 48, 48]);
 
+/// Most pixels a sheet may have: 2^30, 3.2 GB as 8-bit RGB. A 16384²
+/// render (the largest square a scene may ask for,
+/// [`MAX_PIXELS`](crate::scene::MAX_PIXELS)) fits, and one more of its size
+/// beside it; a sweep of 600×600 renders, 2700 of them.
+pub const MAX_SHEET_PIXELS: u64 = 1 << 30;
+
 /// Why the sheet could not be drawn.
 #[derive(Debug, thiserror::Error)]
-#[error("cannot draw the contact sheet: {0}")]
-pub struct SheetError(String);
+pub enum SheetError {
+    #[error("cannot draw the contact sheet: {0}")]
+    Draw(String),
+    #[error(
+        "cannot draw the contact sheet: {count} image{} in {columns} column{} of {cell_width}×{cell_height}-pixel cells make a {width}×{height} sheet ({} pixels), more than the limit of {MAX_SHEET_PIXELS} (2^30)",
+        plural(*count),
+        plural(*columns as usize),
+        u128::from(*width) * u128::from(*height)
+    )]
+    TooLarge {
+        count: usize,
+        columns: u64,
+        cell_width: u64,
+        cell_height: u64,
+        width: u64,
+        height: u64,
+    },
+    #[error("cannot draw the {width}×{height} contact sheet: it {source}")]
+    Memory {
+        width: u32,
+        height: u32,
+        source: crate::resources::NotEnoughMemory,
+    },
+}
+
+fn plural(n: usize) -> &'static str {
+    if n == 1 { "" } else { "s" }
+}
+
+/// Where the pictures go: the grid of a sheet of pictures of some sizes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Layout {
+    pub columns: u32,
+    pub rows: u32,
+    /// Each cell: as large as the largest picture (and at least
+    /// [`MIN_CELL_WIDTH`] wide), and the line for its name.
+    pub cell_width: u32,
+    pub cell_height: u32,
+    /// The whole sheet.
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Layout {
+    /// The grid of pictures of `sizes` (width, height) in reading order,
+    /// `columns` a row (none: as square a grid as the count allows);
+    /// refused, before anything is allocated, where the sheet would have
+    /// more than [`MAX_SHEET_PIXELS`].
+    pub fn new(sizes: &[(u32, u32)], columns: Option<usize>) -> Result<Layout, SheetError> {
+        let count = sizes.len().max(1);
+        let columns = columns
+            .unwrap_or_else(|| (count as f64).sqrt().ceil() as usize)
+            .clamp(1, count) as u64;
+        let rows = count.div_ceil(columns as usize) as u64;
+        let gap = u64::from(GAP);
+        let cell_width =
+            u64::from(sizes.iter().map(|s| s.0).max().unwrap_or(1)).max(u64::from(MIN_CELL_WIDTH));
+        let cell_height =
+            u64::from(sizes.iter().map(|s| s.1).max().unwrap_or(1)) + u64::from(LABEL_HEIGHT);
+        let width = columns * (cell_width + gap) + gap;
+        let height = rows * (cell_height + gap) + gap;
+        if u128::from(width) * u128::from(height) > u128::from(MAX_SHEET_PIXELS) {
+            return Err(SheetError::TooLarge {
+                count: sizes.len(),
+                columns,
+                cell_width,
+                cell_height,
+                width,
+                height,
+            });
+        }
+        // Below 2^30 pixels, every side and product fits in a u32.
+        let small = |v: u64| u32::try_from(v).expect("a side of a sheet under the limit");
+        Ok(Layout {
+            columns: small(columns),
+            rows: small(rows),
+            cell_width: small(cell_width),
+            cell_height: small(cell_height),
+            width: small(width),
+            height: small(height),
+        })
+    }
+
+    /// Bytes of the sheet as 8-bit RGB.
+    pub fn bytes(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height) * 3
+    }
+
+    /// The top-left corner of cell `k`.
+    fn cell(&self, k: usize) -> (u32, u32) {
+        let (c, r) = (k as u32 % self.columns, k as u32 / self.columns);
+        (
+            GAP + c * (self.cell_width + GAP),
+            GAP + r * (self.cell_height + GAP),
+        )
+    }
+}
 
 /// The sheet of `images` (name, picture) in reading order, `columns` a
 /// row (none: as square a grid as the count allows). Each cell is as
@@ -33,43 +134,56 @@ pub fn contact_sheet(
     images: &[(String, RgbImage)],
     columns: Option<usize>,
 ) -> Result<RgbImage, SheetError> {
-    let count = images.len().max(1);
-    let columns = columns
-        .unwrap_or_else(|| (count as f64).sqrt().ceil() as usize)
-        .clamp(1, count) as u32;
-    let rows = count.div_ceil(columns as usize) as u32;
-    let cell_w = images
-        .iter()
-        .map(|(_, i)| i.width())
-        .max()
-        .unwrap_or(1)
-        .max(MIN_CELL_WIDTH);
-    let cell_h = images.iter().map(|(_, i)| i.height()).max().unwrap_or(1) + LABEL_HEIGHT;
-    let width = columns * (cell_w + GAP) + GAP;
-    let height = rows * (cell_h + GAP) + GAP;
-    let mut sheet = RgbImage::from_pixel(width, height, BACKGROUND);
-    let cell = |k: usize| {
-        let (c, r) = (k as u32 % columns, k as u32 / columns);
-        (GAP + c * (cell_w + GAP), GAP + r * (cell_h + GAP))
-    };
-    for (k, (_, picture)) in images.iter().enumerate() {
-        let (x, y) = cell(k);
-        let (dx, dy) = (
-            (cell_w - picture.width()) / 2,
-            (cell_h - LABEL_HEIGHT - picture.height()) / 2,
-        );
-        image::imageops::replace(&mut sheet, picture, i64::from(x + dx), i64::from(y + dy));
+    let sizes: Vec<(u32, u32)> = images.iter().map(|(_, i)| i.dimensions()).collect();
+    let names: Vec<&str> = images.iter().map(|(n, _)| n.as_str()).collect();
+    let layout = Layout::new(&sizes, columns)?;
+    draw(&layout, &names, |k| {
+        Ok::<_, SheetError>(std::borrow::Cow::Borrowed(&images[k].1))
+    })
+}
+
+/// The sheet of `layout` ([`Layout::new`] of the pictures' sizes) with
+/// `names[k]` under picture `k`, each picture asked of `picture` in turn
+/// and dropped once placed: the sheet and one picture are in memory, never
+/// all of them. The sheet's buffer is taken, not assumed: a size the
+/// system cannot give is an error, not an abort.
+pub fn draw<'a, E: From<SheetError>>(
+    layout: &Layout,
+    names: &[&str],
+    mut picture: impl FnMut(usize) -> Result<std::borrow::Cow<'a, RgbImage>, E>,
+) -> Result<RgbImage, E> {
+    let (width, height) = (layout.width, layout.height);
+    let mut raw = crate::resources::buffer(layout.bytes() as usize, 0u8).map_err(|source| {
+        SheetError::Memory {
+            width,
+            height,
+            source,
+        }
+    })?;
+    for pixel in raw.chunks_exact_mut(3) {
+        pixel.copy_from_slice(&BACKGROUND.0);
     }
-    register_font().map_err(|e| SheetError(e.to_string()))?;
-    let err = |e: DrawingAreaErrorKind<_>| SheetError(e.to_string());
+    let mut sheet = RgbImage::from_raw(width, height, raw).expect("3 bytes a pixel");
+    let (cell_w, cell_h) = (layout.cell_width, layout.cell_height);
+    for k in 0..names.len() {
+        let picture = picture(k)?;
+        let (x, y) = layout.cell(k);
+        let (dx, dy) = (
+            cell_w.saturating_sub(picture.width()) / 2,
+            (cell_h - LABEL_HEIGHT).saturating_sub(picture.height()) / 2,
+        );
+        image::imageops::replace(&mut sheet, &*picture, i64::from(x + dx), i64::from(y + dy));
+    }
+    register_font().map_err(|e| SheetError::Draw(e.to_string()))?;
+    let err = |e: DrawingAreaErrorKind<_>| SheetError::Draw(e.to_string());
     {
         let area = BitMapBackend::with_buffer(&mut sheet, (width, height)).into_drawing_area();
         let font = ("sans-serif", 15).into_font();
         let style = font
             .color(&RGBColor(230, 230, 230))
             .pos(Pos::new(HPos::Center, VPos::Center));
-        for (k, (name, _)) in images.iter().enumerate() {
-            let (x, y) = cell(k);
+        for (k, name) in names.iter().enumerate() {
+            let (x, y) = layout.cell(k);
             let label = fitting(name, cell_w, |text| {
                 area.estimate_text_size(text, &style)
                     .map_or(u32::MAX, |(w, _)| w)
@@ -135,6 +249,29 @@ mod tests {
         assert_eq!(sheet.width(), MIN_CELL_WIDTH + 2 * GAP);
         let label_row = GAP + 1 + LABEL_HEIGHT / 2;
         assert!((GAP..GAP + MIN_CELL_WIDTH).any(|x| sheet.get_pixel(x, label_row)[0] > 150));
+    }
+
+    #[test]
+    fn a_sheet_over_the_limit_is_refused_before_it_is_drawn() {
+        // 5000 renders of 600×600: 43176×44738 pixels.
+        let sizes = vec![(600, 600); 5000];
+        let e = Layout::new(&sizes, None).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "cannot draw the contact sheet: 5000 images in 71 columns of 600×622-pixel \
+             cells make a 43176×44738 sheet (1931607888 pixels), more than the limit of \
+             1073741824 (2^30)"
+        );
+        // The largest square render fits, and one more of its size.
+        let side = 1 << 14;
+        let two = Layout::new(&[(side, side); 2], None).unwrap();
+        assert_eq!((two.columns, two.rows), (2, 1));
+        assert!(two.bytes() <= 3 * MAX_SHEET_PIXELS);
+        assert!(Layout::new(&[(side, side); 3], None).is_err());
+        assert!(Layout::new(&vec![(600, 600); 2700], None).is_ok());
+        // Sides past u32 are counted, not wrapped.
+        let wide = Layout::new(&[(u32::MAX, 1); 3], Some(3)).unwrap_err();
+        assert!(matches!(wide, SheetError::TooLarge { .. }), "{wide}");
     }
 
     #[test]

@@ -255,3 +255,47 @@ fn a_pixel_outside_the_image_is_a_usage_error_and_text_is_readable() {
         assert!(text.contains(words), "{words:?} in\n{text}");
     }
 }
+
+#[test]
+fn the_trees_one_at_a_time_are_the_explanations_trees() {
+    use rayoflight::render::prepare;
+    use rayoflight::request::RenderRequest;
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/golden/mirror-spheres.xml");
+    let scene = rayoflight::scene::load(&path).unwrap();
+    for aa in [1, 3] {
+        let request = RenderRequest {
+            aa: Some(aa),
+            ..RenderRequest::default()
+        };
+        let prepared = prepare(&scene, &request.options(&scene));
+        for (x, y) in [(0, 0), (100, 100), (150, 60)] {
+            let whole = prepared.explain(x, y).unwrap();
+            let mut each = Vec::new();
+            let pixel = prepared
+                .explain_each(x, y, |s| {
+                    each.push(s);
+                    std::ops::ControlFlow::Continue(())
+                })
+                .unwrap();
+            assert_eq!(each, whole.samples);
+            assert_eq!((pixel.rgb, pixel.rgb8), (whole.rgb, whole.rgb8));
+            assert_eq!(pixel.samples, (aa * aa) as usize);
+            assert_eq!(prepared.explained_pixel(x, y), Some(pixel));
+            // A visitor that stops: no pixel, and no more trees.
+            let mut seen = 0;
+            let stopped = prepared.explain_each(x, y, |_| {
+                seen += 1;
+                std::ops::ControlFlow::Break(())
+            });
+            assert_eq!((stopped, seen), (None, 1));
+        }
+    }
+    assert_eq!(prepared_outside(&scene), None);
+}
+
+fn prepared_outside(
+    scene: &rayoflight::scene::Scene,
+) -> Option<rayoflight::render::explain::PixelValue> {
+    let prepared = rayoflight::render::prepare(scene, &Default::default());
+    prepared.explained_pixel(scene.camera.width, 0)
+}

@@ -241,3 +241,40 @@ fn a_pass_png_is_its_8_bit_picture_and_bad_names_are_refused() {
         stderr(&o)
     );
 }
+
+#[test]
+fn a_pass_kept_in_its_files_form_is_the_whole_pass_converted() {
+    // What the CLI renders for a file (3, 8 or 12 bytes a pixel, made
+    // tile by tile) is what the f64 pass converts to, to the last bit.
+    use rayoflight::render::{PassForm, PassPixels};
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/golden/mirror-spheres.xml");
+    let scene = scene::load(&path).unwrap();
+    for aa in [1, 2] {
+        let request = RenderRequest {
+            aa: Some(aa),
+            ..RenderRequest::default()
+        };
+        let options = request.options(&scene);
+        for p in Pass::ALL {
+            let whole = pass(&scene, &request, p);
+            for form in [PassForm::Picture, PassForm::Floats] {
+                let (kept, _) = render::render_pass_as(
+                    &scene,
+                    &options,
+                    p,
+                    form,
+                    &Cancel::never(),
+                    &Progress::default(),
+                )
+                .unwrap()
+                .unwrap();
+                let what = format!("{} {form:?} aa {aa}", p.name());
+                assert_eq!(kept.depth_range, whole.depth_range(), "{what}");
+                match kept.pixels {
+                    PassPixels::Picture(image) => assert!(image == whole.to_rgb8(), "{what}"),
+                    PassPixels::Floats(image) => assert!(image == whole.to_rgb32f(), "{what}"),
+                }
+            }
+        }
+    }
+}

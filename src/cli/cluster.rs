@@ -9,7 +9,7 @@ use super::args::UsageError;
 use super::{Failure, edit, fail, print_line, refused, usage};
 use image::ImageFormat;
 use rayoflight::scene::edit::Edited;
-use rayoflight::{assemble, files, output, scene, sheet, split};
+use rayoflight::{assemble, files, output, resources, scene, sheet, split};
 use std::path::{Path, PathBuf};
 
 /// `split scene.xml --tasks N`: the regions on stdout, one a line.
@@ -44,7 +44,11 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 }
 
 /// `sheet -out sheet.png [--columns N] IMAGE…`: each image named by its
-/// file name without the extension.
+/// file name without the extension. Every image's size is read from its
+/// header first, and refused past a render's own limit
+/// ([`scene::MAX_PIXELS`]); the sheet's size and the memory it needs are
+/// checked before anything is decoded; then the images are decoded one at
+/// a time, each dropped once placed.
 pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
     output::format_for(out).map_err(fail)?;
     if let Some(image) = images.iter().find(|i| files::same_file(i, out)) {
@@ -53,29 +57,118 @@ pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(
             image.display()
         )));
     }
-    let pictures = images
+    let headers = images
         .iter()
-        .map(|path| {
-            // A FIFO or a device is never opened: it could block for ever.
-            if let Some(kind) = std::fs::metadata(path)
-                .ok()
-                .and_then(|m| files::special_kind(&m))
-            {
-                return Err(Failure::Error(format!(
-                    "{}: is {kind}, not an image",
-                    path.display()
-                )));
-            }
-            let picture = image::open(path)
-                .map_err(|e| Failure::Error(format!("{}: {e}", path.display())))?;
-            let name = path.file_stem().map_or_else(
-                || path.display().to_string(),
-                |s| s.to_string_lossy().into_owned(),
-            );
-            Ok((name, picture.to_rgb8()))
-        })
+        .map(|path| SheetImage::read(path))
         .collect::<Result<Vec<_>, Failure>>()?;
-    let sheet = sheet::contact_sheet(&pictures, columns).map_err(fail)?;
-    output::check_target(out, sheet.width(), sheet.height()).map_err(fail)?;
+    let sizes: Vec<(u32, u32)> = headers.iter().map(|h| h.size).collect();
+    let layout = sheet::Layout::new(&sizes, columns).map_err(fail)?;
+    output::check_target(out, layout.width, layout.height).map_err(fail)?;
+    // The sheet, the largest image decoded and in 8-bit RGB, and the
+    // file where its format is encoded in memory.
+    let format = output::format_for(out).map_err(fail)?;
+    let encoded = output::bytes_to_render(format, None, layout.width, layout.height)
+        .saturating_sub(layout.bytes());
+    let largest = headers.iter().map(|h| h.bytes).max().unwrap_or(0);
+    let needed = layout.bytes() + largest.max(encoded);
+    resources::check_memory(needed).map_err(|e| {
+        Failure::Error(format!(
+            "{}: the {}×{} contact sheet {e}",
+            out.display(),
+            layout.width,
+            layout.height
+        ))
+    })?;
+    let names: Vec<&str> = headers.iter().map(|h| h.name.as_str()).collect();
+    let sheet = sheet::draw(&layout, &names, |k| {
+        headers[k].decode().map(std::borrow::Cow::Owned)
+    })?;
     output::save(&sheet, out).map_err(fail)
+}
+
+impl From<sheet::SheetError> for Failure {
+    fn from(e: sheet::SheetError) -> Failure {
+        fail(e)
+    }
+}
+
+/// An image for the sheet, its header read.
+struct SheetImage<'a> {
+    path: &'a Path,
+    name: String,
+    size: (u32, u32),
+    /// Bytes decoding it takes: its pixels as decoded, and in 8-bit RGB.
+    bytes: u64,
+}
+
+impl<'a> SheetImage<'a> {
+    /// The decoder's limits: any image of up to a render's pixels, in
+    /// any of its formats (16 bytes a pixel at most: RGBA in f32).
+    fn limits() -> image::Limits {
+        let mut limits = image::Limits::default();
+        limits.max_image_width = None;
+        limits.max_image_height = None;
+        limits.max_alloc = Some(scene::MAX_PIXELS * 16);
+        limits
+    }
+
+    fn decoder(path: &Path) -> Result<impl image::ImageDecoder, Failure> {
+        let error = |e: &dyn std::fmt::Display| Failure::Error(format!("{}: {e}", path.display()));
+        // A FIFO or a device is never opened: it could block for ever.
+        if let Some(kind) = std::fs::metadata(path)
+            .ok()
+            .and_then(|m| files::special_kind(&m))
+        {
+            return Err(Failure::Error(format!(
+                "{}: is {kind}, not an image",
+                path.display()
+            )));
+        }
+        let mut reader = image::ImageReader::open(path).map_err(|e| error(&e))?;
+        reader.limits(SheetImage::limits());
+        reader.into_decoder().map_err(|e| error(&e))
+    }
+
+    /// The image's name and size, from its header alone.
+    fn read(path: &'a Path) -> Result<SheetImage<'a>, Failure> {
+        use image::ImageDecoder;
+        let decoder = SheetImage::decoder(path)?;
+        let (width, height) = decoder.dimensions();
+        let pixels = u64::from(width) * u64::from(height);
+        if pixels > scene::MAX_PIXELS {
+            return Err(Failure::Error(format!(
+                "{}: a {width}×{height} image has more than the {} pixels (2^28) a render may have",
+                path.display(),
+                scene::MAX_PIXELS
+            )));
+        }
+        let rgb8 = decoder.color_type() == image::ColorType::Rgb8;
+        let bytes = decoder.total_bytes() + if rgb8 { 0 } else { 3 * pixels };
+        let name = path.file_stem().map_or_else(
+            || path.display().to_string(),
+            |s| s.to_string_lossy().into_owned(),
+        );
+        Ok(SheetImage {
+            path,
+            name,
+            size: (width, height),
+            bytes,
+        })
+    }
+
+    /// The picture in 8-bit RGB.
+    fn decode(&self) -> Result<image::RgbImage, Failure> {
+        use image::ImageDecoder;
+        let path = self.path;
+        let decoder = SheetImage::decoder(path)?;
+        if decoder.dimensions() != self.size {
+            return Err(Failure::Error(format!(
+                "{}: changed while the sheet was drawn",
+                path.display()
+            )));
+        }
+        let picture = image::DynamicImage::from_decoder(decoder)
+            .map_err(|e| Failure::Error(format!("{}: {e}", path.display())))?;
+        Ok(picture.into_rgb8())
+    }
 }

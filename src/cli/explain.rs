@@ -1,16 +1,23 @@
 //! `rayoflight explain scene.xml X Y [--json]`: why a pixel has its
 //! colour, as text for a person or as one JSON object for a script. The
-//! tree is the library's ([`Prepared::explain`]); this edge only words it.
+//! tree is the library's ([`Prepared::explain_each`]); this edge only
+//! words it, written out as the rays are traced: one ray's tree in memory
+//! at a time, whatever the output's length (256 rays of 10 000 bounces
+//! write 1.5 GB of JSON).
 
 use super::args::ExplainArgs;
-use super::{Failure, edit, fail, print_line, refused};
+use super::{Failure, edit, fail, refused};
 use glam::DVec3;
 use rayoflight::geometry::Ray;
-use rayoflight::render::explain::{Bounce, Ended, Sample, describe_ray, number as n, vector as v};
-use rayoflight::render::{Explanation, prepare};
+use rayoflight::render::explain::{
+    Bounce, Ended, PixelValue, Sample, describe_ray, number as n, vector as v,
+};
+use rayoflight::render::{Prepared, prepare};
 use rayoflight::scene::edit::Edited;
 use rayoflight::scene::{self, Scene, splice};
 use serde_json::{Value, json};
+use std::io::{self, Write};
+use std::ops::ControlFlow;
 
 pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
     let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
@@ -18,8 +25,7 @@ pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
     edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
     let scene = edited.scene();
     let (width, height) = (scene.camera.width, scene.camera.height);
-    let options = args.request.options(scene);
-    let Some(explained) = prepare(scene, &options).explain(args.x, args.y) else {
+    if args.x >= width || args.y >= height {
         return Err(Failure::Usage(super::UsageError::Invalid {
             message: format!(
                 "pixel ({}, {}) is outside the {width}×{height} image of {} \
@@ -32,22 +38,61 @@ pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
             ),
             command: Some("explain"),
         }));
-    };
+    }
+    let options = args.request.options(scene);
+    let prepared = prepare(scene, &options);
     let names = Names {
         scene,
         comments: splice::object_labels(&text),
     };
-    if args.json {
-        let value = to_json(&explained, &names);
-        print_line(&value.to_string())?;
+    let mut out = io::BufWriter::with_capacity(1 << 16, io::stdout().lock());
+    let pixel = (args.x, args.y);
+    let written = if args.json {
+        json_to(&mut out, &prepared, pixel, &names)
     } else {
-        print_line(&words(
-            &explained,
+        words_to(
+            &mut out,
+            &prepared,
+            pixel,
             &names,
             &args.scene.display().to_string(),
-        ))?;
+        )
+    };
+    // A closed pipe (`explain … | head`) is the reader's choice; any
+    // other failure to write is an error.
+    match written.and_then(|()| out.flush()) {
+        Err(e) if e.kind() != io::ErrorKind::BrokenPipe => Err(Failure::Error(format!(
+            "rayoflight: cannot write to stdout: {e}"
+        ))),
+        _ => Ok(()),
     }
-    Ok(())
+}
+
+/// Each ray's tree of pixel (x, y) in turn to `write`, stopping at its
+/// first error; then the pixel.
+fn each_sample(
+    p: &Prepared,
+    (x, y): (u32, u32),
+    mut write: impl FnMut(usize, Sample) -> io::Result<()>,
+) -> io::Result<PixelValue> {
+    let mut failure = None;
+    let mut k = 0;
+    let pixel = p.explain_each(x, y, |sample| {
+        let written = write(k, sample);
+        k += 1;
+        match written {
+            Ok(()) => ControlFlow::Continue(()),
+            Err(e) => {
+                failure = Some(e);
+                ControlFlow::Break(())
+            }
+        }
+    });
+    match (failure, pixel) {
+        (Some(e), _) => Err(e),
+        (None, Some(pixel)) => Ok(pixel),
+        (None, None) => Err(io::Error::other("the pixel is outside the image")),
+    }
 }
 
 /// The panel's names of the scene's objects.
@@ -78,48 +123,104 @@ fn ray_json(ray: &Ray) -> Value {
     json!({ "origin": v3(ray.origin), "direction": v3(ray.dir) })
 }
 
-fn to_json(e: &Explanation, names: &Names) -> Value {
-    let samples: Vec<Value> = e.samples.iter().map(|s| sample_json(s, names)).collect();
-    let mut top = json!({
-        "x": e.x,
-        "y": e.y,
-        "model": e.illumination.name(),
-        "rgb8": e.rgb8,
-        "rgb": v3(e.rgb),
-    });
-    // One ray per pixel: its tree at the top. More: each ray's tree in
-    // "samples", the first one's also at the top.
-    if let (Some(Value::Object(first)), Value::Object(out)) = (samples.first(), &mut top) {
-        for key in ["hits", "ended"] {
-            if let Some(v) = first.get(key) {
-                out.insert(key.to_owned(), v.clone());
-            }
-        }
-        if samples.len() > 1 {
-            out.insert("samples".to_owned(), Value::Array(samples));
-        }
-    }
-    top
+/// Writes `value` as compact JSON (serde_json's numbers and escapes).
+fn put(out: &mut impl Write, value: &Value) -> io::Result<()> {
+    serde_json::to_writer(&mut *out, value).map_err(io::Error::from)
 }
 
-fn sample_json(s: &Sample, names: &Names) -> Value {
-    let mut hits: Vec<Value> = s.bounces.iter().map(|b| bounce_json(b, names)).collect();
-    if let Some(ray) = &s.missed {
-        hits.push(json!({
-            "object": null, "label": null, "t": null, "point": null, "normal": null,
-            "ray": ray_json(ray),
-        }));
+/// The explanation as one JSON object on one line, written as the rays
+/// are traced: `x`, `y`, `model`, `rgb8`, `rgb`, then the first ray's
+/// `hits` and `ended`, then, with more rays than one, every ray's tree in
+/// `samples`. The pixel's value comes first, so it is traced once
+/// beforehand without recording.
+fn json_to(
+    out: &mut impl Write,
+    p: &Prepared,
+    (x, y): (u32, u32),
+    names: &Names,
+) -> io::Result<()> {
+    let pixel = p
+        .explained_pixel(x, y)
+        .ok_or_else(|| io::Error::other("the pixel is outside the image"))?;
+    out.write_all(b"{\"x\":")?;
+    put(out, &json!(x))?;
+    out.write_all(b",\"y\":")?;
+    put(out, &json!(y))?;
+    out.write_all(b",\"model\":")?;
+    put(out, &json!(p.illumination().name()))?;
+    out.write_all(b",\"rgb8\":")?;
+    put(out, &json!(pixel.rgb8))?;
+    out.write_all(b",\"rgb\":")?;
+    put(out, &v3(pixel.rgb))?;
+    let many = pixel.samples > 1;
+    each_sample(p, (x, y), |k, sample| {
+        if k == 0 {
+            // One ray per pixel: its tree at the top. More: each ray's
+            // tree in "samples", the first one's also at the top.
+            out.write_all(b",\"hits\":")?;
+            hits_to(out, &sample, names)?;
+            out.write_all(b",\"ended\":")?;
+            put(out, &ended_json(sample.ended))?;
+            if many {
+                out.write_all(b",\"samples\":[")?;
+            }
+        } else {
+            out.write_all(b",")?;
+        }
+        if many {
+            sample_to(out, &sample, names)?;
+        }
+        Ok(())
+    })?;
+    if many {
+        out.write_all(b"]")?;
     }
-    let ended = match s.ended {
+    out.write_all(b"}\n")
+}
+
+/// One ray's tree: `at`, `rgb`, `hits`, `ended`.
+fn sample_to(out: &mut impl Write, s: &Sample, names: &Names) -> io::Result<()> {
+    out.write_all(b"{\"at\":")?;
+    put(out, &json!([s.at.0, s.at.1]))?;
+    out.write_all(b",\"rgb\":")?;
+    put(out, &v3(s.color))?;
+    out.write_all(b",\"hits\":")?;
+    hits_to(out, s, names)?;
+    out.write_all(b",\"ended\":")?;
+    put(out, &ended_json(s.ended))?;
+    out.write_all(b"}")
+}
+
+/// The hits of a ray's chain, a bounce at a time, and the ray that
+/// missed, if one did.
+fn hits_to(out: &mut impl Write, s: &Sample, names: &Names) -> io::Result<()> {
+    out.write_all(b"[")?;
+    for (k, b) in s.bounces.iter().enumerate() {
+        if k > 0 {
+            out.write_all(b",")?;
+        }
+        put(out, &bounce_json(b, names))?;
+    }
+    if let Some(ray) = &s.missed {
+        if !s.bounces.is_empty() {
+            out.write_all(b",")?;
+        }
+        put(
+            out,
+            &json!({
+                "object": null, "label": null, "t": null, "point": null, "normal": null,
+                "ray": ray_json(ray),
+            }),
+        )?;
+    }
+    out.write_all(b"]")
+}
+
+fn ended_json(ended: Ended) -> Value {
+    match ended {
         Ended::EarlyStop { bound } => json!({ "reason": "early stop", "bound": v3(bound) }),
         other => json!({ "reason": reason(other) }),
-    };
-    json!({
-        "at": [s.at.0, s.at.1],
-        "rgb": v3(s.color),
-        "hits": hits,
-        "ended": ended,
-    })
+    }
 }
 
 fn bounce_json(b: &Bounce, names: &Names) -> Value {
@@ -167,37 +268,44 @@ fn reason(ended: Ended) -> &'static str {
 
 // ----- words -----
 
-fn words(e: &Explanation, names: &Names, scene: &str) -> String {
-    let [r, g, b] = e.rgb8;
-    let mut out = format!(
-        "pixel ({}, {}) of {scene}: {} model\n",
-        e.x,
-        e.y,
-        e.illumination.name()
-    );
-    for (k, s) in e.samples.iter().enumerate() {
-        if e.samples.len() > 1 {
-            out += &format!(
-                "\nsample {} of {} at ({}, {}):\n",
+/// The explanation in words, a ray's tree at a time.
+fn words_to(
+    out: &mut impl Write,
+    p: &Prepared,
+    (x, y): (u32, u32),
+    names: &Names,
+    scene: &str,
+) -> io::Result<()> {
+    writeln!(
+        out,
+        "pixel ({x}, {y}) of {scene}: {} model",
+        p.illumination().name()
+    )?;
+    let count = p.samples_per_pixel();
+    let pixel = each_sample(p, (x, y), |k, s| {
+        let mut text = String::new();
+        if count > 1 {
+            text += &format!(
+                "\nsample {} of {count} at ({}, {}):\n",
                 k + 1,
-                e.samples.len(),
                 n(s.at.0),
                 n(s.at.1)
             );
         }
-        sample_words(&mut out, s, names);
-    }
-    if e.samples.len() > 1 {
-        out += &format!(
-            "\nmean of the {} samples {} (each clamped to [0, 1] first)\n",
-            e.samples.len(),
-            v(e.rgb)
-        );
+        sample_words(&mut text, &s, names);
+        out.write_all(text.as_bytes())
+    })?;
+    if count > 1 {
+        writeln!(
+            out,
+            "\nmean of the {count} samples {} (each clamped to [0, 1] first)",
+            v(pixel.rgb)
+        )?;
     } else {
-        out += &format!("\nunclamped sum {}\n", v(e.rgb));
+        writeln!(out, "\nunclamped sum {}", v(pixel.rgb))?;
     }
-    out += &format!("8-bit value  ({r}, {g}, {b})");
-    out
+    let [r, g, b] = pixel.rgb8;
+    writeln!(out, "8-bit value  ({r}, {g}, {b})")
 }
 
 fn sample_words(out: &mut String, s: &Sample, names: &Names) {

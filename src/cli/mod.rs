@@ -16,7 +16,7 @@ use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
 use rayoflight::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::{merge, splice};
-use rayoflight::{files, interrupt, measure, output, pov, render, scene};
+use rayoflight::{files, interrupt, measure, output, pov, render, resources, scene};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -191,7 +191,21 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     };
     // The output can take this image: a folder that exists and is
     // writable, a format that holds its size, no special file in the way.
-    output::check_target(&out, width, height).map_err(fail)?;
+    let format = output::check_target(&out, width, height).map_err(fail)?;
+    let pass = output::takes_pass(r.pass, &out).then_some(r.pass);
+    // The memory the render and its file take, asked for before the
+    // first ray: a one-line refusal, not an abort after minutes of work.
+    let needed = output::bytes_to_render(format, pass, width, height);
+    resources::check_memory(needed).map_err(|e| {
+        let what = match pass {
+            Some(pass) => format!("the {} pass", pass.name()),
+            None => "the image".to_owned(),
+        };
+        Failure::Error(format!(
+            "{}: rendering {what} at {width}×{height} {e}",
+            out.display()
+        ))
+    })?;
     // Render time as the bench and the study measure it (rayoflight::measure).
     let pool = measure::RenderPool::new(request.threads).map_err(fail)?;
     let counted = render::Progress::default();
@@ -199,13 +213,14 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
     let _cleanly = interrupt::cleanly();
     let never = render::Cancel::on_signal();
     let cancelled = interrupted;
-    let elapsed = if output::takes_pass(r.pass, &out) {
+    let elapsed = if let Some(pass) = pass {
+        let form = output::pixel_form(format);
         let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
-            measure::pass_timed(scene, request, r.pass, &pool, &never, &counted)
+            measure::kept_pass_timed(scene, request, pass, form, &pool, &never, &counted)
         });
         let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
-        output::save_pass(&timed.image, &out).map_err(fail)?;
-        if let Some((near, far)) = timed.image.depth_range() {
+        output::save_kept_pass(&timed.image, &out).map_err(fail)?;
+        if let Some((near, far)) = timed.image.depth_range {
             eprintln!("depth: t from {near} to {far}");
         }
         timed.elapsed

@@ -16,7 +16,12 @@
 //! reflection is its ks times the next bounce's colour (the contract's
 //! I = local + ks I_r).
 //!
+//! The trees of a pixel's rays can be large (256 rays of 10 000 bounces):
+//! [`Prepared::explain_each`] hands them on one at a time, so that a
+//! writer holds one tree, never all of them.
+//!
 //! [`Prepared::explain`]: super::Prepared::explain
+//! [`Prepared::explain_each`]: super::Prepared::explain_each
 
 use super::prepared::Observer;
 use crate::geometry::{Lanes, Mask, Ray};
@@ -179,6 +184,17 @@ pub struct Explanation {
     pub rgb: DVec3,
     /// The pixel of the image.
     pub rgb8: [u8; 3],
+}
+
+/// The pixel an explanation explains, as the render makes it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PixelValue {
+    /// The unclamped colour: the one ray's, or the mean of the samples'.
+    pub rgb: DVec3,
+    /// The pixel of the image.
+    pub rgb8: [u8; 3],
+    /// Rays through the pixel: 1, or aa × aa.
+    pub samples: usize,
 }
 
 /// Records lane 0 of a trace (the explain traces one lane).

@@ -27,7 +27,10 @@ pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
 pub use explain::Explanation;
 pub use ids::{ObjectIds, object_ids};
-pub use pass::{Pass, PassImage, Texel, f32_keeping_level, in_f32, object_color, render_pass};
+pub use pass::{
+    KeptPass, Pass, PassForm, PassImage, PassPixels, Texel, f32_keeping_level, in_exr, in_f32,
+    object_color, render_pass, render_pass_as, shown,
+};
 pub use prepared::{Hit, Prepared, prepare};
 pub use progress::{Progress, time_left};
 pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
@@ -180,6 +183,12 @@ pub enum RenderError {
     TooManyThreads(usize),
     #[error("--region {0}")]
     Region(#[from] RegionError),
+    #[error("{what} {source}")]
+    Memory {
+        /// What the memory was for: `the 16384×16384 image`.
+        what: String,
+        source: crate::resources::NotEnoughMemory,
+    },
     #[error("cannot start {threads} render threads: {source}")]
     ThreadPool {
         threads: usize,
@@ -254,7 +263,7 @@ pub fn render_watched(
     let region = options.region_of(scene)?;
     in_pool(options, || {
         render_all(scene, options, region, cancel, progress)
-    })
+    })?
 }
 
 /// Checks `options` and runs `work` in their thread pool (rayon's global
@@ -283,18 +292,29 @@ fn render_all(
     region: Region,
     cancel: &Cancel,
     progress: &Progress,
-) -> Option<(RgbImage, RenderStats)> {
+) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
     let prepared = prepare(scene, options);
-    let mut image = RgbImage::new(region.width(), region.height());
-    let rays = trace_tiles(
+    let (width, height) = (region.width(), region.height());
+    // Taken, not assumed: a size the system cannot give is an error.
+    let bytes = (width as usize)
+        .saturating_mul(height as usize)
+        .saturating_mul(3);
+    let pixels = crate::resources::buffer(bytes, 0u8).map_err(|source| RenderError::Memory {
+        what: format!("the {width}×{height} image"),
+        source,
+    })?;
+    let mut image = RgbImage::from_raw(width, height, pixels).expect("3 bytes a pixel");
+    let Some(rays) = trace_tiles(
         &prepared,
         region,
         cancel,
         progress,
         Some(&mut *image),
         |_, _| {},
-    )?;
-    Some((image, RenderStats { rays }))
+    ) else {
+        return Ok(None);
+    };
+    Ok(Some((image, RenderStats { rays })))
 }
 
 /// The tile loop every front end shares (the CLI's render, the study, the

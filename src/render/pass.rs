@@ -170,23 +170,7 @@ impl PassImage {
         let range = self.depth_range();
         let mut image = RgbImage::new(self.width, self.height);
         for (pixel, v) in image.pixels_mut().zip(self.values.chunks_exact(3)) {
-            let v = DVec3::from_slice(v);
-            let shown = match self.pass {
-                // A hit's N is unit: zero is a miss, black.
-                Pass::Normal if v == DVec3::ZERO => v,
-                Pass::Normal => (v + DVec3::ONE) * 0.5,
-                Pass::Depth => match range {
-                    Some((near, far)) if v.x.is_finite() => {
-                        let span = far - near;
-                        let along = if span > 0.0 { (v.x - near) / span } else { 0.0 };
-                        DVec3::splat(1.0 - 0.8 * along)
-                    }
-                    _ => DVec3::ZERO,
-                },
-                Pass::Object => object_color(v.x),
-                _ => v,
-            };
-            pixel.0 = u8::pixel(shown);
+            pixel.0 = shown(self.pass, DVec3::from_slice(v), range);
         }
         image
     }
@@ -196,19 +180,41 @@ impl PassImage {
     /// supersampled pixels are rounded to the nearest f32 that keeps
     /// their 8-bit value ([`f32_keeping_level`]).
     pub fn to_rgb32f(&self) -> Rgb32FImage {
-        let values = self
-            .values
-            .iter()
-            .map(|&v| {
-                if self.pass.is_geometric() {
-                    v as f32
-                } else {
-                    f32_keeping_level(v)
-                }
-            })
-            .collect();
+        let values = self.values.iter().map(|&v| in_exr(self.pass, v)).collect();
         Rgb32FImage::from_raw(self.width, self.height, values)
             .expect("three values a pixel, width × height pixels")
+    }
+}
+
+/// A pass's value `v` as its 8-bit picture shows it ([`PassImage::to_rgb8`]);
+/// `range` is the depth pass's nearest and farthest hit.
+#[inline]
+pub fn shown(pass: Pass, v: DVec3, range: Option<(f64, f64)>) -> [u8; 3] {
+    let shown = match pass {
+        // A hit's N is unit: zero is a miss, black.
+        Pass::Normal if v == DVec3::ZERO => v,
+        Pass::Normal => (v + DVec3::ONE) * 0.5,
+        Pass::Depth => match range {
+            Some((near, far)) if v.x.is_finite() => {
+                let span = far - near;
+                let along = if span > 0.0 { (v.x - near) / span } else { 0.0 };
+                DVec3::splat(1.0 - 0.8 * along)
+            }
+            _ => DVec3::ZERO,
+        },
+        Pass::Object => object_color(v.x),
+        _ => v,
+    };
+    u8::pixel(shown)
+}
+
+/// A pass's value in the f32 an EXR holds ([`PassImage::to_rgb32f`]).
+#[inline]
+pub fn in_exr(pass: Pass, v: f64) -> f32 {
+    if pass.is_geometric() {
+        v as f32
+    } else {
+        f32_keeping_level(v)
     }
 }
 
@@ -313,16 +319,18 @@ pub fn render_pass(
         }
         .for_pass(pass);
         let (width, height) = (region.width(), region.height());
-        let mut values = vec![0.0; width as usize * height as usize * 3];
-        let rays = trace_tiles(
+        let mut values = pass_buffer(width, height, 3, 0.0, pass, "its f64 values")?;
+        let Some(rays) = trace_tiles(
             &prepared,
             region,
             cancel,
             progress,
             Some(&mut values),
             |_, _| {},
-        )?;
-        Some((
+        ) else {
+            return Ok(None);
+        };
+        Ok(Some((
             PassImage {
                 pass,
                 width,
@@ -330,8 +338,204 @@ pub fn render_pass(
                 values,
             },
             RenderStats { rays },
-        ))
+        )))
+    })?
+}
+
+/// A buffer of `per_pixel` values a pixel for a pass, or the error that
+/// names what it would have taken.
+fn pass_buffer<T: Clone>(
+    width: u32,
+    height: u32,
+    per_pixel: usize,
+    value: T,
+    pass: Pass,
+    what: &str,
+) -> Result<Vec<T>, RenderError> {
+    let len = (width as usize)
+        .saturating_mul(height as usize)
+        .saturating_mul(per_pixel);
+    crate::resources::buffer(len, value).map_err(|source| RenderError::Memory {
+        what: format!("the {width}×{height} {} pass ({what})", pass.name()),
+        source,
     })
+}
+
+/// The form a pass is kept in while it renders, for the file it goes
+/// to: the 8-bit picture an image format holds, or the f32 values an EXR
+/// holds. Either is made tile by tile as the tiles finish, never the f64
+/// values of the whole image ([`PassImage`]: 24 bytes a pixel).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PassForm {
+    /// [`PassImage::to_rgb8`]'s picture.
+    Picture,
+    /// [`PassImage::to_rgb32f`]'s values.
+    Floats,
+}
+
+impl PassForm {
+    /// Bytes a pixel that rendering `pass` in this form holds at most: 3
+    /// for a picture (the image's own), 8 for the depth pass's (t in f64
+    /// until the range is known, then its picture in the same bytes), 12
+    /// for floats.
+    pub fn bytes_per_pixel(self, pass: Pass) -> u64 {
+        match (self, pass) {
+            (PassForm::Floats, _) => 12,
+            (PassForm::Picture, Pass::Depth) => 8,
+            (PassForm::Picture, _) => 3,
+        }
+    }
+}
+
+/// A pass in its [`PassForm`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum PassPixels {
+    Picture(RgbImage),
+    Floats(Rgb32FImage),
+}
+
+/// A pass rendered in the form of its file ([`render_pass_as`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeptPass {
+    pub pass: Pass,
+    pub pixels: PassPixels,
+    /// The depth pass's nearest and farthest hit ([`PassImage::depth_range`]).
+    pub depth_range: Option<(f64, f64)>,
+}
+
+/// [`render_pass`] kept in `form` as the tiles finish: what
+/// [`PassImage::to_rgb8`] or [`PassImage::to_rgb32f`] of its image gives,
+/// the same bytes, in [`PassForm::bytes_per_pixel`] bytes a pixel instead
+/// of 24 and then a copy. The buffer is allocated before the first ray: a
+/// size the system cannot give is an error ([`RenderError::Memory`]),
+/// not an abort.
+pub fn render_pass_as(
+    scene: &Scene,
+    options: &RenderOptions,
+    pass: Pass,
+    form: PassForm,
+    cancel: &Cancel,
+    progress: &Progress,
+) -> Result<Option<(KeptPass, RenderStats)>, RenderError> {
+    let region = options.region_of(scene)?;
+    super::in_pool(options, || {
+        let prepared = prepare(scene, options);
+        let prepared = if pass.is_geometric() {
+            prepared.with_view(&scene.camera, 1)
+        } else {
+            prepared
+        }
+        .for_pass(pass);
+        let (width, height) = (region.width(), region.height());
+        let done = match form {
+            PassForm::Floats => {
+                let buffer = pass_buffer(width, height, 3, 0f32, pass, "its f32 values")?;
+                keep_tiles(&prepared, region, cancel, progress, buffer, 3, |v, out| {
+                    for c in 0..3 {
+                        out[c] = in_exr(pass, v[c]);
+                    }
+                })
+                .map(|(values, range, rays)| {
+                    let image =
+                        Rgb32FImage::from_raw(width, height, values).expect("three values a pixel");
+                    (PassPixels::Floats(image), range, rays)
+                })
+            }
+            PassForm::Picture if pass == Pass::Depth => {
+                // t in f64, little-endian, 8 bytes a pixel: the range is
+                // known only at the end.
+                let buffer = pass_buffer(width, height, 8, 0u8, pass, "t in f64")?;
+                keep_tiles(&prepared, region, cancel, progress, buffer, 8, |v, out| {
+                    out.copy_from_slice(&v.x.to_le_bytes());
+                })
+                .map(|(mut bytes, range, rays)| {
+                    // Each pixel's 3 bytes where its t began, in order: a
+                    // pixel's picture never reaches a t not yet read
+                    // (3k + 3 ≤ 8k for k ≥ 1, and pixel 0 reads first).
+                    let pixels = bytes.len() / 8;
+                    for k in 0..pixels {
+                        let mut t = [0; 8];
+                        t.copy_from_slice(&bytes[8 * k..8 * k + 8]);
+                        let t = f64::from_le_bytes(t);
+                        let rgb = shown(pass, DVec3::splat(t), range);
+                        bytes[3 * k..3 * k + 3].copy_from_slice(&rgb);
+                    }
+                    bytes.truncate(3 * pixels);
+                    bytes.shrink_to_fit();
+                    let image = RgbImage::from_raw(width, height, bytes).expect("3 bytes a pixel");
+                    (PassPixels::Picture(image), range, rays)
+                })
+            }
+            PassForm::Picture => {
+                let buffer = pass_buffer(width, height, 3, 0u8, pass, "its 8-bit picture")?;
+                keep_tiles(&prepared, region, cancel, progress, buffer, 3, |v, out| {
+                    out.copy_from_slice(&shown(pass, v, None));
+                })
+                .map(|(bytes, range, rays)| {
+                    let image = RgbImage::from_raw(width, height, bytes).expect("3 bytes a pixel");
+                    (PassPixels::Picture(image), range, rays)
+                })
+            }
+        };
+        Ok(done.map(|(pixels, depth_range, rays)| {
+            (
+                KeptPass {
+                    pass,
+                    pixels,
+                    depth_range: depth_range.filter(|_| pass == Pass::Depth),
+                },
+                RenderStats { rays },
+            )
+        }))
+    })?
+}
+
+/// What [`keep_tiles`] kept: the buffer, the depth range, the rays traced.
+type Kept<U> = (Vec<U>, Option<(f64, f64)>, u64);
+
+/// Traces `region` of the prepared pass ([`trace_tiles`]) and keeps each
+/// finished tile's values in `buffer`, `per_pixel` elements a pixel
+/// written by `keep`, under a lock taken once a tile; also the nearest
+/// and farthest finite first channel (the depth pass's range). `None`
+/// once `cancel` is set.
+fn keep_tiles<U: Copy + Default + Send>(
+    prepared: &super::Prepared,
+    region: crate::region::Region,
+    cancel: &Cancel,
+    progress: &Progress,
+    mut buffer: Vec<U>,
+    per_pixel: usize,
+    keep: impl Fn(DVec3, &mut [U]) + Sync,
+) -> Option<Kept<U>> {
+    let row = region.width() as usize * per_pixel;
+    let range = (f64::INFINITY, f64::NEG_INFINITY);
+    let shared = std::sync::Mutex::new((&mut buffer[..], range));
+    let rays = trace_tiles::<f64>(prepared, region, cancel, progress, None, |tile, values| {
+        let tile_row = tile.width as usize * per_pixel;
+        let mut kept = vec![U::default(); tile_row * tile.height as usize];
+        let (mut near, mut far) = range;
+        for (v, out) in values.chunks_exact(3).zip(kept.chunks_exact_mut(per_pixel)) {
+            let v = DVec3::from_slice(v);
+            if v.x.is_finite() {
+                (near, far) = (near.min(v.x), far.max(v.x));
+            }
+            keep(v, out);
+        }
+        let mut shared = shared
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        let (image, (n, f)) = &mut *shared;
+        (*n, *f) = (n.min(near), f.max(far));
+        for (r, src) in kept.chunks_exact(tile_row).enumerate() {
+            let y = (tile.y - region.y0) as usize + r;
+            let start = y * row + (tile.x - region.x0) as usize * per_pixel;
+            image[start..start + tile_row].copy_from_slice(src);
+        }
+    })?;
+    let (_, (near, far)) = shared
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    Some((buffer, (near <= far).then_some((near, far)), rays))
 }
 
 #[cfg(test)]

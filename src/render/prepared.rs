@@ -28,7 +28,7 @@
 //!   same scene ([`Prepared::with_view`]: a coarse pass, a moved camera, a
 //!   pick) prepares nothing again.
 
-use super::explain::{Ended, Explanation, Recorder, Sample};
+use super::explain::{Ended, Explanation, PixelValue, Recorder, Sample};
 use super::{
     CameraRays, Cancel, Offset, Pass, Precision, RenderOptions, SphereTest, Texel, Tile, in_f32,
     to_8bit,
@@ -45,6 +45,7 @@ use crate::shading::{
 };
 use glam::DVec3;
 use std::marker::PhantomData;
+use std::ops::ControlFlow;
 use std::sync::Arc;
 
 /// With fewer bounded primitives than this, a linear scan beats the BVH.
@@ -437,38 +438,73 @@ impl WithKernel for PixelAt {
     }
 }
 
-/// [`Prepared::explain`]'s work: each ray through the pixel traced alone,
-/// its trace recorded.
-struct ExplainAt {
+/// [`Prepared::explain_each`]'s work: each ray through the pixel traced
+/// alone, in turn; with a visitor, its trace recorded and handed to it
+/// (one tree held at a time), without one only its colour kept. Returns
+/// the pixel, or `None` once the visitor stops.
+struct ExplainAt<'a> {
     i: u32,
     j: u32,
+    visit: Option<&'a mut dyn FnMut(Sample) -> ControlFlow<()>>,
 }
 
-impl WithKernel for ExplainAt {
-    type Output = Vec<Sample>;
+impl WithKernel for ExplainAt<'_> {
+    type Output = Option<PixelValue>;
     const ONE_LANE: bool = true;
-    fn run<K: Kernel>(self, p: &Prepared, kernel: &K) -> Vec<Sample> {
+    fn run<K: Kernel>(mut self, p: &Prepared, kernel: &K) -> Option<PixelValue> {
         // The early stop of one-ray pixels, as the render does.
         let exact_stop = p.aa == 1 && p.world.early_stop;
-        (0..p.sample_count())
-            .map(|k| {
-                let at = p.sample_point(self.i, self.j, k);
-                let mut recorder = Recorder::default();
-                let traced = p.trace(
-                    kernel,
-                    p.packet::<K>(&[at]),
-                    Candidates::All,
-                    exact_stop,
-                    &mut 0,
-                    &mut recorder,
-                );
-                recorder.finish(
-                    at,
-                    K::L::vector_lane(traced.reflection, 0),
-                    K::L::vector_lane(traced.color(), 0),
-                )
-            })
-            .collect()
+        let (mut sum, mut clamped_sum) = (DVec3::ZERO, DVec3::ZERO);
+        let mut first = DVec3::ZERO;
+        for k in 0..p.sample_count() {
+            let at = p.sample_point(self.i, self.j, k);
+            let packet = p.packet::<K>(&[at]);
+            let color = match self.visit.as_deref_mut() {
+                Some(visit) => {
+                    let mut recorder = Recorder::default();
+                    let traced = p.trace(
+                        kernel,
+                        packet,
+                        Candidates::All,
+                        exact_stop,
+                        &mut 0,
+                        &mut recorder,
+                    );
+                    let sample = recorder.finish(
+                        at,
+                        K::L::vector_lane(traced.reflection, 0),
+                        K::L::vector_lane(traced.color(), 0),
+                    );
+                    let color = sample.color;
+                    if visit(sample).is_break() {
+                        return None;
+                    }
+                    color
+                }
+                None => {
+                    let traced =
+                        p.trace(kernel, packet, Candidates::All, exact_stop, &mut 0, &mut ());
+                    K::L::vector_lane(traced.color(), 0)
+                }
+            };
+            if k == 0 {
+                first = color;
+            }
+            sum += color;
+            clamped_sum += clamped(color);
+        }
+        // The pixel as [`Prepared::pixels`] makes it.
+        let n = f64::from(p.aa);
+        let (rgb, rgb8) = if p.aa == 1 {
+            (first, u8::pixel(clamped(first)))
+        } else {
+            (sum / (n * n), u8::pixel(clamped_sum / (n * n)))
+        };
+        Some(PixelValue {
+            rgb,
+            rgb8,
+            samples: p.sample_count(),
+        })
     }
 }
 
@@ -1182,33 +1218,63 @@ impl Prepared {
 
     /// Why pixel (i, j) has its colour: each of its rays' trees, recorded
     /// from the render's trace ([`super::explain`]); `None` outside the
-    /// image.
+    /// image. All the trees at once: [`Prepared::explain_each`] hands them
+    /// on one at a time.
     pub fn explain(&self, i: u32, j: u32) -> Option<Explanation> {
-        if i >= self.width() || j >= self.height() {
-            return None;
-        }
-        let samples = self.with_kernel(ExplainAt { i, j });
-        // The pixel as [`Prepared::pixels`] makes it.
-        let n = f64::from(self.aa);
-        let (rgb, rgb8) = if self.aa == 1 {
-            let c = samples[0].color;
-            (c, u8::pixel(clamped(c)))
-        } else {
-            let (sum, clamped_sum) = samples
-                .iter()
-                .fold((DVec3::ZERO, DVec3::ZERO), |(s, k), sample| {
-                    (s + sample.color, k + clamped(sample.color))
-                });
-            (sum / (n * n), u8::pixel(clamped_sum / (n * n)))
-        };
+        let mut samples = Vec::new();
+        let pixel = self.explain_each(i, j, |sample| {
+            samples.push(sample);
+            ControlFlow::Continue(())
+        })?;
         Some(Explanation {
             x: i,
             y: j,
             illumination: self.world.illumination,
             samples,
-            rgb,
-            rgb8,
+            rgb: pixel.rgb,
+            rgb8: pixel.rgb8,
         })
+    }
+
+    /// [`Prepared::explain`] in bounded memory: each ray's tree in turn to
+    /// `visit` (its aa × aa rays in reading order), one held at a time, so
+    /// that 256 rays of 10 000 bounces never are in memory together. Then
+    /// the pixel they make; `None` outside the image, or once `visit`
+    /// stops (`ControlFlow::Break`).
+    pub fn explain_each(
+        &self,
+        i: u32,
+        j: u32,
+        mut visit: impl FnMut(Sample) -> ControlFlow<()>,
+    ) -> Option<PixelValue> {
+        if i >= self.width() || j >= self.height() {
+            return None;
+        }
+        self.with_kernel(ExplainAt {
+            i,
+            j,
+            visit: Some(&mut visit),
+        })
+    }
+
+    /// The pixel [`Prepared::explain`] explains, traced as it traces it
+    /// but recording nothing: what a writer needs before the trees (the
+    /// JSON's `rgb` comes before its samples). `None` outside the image.
+    pub fn explained_pixel(&self, i: u32, j: u32) -> Option<PixelValue> {
+        if i >= self.width() || j >= self.height() {
+            return None;
+        }
+        self.with_kernel(ExplainAt { i, j, visit: None })
+    }
+
+    /// Rays through each pixel: 1, or aa × aa.
+    pub fn samples_per_pixel(&self) -> usize {
+        self.sample_count()
+    }
+
+    /// The illumination model of the prepared scene.
+    pub fn illumination(&self) -> Illumination {
+        self.world.illumination
     }
 
     /// The pixels (8-bit colours, or the values of the view's pass) of up
