@@ -83,6 +83,7 @@ fn to_json(e: &Explanation, names: &Names) -> Value {
     let mut top = json!({
         "x": e.x,
         "y": e.y,
+        "traced": [e.traced.0, e.traced.1],
         "model": e.illumination.name(),
         "rgb8": e.rgb8,
         "rgb": v3(e.rgb),
@@ -175,6 +176,9 @@ fn words(e: &Explanation, names: &Names, scene: &str) -> String {
         e.y,
         e.illumination.name()
     );
+    if let Some(note) = e.draft_note() {
+        out += &format!("{note}\n");
+    }
     for (k, s) in e.samples.iter().enumerate() {
         if e.samples.len() > 1 {
             out += &format!(

@@ -172,6 +172,10 @@ pub struct Sample {
 pub struct Explanation {
     pub x: u32,
     pub y: u32,
+    /// The pixel whose rays were traced: (x, y) itself, or in a draft the
+    /// top-left pixel of its 2×2 block (even x and y), whose colour the
+    /// draft copies to the other three.
+    pub traced: (u32, u32),
     pub illumination: Illumination,
     /// The rays through the pixel: one, or aa × aa in reading order.
     pub samples: Vec<Sample>,
@@ -179,6 +183,25 @@ pub struct Explanation {
     pub rgb: DVec3,
     /// The pixel of the image.
     pub rgb8: [u8; 3],
+}
+
+impl Explanation {
+    /// In words, where the pixel is a draft's copy of another:
+    /// `draft: pixel (7, 5) shows the ray of (6, 4)`.
+    pub fn draft_note(&self) -> Option<String> {
+        let (x0, y0) = self.traced;
+        let rays = if self.samples.len() > 1 {
+            "rays"
+        } else {
+            "ray"
+        };
+        ((x0, y0) != (self.x, self.y)).then(|| {
+            format!(
+                "draft: pixel ({}, {}) shows the {rays} of ({x0}, {y0})",
+                self.x, self.y
+            )
+        })
+    }
 }
 
 /// Records lane 0 of a trace (the explain traces one lane).

@@ -1182,12 +1182,18 @@ impl Prepared {
 
     /// Why pixel (i, j) has its colour: each of its rays' trees, recorded
     /// from the render's trace ([`super::explain`]); `None` outside the
-    /// image.
+    /// image. A draft's pixel is explained by the rays the draft traced
+    /// for it: those of its 2×2 block's top-left pixel
+    /// ([`Explanation::traced`]).
     pub fn explain(&self, i: u32, j: u32) -> Option<Explanation> {
         if i >= self.width() || j >= self.height() {
             return None;
         }
-        let samples = self.with_kernel(ExplainAt { i, j });
+        let traced = self.traced_for(i, j);
+        let samples = self.with_kernel(ExplainAt {
+            i: traced.0,
+            j: traced.1,
+        });
         // The pixel as [`Prepared::pixels`] makes it.
         let n = f64::from(self.aa);
         let (rgb, rgb8) = if self.aa == 1 {
@@ -1204,6 +1210,7 @@ impl Prepared {
         Some(Explanation {
             x: i,
             y: j,
+            traced,
             illumination: self.world.illumination,
             samples,
             rgb,
@@ -1321,6 +1328,20 @@ impl Prepared {
         self.with_kernel(TileInto { tile, cancel, out })
     }
 
+    /// The side of the blocks one traced pixel stands for: 2 in a draft,
+    /// else 1.
+    fn draft_step(&self) -> u32 {
+        if self.world.draft { 2 } else { 1 }
+    }
+
+    /// The pixel whose rays give pixel (i, j) its colour: itself, or in a
+    /// draft the top-left of its 2×2 block, which [`Prepared::tile_into`]
+    /// traces and copies to the other three.
+    fn traced_for(&self, i: u32, j: u32) -> (u32, u32) {
+        let step = self.draft_step();
+        (i - i % step, j - j % step)
+    }
+
     #[inline(always)]
     fn tile_into<K: Kernel, T: Texel>(
         &self,
@@ -1338,7 +1359,7 @@ impl Prepared {
         // block of the image (even x and y); the other three copy it. A
         // tile of a region may start at an odd row or column: its first
         // pixels copy a block's corner outside it, traced all the same.
-        let step = if self.world.draft { 2 } else { 1 };
+        let step = self.draft_step();
         let anchor = |v: u32| v - v % step;
         let traced_area = Tile {
             x: anchor(tile.x),
