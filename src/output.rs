@@ -54,7 +54,7 @@ pub enum OutputError {
     EmptyName,
     #[error("{}: is {kind}, not an image file", path.display())]
     Special { path: PathBuf, kind: &'static str },
-    #[error("{}: is a directory, not an image file", path.display())]
+    #[error("{}: is a directory, not a file", path.display())]
     IsDirectory { path: PathBuf },
     #[error("{}: the folder {} does not exist", path.display(), folder.display())]
     NoFolder { path: PathBuf, folder: PathBuf },
@@ -145,6 +145,29 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
             limit,
         });
     }
+    // A device or a pipe would be written directly: never an image.
+    if let Some(kind) = std::fs::metadata(crate::files::through_links(path))
+        .ok()
+        .and_then(|meta| crate::files::special_kind(&meta))
+    {
+        return Err(OutputError::Special {
+            path: path.to_owned(),
+            kind,
+        });
+    }
+    check_file_target(path)?;
+    Ok(format)
+}
+
+/// [`check_target`] for a file of any kind (a CSV, a scene), before the
+/// work that makes it: a name, a folder that exists and takes new files,
+/// no directory or read-only file in the way. An existing device or pipe
+/// (`/dev/stdout`) passes: [`write_atomic`] writes into it. Errors name
+/// `path` as given.
+pub fn check_file_target(path: &Path) -> Result<(), OutputError> {
+    if path.as_os_str().is_empty() {
+        return Err(OutputError::EmptyName);
+    }
     let target = crate::files::through_links(path);
     match std::fs::metadata(&target) {
         Ok(meta) if meta.is_dir() => {
@@ -153,11 +176,8 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
             });
         }
         Ok(meta) => {
-            if let Some(kind) = crate::files::special_kind(&meta) {
-                return Err(OutputError::Special {
-                    path: path.to_owned(),
-                    kind,
-                });
+            if crate::files::special_kind(&meta).is_some() {
+                return Ok(());
             }
             if meta.permissions().readonly() {
                 return Err(OutputError::ReadOnly {
@@ -193,12 +213,32 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
         .map(drop)
         .map_err(|e| OutputError::FolderNotWritable {
             path: path.to_owned(),
-            source: e
-                .raw_os_error()
-                .map_or(e, std::io::Error::from_raw_os_error),
+            source: system_error(e),
             folder,
         })?;
-    Ok(format)
+    Ok(())
+}
+
+/// The system's error in an error of `tempfile`, which adds the path of
+/// its temporary file to the message (`… at path "/d/.rayoflight-x1.tmp"`)
+/// and hides the error number: the error as the system gave it, for a
+/// message that names the user's path only.
+fn system_error(e: std::io::Error) -> std::io::Error {
+    if let Some(code) = e.raw_os_error() {
+        return std::io::Error::from_raw_os_error(code);
+    }
+    let text = e.to_string();
+    let code = text
+        .split_once("(os error ")
+        .and_then(|(_, rest)| rest.split_once(')'))
+        .and_then(|(n, _)| n.parse().ok());
+    match code {
+        Some(code) => std::io::Error::from_raw_os_error(code),
+        None => match text.rsplit_once(" at path ") {
+            Some((words, _)) => std::io::Error::new(e.kind(), words.to_owned()),
+            None => e,
+        },
+    }
 }
 
 /// The supported extensions, comma separated, for messages.
@@ -487,12 +527,9 @@ pub fn write_atomic_with<E: From<OutputError>>(
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     // tempfile names its own temporary path in its errors: report the
     // system's error for the path the user gave.
-    let mut file = builder.tempfile_in(dir).map_err(|e| {
-        io_error(
-            e.raw_os_error()
-                .map_or(e, std::io::Error::from_raw_os_error),
-        )
-    })?;
+    let mut file = builder
+        .tempfile_in(dir)
+        .map_err(|e| io_error(system_error(e)))?;
     // A replaced file keeps its own permissions.
     if let Ok(meta) = std::fs::metadata(path) {
         file.as_file()
@@ -608,6 +645,34 @@ mod tests {
         assert!(matches!(gone, OutputError::NoFolder { .. }), "{gone}");
         // The probe leaves nothing behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn errors_name_the_path_given_never_a_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let gone = dir.path().join("gone/x.csv");
+        let err = write_atomic(&gone, b"x").unwrap_err().to_string();
+        assert_eq!(
+            err,
+            format!("{}: No such file or directory (os error 2)", gone.display())
+        );
+        let err = check_file_target(&gone).unwrap_err().to_string();
+        assert!(err.contains("the folder") && !err.contains(".tmp"), "{err}");
+        assert!(matches!(
+            check_file_target(dir.path()),
+            Err(OutputError::IsDirectory { .. })
+        ));
+        // A device takes a text file written into it, never an image.
+        check_file_target(Path::new("/dev/null")).unwrap();
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("null.png");
+            std::os::unix::fs::symlink("/dev/null", &link).unwrap();
+            assert!(matches!(
+                check_target(&link, 1, 1),
+                Err(OutputError::Special { .. })
+            ));
+        }
     }
 
     #[test]

@@ -9,6 +9,7 @@ mod cluster;
 mod edit;
 mod explain;
 mod progress;
+mod stdout;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
@@ -16,7 +17,6 @@ use rayoflight::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::splice;
 use rayoflight::{files, measure, output, pov, render, scene};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -73,7 +73,12 @@ pub fn main() -> ExitCode {
 }
 
 fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure> {
-    match args::parse(args)? {
+    let command = args::parse(args)?;
+    // What prints on stdout finds it closed before any work, not after.
+    if command.prints() && stdout::closed_at_start() {
+        return Err(Failure::Error(stdout::CLOSED.to_owned()));
+    }
+    match command {
         Command::Print(text) => print_line(text.trim_end()),
         Command::ExportPov { scene, out } => export_pov(&scene, out),
         Command::Edit(args) => edit_scene(&args),
@@ -104,18 +109,9 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
     }
 }
 
-/// Prints a line to stdout. A closed pipe (`rayoflight split … | head`)
-/// is the reader's choice and no error; any other failure to write (a
-/// full disk: `split … > regions.txt`) is, so that a script never takes a
-/// cut list for a whole one.
+/// Prints a line to stdout ([`stdout::write`]).
 fn print_line(text: &str) -> Result<(), Failure> {
-    let mut out = std::io::stdout().lock();
-    match writeln!(out, "{text}").and_then(|()| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Failure::Error(format!(
-            "rayoflight: cannot write to stdout: {e}"
-        ))),
-        _ => Ok(()),
-    }
+    stdout::write(&format!("{text}\n")).map_err(Failure::Error)
 }
 
 fn render_scene(r: RenderArgs) -> Result<(), Failure> {
@@ -208,6 +204,9 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
 /// `rayoflight edit`: applies the edits and writes the scene's text back
 /// with only what they change changed, in place or to `-out`.
 fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
+    if let Some(out) = &args.out {
+        output::check_file_target(out).map_err(fail)?;
+    }
     let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
     let mut edited = Edited::new(loaded);
     edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
@@ -231,6 +230,7 @@ fn refused(scene: &Path) -> impl FnOnce(EditError) -> Failure {
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
     refuse_same_file(scene_path, &out)?;
+    output::check_file_target(&out).map_err(fail)?;
     let scene = scene::load(scene_path).map_err(fail)?;
     let name = scene_path.file_name().map(|n| n.to_string_lossy());
     let text = pov::export_named(&scene, name.as_deref());
