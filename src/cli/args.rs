@@ -1136,11 +1136,14 @@ mod tests {
             message(p(&["s.xml", "-threads", "2"])),
             "unknown flag '-threads' (did you mean '--threads'?)"
         );
-        let Err(UsageError::Invalid { message, command }) = p(&["assemble", "-outt", "a.png"])
+        let Err(UsageError::Invalid {
+            message: text,
+            command,
+        }) = p(&["assemble", "-outt", "a.png"])
         else {
             panic!()
         };
-        assert_eq!(message, "unknown flag '-outt' (did you mean '-out'?)");
+        assert_eq!(text, "unknown flag '-outt' (did you mean '-out'?)");
         assert_eq!(command, Some("assemble"));
         // clap's own forms still read: a value glued to a short flag, a
         // cluster of flags, a flag's value that starts with a dash.
