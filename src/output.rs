@@ -657,7 +657,10 @@ mod tests {
             format!("{}: No such file or directory (os error 2)", gone.display())
         );
         let err = check_file_target(&gone).unwrap_err().to_string();
-        assert!(err.contains("the folder") && !err.contains(".tmp"), "{err}");
+        assert!(
+            err.contains("the folder") && !err.contains(".rayoflight-"),
+            "{err}"
+        );
         assert!(matches!(
             check_file_target(dir.path()),
             Err(OutputError::IsDirectory { .. })
