@@ -60,7 +60,7 @@ pub enum OutputError {
     EmptyName,
     #[error("{}: is {kind}, not an image file", path.display())]
     Special { path: PathBuf, kind: &'static str },
-    #[error("{}: is a directory", path.display())]
+    #[error("{}: is a directory, not a file", path.display())]
     IsDirectory { path: PathBuf },
     #[error("{}: the folder {} does not exist", path.display(), folder.display())]
     NoFolder { path: PathBuf, folder: PathBuf },
@@ -160,10 +160,8 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
             limit,
         });
     }
-    let target = crate::files::follow_for_writing(path).map_err(|source| OutputError::Link {
-        path: path.to_owned(),
-        source,
-    })?;
+    // A device or a pipe would be written directly: never an image.
+    let target = follow(path)?;
     if let Some(meta) = existing(path, &target)?
         && let Some(kind) = crate::files::special_kind(&meta)
     {
@@ -178,6 +176,22 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
             kind,
         });
     }
+    check_file_target(path)?;
+    Ok(format)
+}
+
+/// [`check_target`] for a file of any kind (a CSV, a scene), before the
+/// work that makes it: a name, links that may be followed, a folder that
+/// exists and takes new files, no directory, read-only file or file the
+/// caller may not write in the way. An existing device or pipe
+/// (`/dev/stdout`) passes: [`write_atomic`] writes into it. Errors name
+/// `path` as given.
+pub fn check_file_target(path: &Path) -> Result<(), OutputError> {
+    if path.as_os_str().is_empty() {
+        return Err(OutputError::EmptyName);
+    }
+    let target = follow(path)?;
+    existing(path, &target)?;
     let folder = match target.parent() {
         Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
         _ => PathBuf::from("."),
@@ -205,12 +219,32 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
         .map(drop)
         .map_err(|e| OutputError::FolderNotWritable {
             path: path.to_owned(),
-            source: e
-                .raw_os_error()
-                .map_or(e, std::io::Error::from_raw_os_error),
+            source: system_error(e),
             folder,
         })?;
-    Ok(format)
+    Ok(())
+}
+
+/// The system's error in an error of `tempfile`, which adds the path of
+/// its temporary file to the message (`… at path "/d/.rayoflight-x1.tmp"`)
+/// and hides the error number: the error as the system gave it, for a
+/// message that names the user's path only.
+fn system_error(e: std::io::Error) -> std::io::Error {
+    if let Some(code) = e.raw_os_error() {
+        return std::io::Error::from_raw_os_error(code);
+    }
+    let text = e.to_string();
+    let code = text
+        .split_once("(os error ")
+        .and_then(|(_, rest)| rest.split_once(')'))
+        .and_then(|(n, _)| n.parse().ok());
+    match code {
+        Some(code) => std::io::Error::from_raw_os_error(code),
+        None => match text.rsplit_once(" at path ") {
+            Some((words, _)) => std::io::Error::new(e.kind(), words.to_owned()),
+            None => e,
+        },
+    }
 }
 
 /// The supported extensions, comma separated, for messages.
@@ -531,6 +565,14 @@ fn encode_gif(image: &RgbImage) -> Result<Vec<u8>, image::ImageError> {
     Ok(bytes)
 }
 
+/// The file writing to `path` writes ([`crate::files::follow_for_writing`]).
+fn follow(path: &Path) -> Result<PathBuf, OutputError> {
+    crate::files::follow_for_writing(path).map_err(|source| OutputError::Link {
+        path: path.to_owned(),
+        source,
+    })
+}
+
 /// What is in the way of writing `target` (where `path` leads): nothing
 /// (`None`), or an existing file the caller may replace or a special file
 /// to write into (its metadata). A directory, a read-only file and a file
@@ -616,10 +658,7 @@ pub fn write_atomic_with<E: From<OutputError>>(
     };
     // From here a signal is recorded, not fatal: the temporary file must go.
     let _cleanly = crate::interrupt::cleanly();
-    let target = crate::files::follow_for_writing(path).map_err(|source| OutputError::Link {
-        path: path.to_owned(),
-        source,
-    })?;
+    let target = follow(path)?;
     let old = existing(path, &target)?;
     let path = target.as_path();
     if let Some(meta) = old.as_ref().filter(|m| !m.is_file()) {
@@ -666,12 +705,9 @@ pub fn write_atomic_with<E: From<OutputError>>(
     builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
     // tempfile names its own temporary path in its errors: report the
     // system's error for the path the user gave.
-    let mut file = builder.tempfile_in(dir).map_err(|e| {
-        io_error(
-            e.raw_os_error()
-                .map_or(e, std::io::Error::from_raw_os_error),
-        )
-    })?;
+    let mut file = builder
+        .tempfile_in(dir)
+        .map_err(|e| io_error(system_error(e)))?;
     if let Some(meta) = &old {
         crate::files::keep_attributes(path, meta, file.as_file()).map_err(io_error)?;
     }
@@ -890,6 +926,37 @@ mod tests {
         assert!(matches!(gone, OutputError::NoFolder { .. }), "{gone}");
         // The probe leaves nothing behind.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn errors_name_the_path_given_never_a_temporary_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let gone = dir.path().join("gone/x.csv");
+        let err = write_atomic(&gone, b"x").unwrap_err().to_string();
+        assert_eq!(
+            err,
+            format!("{}: No such file or directory (os error 2)", gone.display())
+        );
+        let err = check_file_target(&gone).unwrap_err().to_string();
+        assert!(
+            err.contains("the folder") && !err.contains(".rayoflight-"),
+            "{err}"
+        );
+        assert!(matches!(
+            check_file_target(dir.path()),
+            Err(OutputError::IsDirectory { .. })
+        ));
+        // A device takes a text file written into it, never an image.
+        check_file_target(Path::new("/dev/null")).unwrap();
+        #[cfg(unix)]
+        {
+            let link = dir.path().join("null.png");
+            std::os::unix::fs::symlink("/dev/null", &link).unwrap();
+            assert!(matches!(
+                check_target(&link, 1, 1),
+                Err(OutputError::Special { .. })
+            ));
+        }
     }
 
     #[test]

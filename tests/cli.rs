@@ -381,3 +381,184 @@ fn method_renders_with_a_study_method() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("auto"), "{}", stderr(&o));
 }
+
+/// Runs the binary in `dir` with its stdout closed (`>&-`): the shell
+/// closes descriptor 1, then runs it (std's Command cannot close one).
+fn with_stdout_closed(dir: &std::path::Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new("sh")
+        .arg("-c")
+        .arg(r#"exec "$0" "$@" >&-"#)
+        .arg(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(args)
+        .current_dir(dir)
+        .env_remove("DISPLAY")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .expect("sh runs")
+}
+
+#[test]
+fn a_closed_stdout_is_an_error_for_every_command_that_prints() {
+    let (dir, _) = workdir();
+    for args in [
+        &["split", "tiny.xml", "--tasks", "2"][..],
+        &["plan", "tiny.xml"],
+        &["explain", "tiny.xml", "3", "4"],
+        &["explain", "tiny.xml", "3", "4", "--json"],
+        &["-time", "tiny.xml", "-out", "t.png"],
+        &["--help"],
+        &["plan", "--help"],
+        &["--version"],
+        &["study", "--out", "res", "tiny.xml", "--runs", "1"],
+    ] {
+        let o = with_stdout_closed(dir.path(), args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert_eq!(
+            stderr(&o).trim_end(),
+            "rayoflight: cannot write to stdout: it is closed",
+            "{args:?}"
+        );
+    }
+    // Found before the work: the render wrote no image, the study nothing.
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+    // What prints nothing does not need stdout.
+    let o = with_stdout_closed(dir.path(), &["--no-gui", "tiny.xml", "-out", "t.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Output thrown away on purpose is no error.
+    let o = std::process::Command::new("sh")
+        .arg("-c")
+        .arg(r#"exec "$0" "$@" >/dev/null"#)
+        .arg(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(["plan", "tiny.xml"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+#[test]
+fn a_full_stdout_is_an_error() {
+    let (dir, _) = workdir();
+    if !std::path::Path::new("/dev/full").exists() {
+        return;
+    }
+    for args in [
+        &["plan", "tiny.xml"][..],
+        &["--help"],
+        &["-time", "tiny.xml", "-out", "t.png"],
+    ] {
+        let o = std::process::Command::new("sh")
+            .arg("-c")
+            .arg(r#"exec "$0" "$@" >/dev/full"#)
+            .arg(env!("CARGO_BIN_EXE_rayoflight"))
+            .args(args)
+            .current_dir(dir.path())
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(
+            stderr(&o).contains("cannot write to stdout: No space left on device"),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+    }
+}
+
+#[test]
+fn output_folders_are_checked_before_the_work() {
+    let (dir, _) = workdir();
+    // The bench is a minute of work: its CSV's folder is checked first.
+    let start = std::time::Instant::now();
+    let o = rayoflight(
+        dir.path(),
+        &[
+            "bench",
+            "--csv",
+            "nodir/x.csv",
+            "--no-pov",
+            "--runs",
+            "1",
+            "-q",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(start.elapsed().as_secs() < 10, "{:?}", start.elapsed());
+    assert_eq!(
+        stderr(&o).trim_end(),
+        "nodir/x.csv: the folder nodir does not exist"
+    );
+    assert_eq!(stdout(&o), "", "no table printed before the refusal");
+    // The study's files: one of them taken by a folder.
+    fs::create_dir_all(dir.path().join("res/study.png")).unwrap();
+    let o = rayoflight(dir.path(), &["study", "--out", "res", "tiny.xml", "-q"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(
+        stderr(&o).trim_end(),
+        "res/study.png: is a directory, not a file"
+    );
+    assert_eq!(stdout(&o), "");
+    assert_eq!(files_in(&dir.path().join("res")), ["study.png"]);
+    // Every error names the path given, never a temporary file.
+    for (args, path) in [
+        (
+            &["export-pov", "tiny.xml", "-out", "gone/x.pov"][..],
+            "gone/x.pov",
+        ),
+        (
+            &[
+                "edit",
+                "tiny.xml",
+                "--set",
+                "model.depth=2",
+                "-out",
+                "gone/x.xml",
+            ],
+            "gone/x.xml",
+        ),
+        (
+            &["sheet", "-out", "gone/s.png", "missing.png"],
+            "gone/s.png",
+        ),
+    ] {
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert_eq!(
+            stderr(&o).trim_end(),
+            format!("{path}: the folder gone does not exist"),
+            "{args:?}"
+        );
+    }
+}
+
+#[test]
+fn negative_numbers_are_values_and_single_dash_words_are_named_whole() {
+    let (dir, _) = workdir();
+    for (args, message) in [
+        (
+            &["tiny.xml", "--threads", "-1"][..],
+            "--threads expects an integer from 1 to ",
+        ),
+        (
+            &["bench", "--split-size", "-1"],
+            "--split-size expects 0 (skip the section) or a side from 8 to 16384 pixels, not \"-1\"",
+        ),
+        (
+            &["explain", "tiny.xml", "-1", "0"],
+            "<X> expects a pixel number",
+        ),
+        (&["-frobnicate", "tiny.xml"], "unknown flag '-frobnicate';"),
+        (
+            &["-tme", "tiny.xml"],
+            "unknown flag '-tme' (did you mean '-time'?)",
+        ),
+        (
+            &["-outt", "x.png", "tiny.xml"],
+            "unknown flag '-outt' (did you mean '-out'?)",
+        ),
+    ] {
+        let o = rayoflight(dir.path(), args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
+    }
+    assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}

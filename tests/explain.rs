@@ -299,3 +299,53 @@ fn prepared_outside(
     let prepared = rayoflight::render::prepare(scene, &Default::default());
     prepared.explained_pixel(scene.camera.width, 0)
 }
+
+/// A draft traces one ray per 2×2 block (its top-left pixel, even x and
+/// y) and copies it to the other three: explaining any pixel of a draft
+/// explains that ray, says so, and gives the draft render's colour.
+#[test]
+fn a_draft_pixel_explains_the_ray_the_draft_traced() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("tiny.xml");
+    std::fs::write(&scene, common::TINY).unwrap();
+    for extra in [
+        &["--method", "draft"][..],
+        &["--method", "draft", "--aa", "2"],
+    ] {
+        let image = render(dir.path(), &scene, extra);
+        let (w, h) = image.dimensions();
+        for y in 0..h {
+            for x in 0..w {
+                let e = explain(dir.path(), &scene, x, y, extra);
+                check(
+                    &e,
+                    image.get_pixel(x, y).0,
+                    &format!("{extra:?} ({x}, {y})"),
+                );
+                let traced: Vec<u64> = e["traced"]
+                    .as_array()
+                    .expect("the pixel traced")
+                    .iter()
+                    .map(|c| c.as_u64().unwrap())
+                    .collect();
+                assert_eq!(traced, [u64::from(x & !1), u64::from(y & !1)]);
+            }
+        }
+    }
+    let o = rayoflight(
+        dir.path(),
+        &["explain", "tiny.xml", "7", "5", "--method", "draft"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stdout(&o).contains("draft: pixel (7, 5) shows the ray of (6, 4)"),
+        "{}",
+        stdout(&o)
+    );
+    // A traced pixel's explanation says nothing of the kind.
+    let o = rayoflight(
+        dir.path(),
+        &["explain", "tiny.xml", "6", "4", "--method", "draft"],
+    );
+    assert!(!stdout(&o).contains("shows the ray of"), "{}", stdout(&o));
+}

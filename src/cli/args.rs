@@ -8,7 +8,10 @@
 //!
 //! The brief's single-dash long options `-out` and `-time` are rewritten to
 //! `--out` and `--time` before clap sees them: clap would read `-out` as
-//! `-o ut`.
+//! `-o ut`. Any other single-dash word of letters (`-frobnicate`, `-tme`)
+//! is refused whole, with the flag it is a slip for, before clap would
+//! read it as short flags. Numeric flags take negative numbers as values,
+//! so that their range check says what is allowed.
 
 use super::edit::{self, EditArg};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
@@ -147,6 +150,26 @@ pub enum Command {
     Study(super::study::StudyArgs),
 }
 
+impl Command {
+    /// Whether the command prints on stdout: help and version, `plan`,
+    /// `split`, `explain`, `bench`, `study` and a render with `-time`.
+    pub fn prints(&self) -> bool {
+        match self {
+            Command::Print(_)
+            | Command::Plan { .. }
+            | Command::Split(_)
+            | Command::Explain(_)
+            | Command::Bench(_)
+            | Command::Study(_) => true,
+            Command::Render(r) => r.time,
+            Command::Assemble { .. }
+            | Command::Sheet { .. }
+            | Command::ExportPov { .. }
+            | Command::Edit(_) => false,
+        }
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct RenderArgs {
     /// The scene file; `None` means the built-in example (app only).
@@ -262,9 +285,9 @@ struct RenderFlags {
     /// Print the render time as 'render: N ns'.
     #[arg(long)]
     time: bool,
-    #[arg(long, value_name = "N", value_parser = threads)]
+    #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
     threads: Option<usize>,
-    #[arg(long, value_name = "N", value_parser = aa)]
+    #[arg(long, value_name = "N", value_parser = aa, allow_negative_numbers = true)]
     aa: Option<u32>,
     #[arg(long, value_name = "NAME", value_parser = method)]
     method: Option<Method>,
@@ -380,10 +403,10 @@ struct ExplainFlags {
     /// The scene file.
     scene: PathBuf,
     /// The pixel's column, 0 at the left.
-    #[arg(value_name = "X", value_parser = pixel)]
+    #[arg(value_name = "X", value_parser = pixel, allow_negative_numbers = true)]
     x: u32,
     /// The pixel's row, 0 at the top.
-    #[arg(value_name = "Y", value_parser = pixel)]
+    #[arg(value_name = "Y", value_parser = pixel, allow_negative_numbers = true)]
     y: u32,
     /// Print one JSON object: "rgb8", "rgb", "hits" (each with "object",
     /// 1-based or null for a miss, "t", "point", "normal", "terms").
@@ -401,7 +424,7 @@ struct RenderOf {
     #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
     set: Vec<(String, String)>,
     /// N×N rays per pixel, 1 to 16.
-    #[arg(long, value_name = "N", value_parser = aa)]
+    #[arg(long, value_name = "N", value_parser = aa, allow_negative_numbers = true)]
     aa: Option<u32>,
     /// The study method the render uses instead of auto.
     #[arg(long, value_name = "NAME", value_parser = method)]
@@ -484,10 +507,10 @@ struct EditFlags {
 #[derive(Args, Debug)]
 struct BenchFlags {
     /// Render threads [default: one per core]
-    #[arg(long, value_name = "N", value_parser = threads)]
+    #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
     threads: Option<usize>,
     /// Runs per measurement; the median is reported.
-    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs)]
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs, allow_negative_numbers = true)]
     runs: usize,
     /// Also write the results as CSV to FILE.
     #[arg(long, short = 'o', visible_alias = "out", value_name = "FILE")]
@@ -500,7 +523,13 @@ struct BenchFlags {
     quiet: bool,
     /// The side of the image split into 64 regions and assembled, in
     /// pixels (0: skip that section).
-    #[arg(long, value_name = "PIXELS", default_value_t = 16000)]
+    #[arg(
+        long,
+        value_name = "PIXELS",
+        default_value_t = 16000,
+        value_parser = split_size,
+        allow_negative_numbers = true
+    )]
     split_size: u32,
 }
 
@@ -510,10 +539,10 @@ struct StudyFlags {
     #[arg(short, long, value_name = "DIR", default_value = "study")]
     out: PathBuf,
     /// Runs per measurement; the median is reported.
-    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs)]
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs, allow_negative_numbers = true)]
     runs: usize,
     /// Render threads [default: one per core]
-    #[arg(long, value_name = "N", value_parser = threads)]
+    #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
     threads: Option<usize>,
     /// Scene files to study [default: the built-in study scenes]
     #[arg(value_name = "SCENE")]
@@ -539,6 +568,21 @@ fn runs(text: &str) -> Result<usize, String> {
         .ok()
         .filter(|n| (1..=1000).contains(n))
         .ok_or_else(|| "expects an integer from 1 to 1000".to_owned())
+}
+
+/// The bench's split section: 0 (skipped), or a square image of at least
+/// a pixel per task and at most the render's limit of pixels.
+fn split_size(text: &str) -> Result<u32, String> {
+    let tasks = super::bench::SPLIT_TASKS as u64;
+    let (min, max) = (
+        tasks.isqrt() + u64::from(tasks.isqrt().pow(2) < tasks),
+        rayoflight::scene::MAX_PIXELS.isqrt(),
+    );
+    text.parse::<u64>()
+        .ok()
+        .filter(|&n| n == 0 || (min..=max).contains(&n))
+        .and_then(|n| u32::try_from(n).ok())
+        .ok_or_else(|| format!("expects 0 (skip the section) or a side from {min} to {max} pixels"))
 }
 
 fn tasks(text: &str) -> Result<usize, String> {
@@ -600,6 +644,12 @@ fn method(text: &str) -> Result<Method, String> {
 pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageError> {
     let args = brief_spellings(args);
     let subcommand = subcommand_named(&args);
+    if let Some(word) = unknown_single_dash_word(&args, subcommand) {
+        return Err(UsageError::Invalid {
+            message: word,
+            command: subcommand,
+        });
+    }
     let program = std::iter::once(OsString::from("rayoflight"));
     let clap_error = |e: clap::Error| match e.kind() {
         ErrorKind::DisplayHelp | ErrorKind::DisplayVersion => {
@@ -819,6 +869,100 @@ fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
         .collect()
 }
 
+/// The first single-dash word of several letters that is neither a brief
+/// spelling (`-out`, `-time`, already `--out` and `--time` here) nor a
+/// cluster of short flags (`-qh`), as a message: `unknown flag
+/// '-frobnicate'`, `unknown flag '-tme' (did you mean '-time'?)`. clap
+/// would read `-frobnicate` as `-f …` and `-outt x.png` as `-o utt` then
+/// a stray `x.png`. A word with a digit, a dot or a slash (`-n4`,
+/// `-ox.png`, `-1`) is clap's to read, as are the values of the flags
+/// that take one.
+fn unknown_single_dash_word(args: &[OsString], subcommand: Option<&str>) -> Option<String> {
+    let mut root = Cli::command();
+    root.build();
+    let command = match subcommand {
+        Some(name) => root.find_subcommand(name)?.clone(),
+        None => root,
+    };
+    let takes_value = |arg: &clap::Arg| arg.get_action().takes_values();
+    let short = |c: char| command.get_arguments().find(|a| a.get_short() == Some(c));
+    let mut value_next = false;
+    for arg in &args[usize::from(subcommand.is_some())..] {
+        if std::mem::take(&mut value_next) {
+            continue;
+        }
+        let Some(text) = arg.to_str() else { continue };
+        if text == "--" {
+            break;
+        }
+        if let Some(long) = text.strip_prefix("--") {
+            value_next = !long.contains('=')
+                && command
+                    .get_arguments()
+                    .any(|a| a.get_long() == Some(long) && takes_value(a));
+            continue;
+        }
+        let Some(word) = text.strip_prefix('-') else {
+            continue;
+        };
+        let mut letters = word.chars();
+        if let (Some(c), None) = (letters.next(), letters.next()) {
+            value_next = short(c).is_some_and(takes_value);
+            continue;
+        }
+        let whole = !word.is_empty()
+            && word.chars().all(|c| c.is_ascii_alphabetic() || c == '-')
+            && !word
+                .chars()
+                .all(|c| short(c).is_some_and(|a| !takes_value(a)));
+        if whole {
+            return Some(match suggestion(word, &command) {
+                Some(flag) => format!("unknown flag '-{word}' (did you mean '{flag}'?)"),
+                None => format!("unknown flag '-{word}'"),
+            });
+        }
+    }
+    None
+}
+
+/// The flag of `command` closest to `word` (a flag's name as typed,
+/// without its dash), spelled as the help spells it (`-out`, `-time`,
+/// `--threads`), where it is close enough to be a slip: at most two
+/// letters apart, and fewer than half the word's.
+fn suggestion(word: &str, command: &clap::Command) -> Option<String> {
+    command
+        .get_arguments()
+        .flat_map(|a| {
+            a.get_long()
+                .into_iter()
+                .chain(a.get_all_aliases().into_iter().flatten())
+        })
+        .map(|long| (edit_distance(word, long), long))
+        .filter(|&(d, _)| d <= 2 && d < word.len().div_ceil(2))
+        .min_by_key(|&(d, _)| d)
+        .map(|(_, long)| match long {
+            "out" | "time" => format!("-{long}"),
+            _ => format!("--{long}"),
+        })
+}
+
+/// Levenshtein's distance: the fewest letters inserted, removed or
+/// replaced that turn `a` into `b`.
+fn edit_distance(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let replaced = diagonal + usize::from(ca != cb);
+            diagonal = row[j + 1];
+            row[j + 1] = replaced.min(row[j] + 1).min(diagonal + 1);
+        }
+    }
+    row[b.len()]
+}
+
 /// The subcommands' names, as clap derives them from `Sub`.
 const SUBCOMMANDS: [&str; 9] = [
     "split",
@@ -972,6 +1116,80 @@ mod tests {
             message(p(&["s.xml", "-out", "a.png", "--out", "b.png"])),
             "--out given twice"
         );
+    }
+
+    #[test]
+    fn single_dash_words_are_named_whole() {
+        assert_eq!(
+            message(p(&["-frobnicate", "s.xml"])),
+            "unknown flag '-frobnicate'"
+        );
+        assert_eq!(
+            message(p(&["-tme", "s.xml"])),
+            "unknown flag '-tme' (did you mean '-time'?)"
+        );
+        assert_eq!(
+            message(p(&["-outt", "x.png", "s.xml"])),
+            "unknown flag '-outt' (did you mean '-out'?)"
+        );
+        assert_eq!(
+            message(p(&["s.xml", "-threads", "2"])),
+            "unknown flag '-threads' (did you mean '--threads'?)"
+        );
+        let Err(UsageError::Invalid {
+            message: text,
+            command,
+        }) = p(&["assemble", "-outt", "a.png"])
+        else {
+            panic!()
+        };
+        assert_eq!(text, "unknown flag '-outt' (did you mean '-out'?)");
+        assert_eq!(command, Some("assemble"));
+        // clap's own forms still read: a value glued to a short flag, a
+        // cluster of flags, a flag's value that starts with a dash.
+        let Ok(Command::Render(r)) = p(&["s.xml", "-ox.png"]) else {
+            panic!()
+        };
+        assert_eq!(r.out, Some(PathBuf::from("x.png")));
+        assert!(matches!(
+            p(&["split", "s.xml", "-n4"]),
+            Ok(Command::Split(_))
+        ));
+        assert!(matches!(p(&["-qh"]), Ok(Command::Print(_))));
+        assert!(message(p(&["s.xml", "--region", "-abc"])).starts_with("--region expects"));
+        assert!(message(p(&["split", "s.xml", "-n", "-abc"])).starts_with("--tasks expects"));
+        assert_eq!(edit_distance("tme", "time"), 1);
+        assert_eq!(edit_distance("outt", "out"), 1);
+        assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn negative_numbers_are_values_and_the_range_is_said() {
+        let max = rayoflight::render::max_threads();
+        assert_eq!(
+            message(p(&["s.xml", "--threads", "-1"])),
+            format!("--threads expects an integer from 1 to {max} (four per core), not \"-1\"")
+        );
+        assert_eq!(
+            message(p(&["s.xml", "--aa", "-1"])),
+            "--aa expects an integer from 1 to 16, not \"-1\""
+        );
+        assert_eq!(
+            message(p(&["bench", "--split-size", "-1"])),
+            "--split-size expects 0 (skip the section) or a side from 8 to 16384 pixels, not \"-1\""
+        );
+        assert!(matches!(
+            p(&["bench", "--split-size", "16384"]),
+            Ok(Command::Bench(_))
+        ));
+        assert!(p(&["bench", "--split-size", "16385"]).is_err());
+        assert!(message(p(&["bench", "--runs", "-1"])).starts_with("--runs expects an integer"));
+        assert!(message(p(&["study", "--threads", "-2"])).starts_with("--threads expects"));
+        assert_eq!(
+            message(p(&["explain", "s.xml", "-1", "0"])),
+            "<X> expects a pixel number: 0, 1, 2, … from the image's top left, not \"-1\""
+        );
+        assert!(message(p(&["explain", "s.xml", "0", "-3"])).starts_with("<Y> expects"));
     }
 
     #[test]

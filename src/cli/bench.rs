@@ -30,7 +30,7 @@ pub struct BenchArgs {
 
 /// The split section's scene (the bench's dearest) and its task count.
 const SPLIT_SCENE: &str = "mirrors";
-const SPLIT_TASKS: usize = 64;
+pub const SPLIT_TASKS: usize = 64;
 
 /// One measured configuration: a CSV row.
 struct Row {
@@ -58,6 +58,10 @@ struct PovRun {
 /// Runs the whole bench; the report goes to stdout as it comes, a progress
 /// bar (`steps`) to stderr.
 pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
+    // The CSV's folder takes it, checked before the minutes of work.
+    if let Some(path) = &args.csv {
+        output::check_file_target(path).map_err(|e| e.to_string())?;
+    }
     let out = |text: &str| steps.print(text);
     let mut done = 0;
     let mut step = |name: &str| {
@@ -74,15 +78,15 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         pov_version
             .as_deref()
             .unwrap_or(if args.pov { "not found" } else { "skipped" }),
-    ));
+    ))?;
 
     out(
         "\nScenes (same image, same thread count as POV-Ray's +WT; app: the app's render worker, no window)\n",
-    );
+    )?;
     out(&format!(
         "{:<14} {:>10} {:>10} {:>9} {:>11} {:>7} {:>9} {:>4} {:>10}\n",
         "scene", "size", "ours ms", "Mrays/s", "POV-Ray ms", "ratio", "within 1", "max", "app ms"
-    ));
+    ))?;
     let mut sets: Vec<(String, Scene)> = Vec::new();
     let example = scene::parse(rayoflight::EXAMPLE_SCENE, Path::new("scenes/example.xml"))
         .map_err(|e| e.to_string())?;
@@ -132,7 +136,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             pov,
             peak_mb: None,
         };
-        out(&scene_line(&row));
+        out(&scene_line(&row))?;
         rows.push(row);
     }
     // The median of the scenes' ratios to POV-Ray (the upper middle one
@@ -150,20 +154,20 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         let lowest = ratios[0];
         out(&format!(
             "median ratio to POV-Ray {median:.1}x, lowest {lowest:.1}x\n"
-        ));
+        ))?;
     }
 
-    out("\nThread scaling (ms, and speed-up over 1 thread)\n");
-    out(&format!("{:<14}", "scene"));
+    out("\nThread scaling (ms, and speed-up over 1 thread)\n")?;
+    out(&format!("{:<14}", "scene"))?;
     for &t in &counts {
         out(&format!(
             " {:>16}",
             format!("{t} thread{}", if t == 1 { "" } else { "s" })
-        ));
+        ))?;
     }
-    out("\n");
+    out("\n")?;
     for (name, scene) in sets.iter().skip(1) {
-        out(&format!("{name:<14}"));
+        out(&format!("{name:<14}"))?;
         let mut one = None;
         for &t in &counts {
             step(&format!("{name}, {t} threads"));
@@ -176,7 +180,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
                     ms(median),
                     base.as_secs_f64() / median.as_secs_f64()
                 )
-            ));
+            ))?;
             rows.push(Row {
                 section: "threads",
                 scene: name.clone(),
@@ -191,14 +195,14 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
                 app: None,
             });
         }
-        out("\n");
+        out("\n")?;
     }
 
-    out("\nCost against object count (n spheres on a floor, 800x600, phong)\n");
+    out("\nCost against object count (n spheres on a floor, 800x600, phong)\n")?;
     out(&format!(
         "{:>8} {:>10} {:>12} {:>14}\n",
         "spheres", "ms", "x n=10", "ms / log2(n)"
-    ));
+    ))?;
     let mut first = None;
     for n in sizes {
         step(&format!("{n} spheres"));
@@ -212,7 +216,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             ms(median),
             median.as_secs_f64() / base.as_secs_f64(),
             ms(median) / (n as f64).log2()
-        ));
+        ))?;
         rows.push(Row {
             section: "objects",
             scene: format!("spheres-{n}"),
@@ -228,13 +232,13 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         });
     }
 
-    out("\nPeak memory, 100 000 spheres at 1600x1200 (XML text, parse, prepare, render)\n");
+    out("\nPeak memory, 100 000 spheres at 1600x1200 (XML text, parse, prepare, render)\n")?;
     step("peak memory");
     match peak_memory(100_000, 1600, 1200, args.threads)? {
         Some((beyond, image_mb)) => {
             out(&format!(
                 "{beyond:.1} MB beyond the image ({image_mb:.1} MB of pixels)\n"
-            ));
+            ))?;
             rows.push(Row {
                 section: "memory",
                 scene: "spheres-100000".into(),
@@ -249,10 +253,10 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
                 app: None,
             });
         }
-        None => out("not measurable here (needs Linux /proc)\n"),
+        None => out("not measurable here (needs Linux /proc)\n")?,
     }
 
-    out("\nEncoding a 4096x4096 render of the example (ms, and against PNG)\n");
+    out("\nEncoding a 4096x4096 render of the example (ms, and against PNG)\n")?;
     let mut example = sets[0].1.clone();
     (example.camera.width, example.camera.height) = (4096, 4096);
     let (_, _, image) = time_render(&example, args.threads, 1)?;
@@ -271,7 +275,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             "{ext:<6} {:>10.1} {:>8.2}x\n",
             ms(median),
             median.as_secs_f64() / base.as_secs_f64()
-        ));
+        ))?;
         rows.push(Row {
             section: "encode",
             scene: format!("example-4096.{ext}"),
@@ -297,7 +301,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
 
     if let Some(path) = &args.csv {
         output::write_atomic(path, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
-        out(&format!("\nCSV written to {}\n", path.display()));
+        out(&format!("\nCSV written to {}\n", path.display()))?;
     }
     Ok(())
 }
@@ -310,7 +314,7 @@ fn split_section(
     scene: &Scene,
     args: &BenchArgs,
     step: &mut impl FnMut(&str),
-    out: &impl Fn(&str),
+    out: &impl Fn(&str) -> Result<(), String>,
     rows: &mut Vec<Row>,
 ) -> Result<(), String> {
     let size = args.split_size;
@@ -320,7 +324,7 @@ fn split_section(
         "\nPast one machine: {SPLIT_SCENE} at {size}x{size}, one render against {SPLIT_TASKS} \
          regions (split, each rendered and written as a part, assemble), {} threads\n",
         args.threads
-    ));
+    ))?;
     let pool = RenderPool::new(Some(args.threads)).map_err(|e| e.to_string())?;
     let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
     let error = |e: &dyn std::fmt::Display| e.to_string();
@@ -438,7 +442,7 @@ fn split_section(
         whole.elapsed.as_secs_f64(),
         whole_write.as_secs_f64(),
         file_mb(&whole_file)
-    ));
+    ))?;
     out(&format!(
         "regions:   split's pre-pass {:.3} s; {} regions rendered {:.2} s in all ({:+.2} %, rays {:+.3} %), \
          parts written {:.2} s\n",
@@ -448,7 +452,7 @@ fn split_section(
         pct(rendering, whole.elapsed) - 100.0,
         100.0 * (rays as f64 / whole_stats.rays.max(1) as f64 - 1.0),
         writing.as_secs_f64()
-    ));
+    ))?;
     out(&format!(
         "per region: fastest {:.3} s, median {:.3} s, slowest {:.3} s (slowest / mean {:.2})\n",
         region_times
@@ -459,14 +463,14 @@ fn split_section(
         region_times[region_times.len() / 2].as_secs_f64(),
         slowest.as_secs_f64(),
         slowest.as_secs_f64() / mean.as_secs_f64()
-    ));
+    ))?;
     out(&format!(
         "assemble:  {:.2} s, peak memory of an assemble process {}; the same file as the whole \
          render: {}\n",
         assembly.as_secs_f64(),
         peak_mb.map_or("not measurable here".to_owned(), |m| format!("{m:.1} MB")),
         if same { "yes" } else { "NO" }
-    ));
+    ))?;
     let total = pre_pass + rendering + writing + assembly;
     out(&format!(
         "overhead:  {:+.1} % of the whole render and its file ({:.2} s against {:.2} s): \
@@ -478,7 +482,7 @@ fn split_section(
         pct(rendering, one) - pct(whole.elapsed, one),
         pct(writing, one) - pct(whole_write, one),
         pct(assembly, one)
-    ));
+    ))?;
     if !same {
         return Err("the assembled image differs from the whole render".to_owned());
     }

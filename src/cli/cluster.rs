@@ -51,6 +51,9 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 /// a time, each dropped once placed.
 pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
     output::format_for(out).map_err(fail)?;
+    // The folder takes the sheet, checked before any image is read; its
+    // size is checked once it is known.
+    output::check_file_target(out).map_err(fail)?;
     if let Some(image) = images.iter().find(|i| files::same_file(i, out)) {
         return Err(Failure::Error(format!(
             "{}: is one of the images: the sheet cannot be written over it",

@@ -6,11 +6,12 @@
 //! write 1.5 GB of JSON).
 
 use super::args::ExplainArgs;
+use super::terminal::shown;
 use super::{Failure, edit, fail, refused};
 use glam::DVec3;
 use rayoflight::geometry::Ray;
 use rayoflight::render::explain::{
-    Bounce, Ended, PixelValue, Sample, describe_ray, number as n, vector as v,
+    Bounce, Ended, PixelValue, Sample, describe_ray, draft_note, number as n, vector as v,
 };
 use rayoflight::render::{Prepared, prepare};
 use rayoflight::scene::edit::Edited;
@@ -129,7 +130,7 @@ fn put(out: &mut impl Write, value: &Value) -> io::Result<()> {
 }
 
 /// The explanation as one JSON object on one line, written as the rays
-/// are traced: `x`, `y`, `model`, `rgb8`, `rgb`, then the first ray's
+/// are traced: `x`, `y`, `traced`, `model`, `rgb8`, `rgb`, then the first ray's
 /// `hits` and `ended`, then, with more rays than one, every ray's tree in
 /// `samples`. The pixel's value comes first, so it is traced once
 /// beforehand without recording.
@@ -146,6 +147,9 @@ fn json_to(
     put(out, &json!(x))?;
     out.write_all(b",\"y\":")?;
     put(out, &json!(y))?;
+    // The pixel whose rays were traced: (x, y), or a draft's block corner.
+    out.write_all(b",\"traced\":")?;
+    put(out, &json!([pixel.traced.0, pixel.traced.1]))?;
     out.write_all(b",\"model\":")?;
     put(out, &json!(p.illumination().name()))?;
     out.write_all(b",\"rgb8\":")?;
@@ -276,12 +280,16 @@ fn words_to(
     names: &Names,
     scene: &str,
 ) -> io::Result<()> {
-    writeln!(
-        out,
-        "pixel ({x}, {y}) of {scene}: {} model",
+    // The scene's name and its comments come from outside: escaped.
+    let head = format!(
+        "pixel ({x}, {y}) of {scene}: {} model\n",
         p.illumination().name()
-    )?;
+    );
+    out.write_all(shown(&head, true).as_bytes())?;
     let count = p.samples_per_pixel();
+    if let Some(note) = draft_note((x, y), p.traced_for(x, y), count) {
+        writeln!(out, "{note}")?;
+    }
     let pixel = each_sample(p, (x, y), |k, s| {
         let mut text = String::new();
         if count > 1 {
@@ -293,7 +301,7 @@ fn words_to(
             );
         }
         sample_words(&mut text, &s, names);
-        out.write_all(text.as_bytes())
+        out.write_all(shown(&text, true).as_bytes())
     })?;
     if count > 1 {
         writeln!(

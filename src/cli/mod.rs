@@ -9,6 +9,7 @@ mod cluster;
 mod edit;
 mod explain;
 mod progress;
+mod stdout;
 mod study;
 mod terminal;
 
@@ -17,7 +18,6 @@ use rayoflight::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::{merge, splice};
 use rayoflight::{files, interrupt, measure, output, pov, render, resources, scene};
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -91,6 +91,10 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
     if !matches!(&command, Command::Render(r) if opens_app(r)) {
         interrupt::install().map_err(fail)?;
     }
+    // What prints on stdout finds it closed before any work, not after.
+    if command.prints() && stdout::closed_at_start() {
+        return Err(Failure::Error(stdout::CLOSED.to_owned()));
+    }
     match command {
         Command::Print(text) => print_line(text.trim_end()),
         Command::ExportPov { scene, out } => export_pov(&scene, out),
@@ -122,18 +126,9 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
     }
 }
 
-/// Prints a line to stdout. A closed pipe (`rayoflight split … | head`)
-/// is the reader's choice and no error; any other failure to write (a
-/// full disk: `split … > regions.txt`) is, so that a script never takes a
-/// cut list for a whole one.
+/// Prints a line to stdout ([`stdout::write`]).
 fn print_line(text: &str) -> Result<(), Failure> {
-    let mut out = std::io::stdout().lock();
-    match writeln!(out, "{}", terminal::shown(text, true)).and_then(|()| out.flush()) {
-        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(Failure::Error(format!(
-            "rayoflight: cannot write to stdout: {e}"
-        ))),
-        _ => Ok(()),
-    }
+    stdout::write(&format!("{text}\n")).map_err(Failure::Error)
 }
 
 /// Whether `r` opens the desktop app rather than rendering here.
@@ -273,6 +268,9 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
 /// ([`merge`]) and written again; a conflict writes nothing.
 fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
     let _cleanly = interrupt::cleanly();
+    if let Some(out) = &args.out {
+        output::check_file_target(out).map_err(fail)?;
+    }
     let out = args.out.as_deref().unwrap_or(&args.scene);
     let in_place = files::same_file(&args.scene, out);
     let _lock = match in_place {
@@ -356,6 +354,7 @@ fn refused(scene: &Path) -> impl FnOnce(EditError) -> Failure {
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
     refuse_same_file(scene_path, &out)?;
+    output::check_file_target(&out).map_err(fail)?;
     let scene = scene::load(scene_path).map_err(fail)?;
     let header = pov::Header {
         scene: scene_path,

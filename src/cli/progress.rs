@@ -116,14 +116,10 @@ impl Steps {
         self.bar.set_message(format!("{name}{left}"));
     }
 
-    /// Prints `text` to stdout without tearing the bar.
-    pub fn print(&self, text: &str) {
-        self.bar.suspend(|| {
-            use std::io::Write;
-            let mut out = std::io::stdout();
-            let _ = write!(out, "{}", super::terminal::shown(text, true));
-            let _ = out.flush();
-        });
+    /// Prints `text` to stdout ([`super::stdout::write`]) without tearing
+    /// the bar.
+    pub fn print(&self, text: &str) -> Result<(), String> {
+        self.bar.suspend(|| super::stdout::write(text))
     }
 }
 

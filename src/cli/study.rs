@@ -36,6 +36,10 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
     // Fail on an unusable output folder before the long part.
     std::fs::create_dir_all(&args.out)
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.out.display()))?;
+    let (csv, png) = (args.out.join("study.csv"), args.out.join("study.png"));
+    for file in [&csv, &png] {
+        output::check_file_target(file).map_err(|e| e.to_string())?;
+    }
     let methods = study::methods();
     out(&format!(
         "RayOfLight study: {} methods × {} scenes, median of {} runs; reference: the default \
@@ -44,13 +48,16 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         scenes.len(),
         args.runs,
         study::FAIL_BELOW
-    ));
+    ))?;
     out(&format!(
         "{:<18} {:<15} {:>10} {:>11} {:>4} {:>9} {:>9}  {}\n",
         "scene", "method", "time ms", "rays", "max", "mean", "within 1", "failed"
-    ));
+    ))?;
     let start = Instant::now();
+    // The first picture or line that could not be written, reported once
+    // the study returns (its callback cannot stop it).
     let mut picture_error = None;
+    let mut print_error = None;
     steps.set_total((scenes.len() * methods.len()) as u64);
     let mut done = 0;
     let rows = study::run(
@@ -66,7 +73,7 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
                     picture_error = Some(e.to_string());
                 }
             }
-            out(&format!(
+            let line = out(&format!(
                 "{:<18} {:<15} {:>10.2} {:>11} {:>4} {:>9.4} {:>9.4}  {}\n",
                 r.scene,
                 r.method,
@@ -77,17 +84,18 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
                 r.within1,
                 if r.failed { "FAILED" } else { "" }
             ));
+            if let Err(e) = line {
+                print_error.get_or_insert(e);
+            }
             done += 1;
             steps.step(done, &format!("{} {}", r.scene, r.method));
         },
     )
     .map_err(|e| e.to_string())?;
-    if let Some(e) = picture_error {
+    if let Some(e) = print_error.or(picture_error) {
         return Err(e);
     }
-    let csv = args.out.join("study.csv");
     output::write_atomic(&csv, study::csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
-    let png = args.out.join("study.png");
     let picture = chart::chart(&rows).map_err(|e| e.to_string())?;
     output::save(&picture, &png).map_err(|e| e.to_string())?;
     let failed: Vec<String> = rows
@@ -104,6 +112,5 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         png.display(),
         failed.len(),
         start.elapsed().as_secs_f64()
-    ));
-    Ok(())
+    ))
 }

@@ -177,6 +177,10 @@ pub struct Sample {
 pub struct Explanation {
     pub x: u32,
     pub y: u32,
+    /// The pixel whose rays were traced: (x, y) itself, or in a draft the
+    /// top-left pixel of its 2×2 block (even x and y), whose colour the
+    /// draft copies to the other three.
+    pub traced: (u32, u32),
     pub illumination: Illumination,
     /// The rays through the pixel: one, or aa × aa in reading order.
     pub samples: Vec<Sample>,
@@ -189,12 +193,31 @@ pub struct Explanation {
 /// The pixel an explanation explains, as the render makes it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PixelValue {
+    /// The pixel whose rays were traced ([`Explanation::traced`]).
+    pub traced: (u32, u32),
     /// The unclamped colour: the one ray's, or the mean of the samples'.
     pub rgb: DVec3,
     /// The pixel of the image.
     pub rgb8: [u8; 3],
     /// Rays through the pixel: 1, or aa × aa.
     pub samples: usize,
+}
+
+impl Explanation {
+    /// In words, where the pixel is a draft's copy of another
+    /// ([`draft_note`]).
+    pub fn draft_note(&self) -> Option<String> {
+        draft_note((self.x, self.y), self.traced, self.samples.len())
+    }
+}
+
+/// In words, where pixel (x, y) is a draft's copy of the `traced` one:
+/// `draft: pixel (7, 5) shows the ray of (6, 4)`; `rays`: its rays.
+pub fn draft_note((x, y): (u32, u32), traced: (u32, u32), rays: usize) -> Option<String> {
+    let (x0, y0) = traced;
+    let rays = if rays > 1 { "rays" } else { "ray" };
+    ((x0, y0) != (x, y))
+        .then(|| format!("draft: pixel ({x}, {y}) shows the {rays} of ({x0}, {y0})"))
 }
 
 /// Records lane 0 of a trace (the explain traces one lane).

@@ -456,8 +456,10 @@ impl WithKernel for ExplainAt<'_> {
         let exact_stop = p.aa == 1 && p.world.early_stop;
         let (mut sum, mut clamped_sum) = (DVec3::ZERO, DVec3::ZERO);
         let mut first = DVec3::ZERO;
+        // In a draft, the pixel whose rays this one copies.
+        let traced = p.traced_for(self.i, self.j);
         for k in 0..p.sample_count() {
-            let at = p.sample_point(self.i, self.j, k);
+            let at = p.sample_point(traced.0, traced.1, k);
             let packet = p.packet::<K>(&[at]);
             let color = match self.visit.as_deref_mut() {
                 Some(visit) => {
@@ -501,6 +503,7 @@ impl WithKernel for ExplainAt<'_> {
             (sum / (n * n), u8::pixel(clamped_sum / (n * n)))
         };
         Some(PixelValue {
+            traced,
             rgb,
             rgb8,
             samples: p.sample_count(),
@@ -1219,7 +1222,9 @@ impl Prepared {
     /// Why pixel (i, j) has its colour: each of its rays' trees, recorded
     /// from the render's trace ([`super::explain`]); `None` outside the
     /// image. All the trees at once: [`Prepared::explain_each`] hands them
-    /// on one at a time.
+    /// on one at a time. A draft's pixel is explained by the rays the draft
+    /// traced for it: those of its 2×2 block's top-left pixel
+    /// ([`Explanation::traced`]).
     pub fn explain(&self, i: u32, j: u32) -> Option<Explanation> {
         let mut samples = Vec::new();
         let pixel = self.explain_each(i, j, |sample| {
@@ -1229,6 +1234,7 @@ impl Prepared {
         Some(Explanation {
             x: i,
             y: j,
+            traced: pixel.traced,
             illumination: self.world.illumination,
             samples,
             rgb: pixel.rgb,
@@ -1387,6 +1393,20 @@ impl Prepared {
         self.with_kernel(TileInto { tile, cancel, out })
     }
 
+    /// The side of the blocks one traced pixel stands for: 2 in a draft,
+    /// else 1.
+    fn draft_step(&self) -> u32 {
+        if self.world.draft { 2 } else { 1 }
+    }
+
+    /// The pixel whose rays give pixel (i, j) its colour: itself, or in a
+    /// draft the top-left of its 2×2 block, which [`Prepared::tile_into`]
+    /// traces and copies to the other three.
+    pub fn traced_for(&self, i: u32, j: u32) -> (u32, u32) {
+        let step = self.draft_step();
+        (i - i % step, j - j % step)
+    }
+
     #[inline(always)]
     fn tile_into<K: Kernel, T: Texel>(
         &self,
@@ -1404,7 +1424,7 @@ impl Prepared {
         // block of the image (even x and y); the other three copy it. A
         // tile of a region may start at an odd row or column: its first
         // pixels copy a block's corner outside it, traced all the same.
-        let step = if self.world.draft { 2 } else { 1 };
+        let step = self.draft_step();
         let anchor = |v: u32| v - v % step;
         let traced_area = Tile {
             x: anchor(tile.x),

@@ -120,6 +120,9 @@ impl RayOfLightApp {
                     e.illumination.name(),
                     vector(e.rgb)
                 ));
+                if let Some(note) = e.draft_note() {
+                    ui.label(note);
+                }
                 if let Some(pixel) = on_screen
                     && pixel != e.rgb8
                 {
