@@ -113,7 +113,8 @@ pub enum LinkError {
 /// `/proc/self/fd/1 -> pipe:[…]`) ends the chain: the link is the path.
 pub fn follow_for_writing(path: &Path) -> Result<PathBuf, LinkError> {
     let mut p = path.to_owned();
-    for _ in 0..40 {
+    // 40 links followed, and the path they lead to looked at.
+    for _ in 0..=40 {
         let Ok(meta) = std::fs::symlink_metadata(&p) else {
             return Ok(p);
         };
@@ -235,7 +236,18 @@ pub struct UpdateLock {
 /// is a device).
 pub fn lock_for_update(path: &Path) -> std::io::Result<Option<UpdateLock>> {
     loop {
-        let file = match std::fs::File::open(path) {
+        // A FIFO is never opened (it would block until a writer came).
+        match std::fs::metadata(path) {
+            Ok(meta) if meta.is_file() => {}
+            Ok(_) => return Ok(None),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(e),
+        }
+        let mut open = std::fs::OpenOptions::new();
+        open.read(true);
+        #[cfg(unix)]
+        std::os::unix::fs::OpenOptionsExt::custom_flags(&mut open, libc::O_NONBLOCK);
+        let file = match open.open(path) {
             Ok(file) => file,
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
             Err(e) => return Err(e),

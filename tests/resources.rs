@@ -109,7 +109,7 @@ fn explain_json_of_256_megabytes_of_rays_streams_in_256_mb() {
     assert!(o.status.success(), "{}", stderr(&o));
     // 16 rays of 10 001 hits each, and the first one's again at the top.
     assert!(count > 100_000_000, "{count} bytes");
-    assert!(start.starts_with(br#"{"x":10,"y":10,"model":"whitted","rgb8":["#));
+    assert!(start.starts_with(br#"{"x":10,"y":10,"traced":[10,10],"model":"whitted","rgb8":["#));
     assert!(end.ends_with(b"\"reason\":\"depth\"}}]}\n"), "{end:?}");
 }
 

@@ -624,3 +624,33 @@ fn a_loop_of_links_and_a_pipe_are_named_as_such() {
     assert_eq!(stderr(&o), "out.png: is a pipe, not an image file\n");
     let _: PathBuf = dir.path().join("unused");
 }
+
+/// Item 5, the app's side: a save waits for the lock an `edit` holds, and
+/// then finds the file that `edit` wrote (a new light) and merges its own
+/// unsaved edit onto it, instead of writing over it.
+#[cfg(feature = "gui")]
+#[test]
+fn the_apps_save_waits_for_the_lock_and_merges() {
+    use rayoflight::gui::document::Reload;
+    use rayoflight::scene::edit::{Edit, Field, Value};
+    let (_dir, path, mut doc) = common::document_on(TINY);
+    doc.apply(Edit::Set(
+        Field::parse("object[1].material.ka").unwrap(),
+        Value::Number(0.75),
+    ))
+    .unwrap();
+    let lock = rayoflight::files::lock_for_update(&path).unwrap();
+    let save = std::thread::spawn(move || doc.save());
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(!save.is_finished(), "the save did not wait for the lock");
+    // What `edit` does under its lock: a new text renamed into place.
+    let theirs = TINY.replace("  <camera", "  <light x=\"9\" y=\"9\" z=\"9\"/>\n  <camera");
+    let new = path.with_extension("new");
+    fs::write(&new, &theirs).unwrap();
+    fs::rename(&new, &path).unwrap();
+    drop(lock);
+    assert_eq!(save.join().unwrap().unwrap(), Reload::Merged);
+    let now = fs::read_to_string(&path).unwrap();
+    assert!(now.contains("<light x=\"9\" y=\"9\" z=\"9\"/>"), "{now}");
+    assert!(now.contains("ka=\"0.75\""), "{now}");
+}
