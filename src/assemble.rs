@@ -55,8 +55,8 @@ pub enum AssembleError {
     TwoRecords { path: PathBuf },
     #[error("{}: is {kind}, not a part", path.display())]
     Special { path: PathBuf, kind: &'static str },
-    #[error("interrupted: nothing was written")]
-    Interrupted,
+    #[error("{}: interrupted: nothing was written", path.display())]
+    Interrupted { path: PathBuf },
     #[error("{}: {source}", path.display())]
     BadRecord { path: PathBuf, source: PartError },
     #[error("{}: not an 8-bit RGB image, as parts are", path.display())]
@@ -405,7 +405,9 @@ pub fn assemble_until(
             let mut rows = Rows::new(&parts, width);
             for _ in 0..height {
                 let row = if stop.load(Ordering::Relaxed) {
-                    Err(AssembleError::Interrupted)
+                    Err(AssembleError::Interrupted {
+                        path: out.to_owned(),
+                    })
                 } else {
                     rows.next_row()
                 };

@@ -654,3 +654,28 @@ fn the_apps_save_waits_for_the_lock_and_merges() {
     assert!(now.contains("<light x=\"9\" y=\"9\" z=\"9\"/>"), "{now}");
     assert!(now.contains("ka=\"0.75\""), "{now}");
 }
+
+/// An `edit` waiting for the lock another holds is still ended by SIGTERM
+/// at once (nothing of its own to clean up yet), the file untouched.
+#[test]
+fn an_edit_waiting_for_the_lock_still_obeys_a_signal() {
+    use std::os::unix::process::ExitStatusExt;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("q.xml");
+    fs::write(&path, TINY).unwrap();
+    let lock = rayoflight::files::lock_for_update(&path).unwrap();
+    let mut child = spawn(dir.path(), &["edit", "q.xml", "--set", "camera.width=8"]);
+    std::thread::sleep(Duration::from_millis(300));
+    assert!(child.try_wait().unwrap().is_none(), "the edit did not wait");
+    signal(&child, rustix::process::Signal::TERM);
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        assert!(start.elapsed() < Duration::from_secs(5), "SIGTERM ignored");
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let status = child.wait().unwrap();
+    assert_eq!(status.signal(), Some(15), "{status:?}");
+    drop(lock);
+    assert_eq!(fs::read_to_string(&path).unwrap(), TINY);
+    assert_eq!(files_in(dir.path()), ["q.xml"]);
+}

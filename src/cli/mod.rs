@@ -267,18 +267,19 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
 /// the edits are then merged onto its text by the app's engine
 /// ([`merge`]) and written again; a conflict writes nothing.
 fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
-    let _cleanly = interrupt::cleanly();
     if let Some(out) = &args.out {
         output::check_file_target(out).map_err(fail)?;
     }
     let out = args.out.as_deref().unwrap_or(&args.scene);
     let in_place = files::same_file(&args.scene, out);
+    // Waiting for the lock, a signal still ends the process at once.
     let _lock = match in_place {
         true => files::lock_for_update(&args.scene).map_err(|e| {
             Failure::Error(format!("{}: cannot lock it: {e}", args.scene.display()))
         })?,
         false => None,
     };
+    let _cleanly = interrupt::cleanly();
     let (mut text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
     let base = loaded.clone();
     let mut edited = Edited::new(loaded);
