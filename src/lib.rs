@@ -8,9 +8,11 @@
 //!
 //! - [`scene`]: the file format, its validation and its errors (`file:line:col`).
 //! - [`math`]: transforms with their cached inverse and normal matrix.
-//! - [`geometry`]: rays and the ray/sphere and ray/plane intersections.
+//! - [`geometry`]: shapes, rays and the ray/sphere and ray/plane
+//!   intersections.
 //! - [`shading`]: the illumination formulas (ambient, lambert, phong, whitted).
-//! - [`render`]: render options, the prepared scene, tiles, the 8-bit image.
+//! - [`render`]: render options and the named methods (`auto`, `f32`, …),
+//!   the prepared scene, tiles, the 8-bit image.
 //! - [`request`]: what a front end asks for (method, anti-aliasing,
 //!   threads, region) resolved into render options, with one precedence.
 //! - [`output`]: writing images atomically, format chosen by extension.
@@ -29,7 +31,8 @@
 //! - [`bench`]: the benchmark scenes.
 //! - [`measure`]: render time, medians, image differences, CSV: measured
 //!   one way by the bench, the study, `-time` and the tests.
-//! - [`study`]: speed against accuracy: methods, study scenes, measures.
+//! - [`study`]: speed against accuracy: every method on the study scenes,
+//!   measured.
 //! - `gui` (feature `gui`): the desktop previewer, which uses only the
 //!   modules above.
 //!

@@ -42,7 +42,14 @@ macro_rules! builtin {
         $crate::measure::BuiltinScene {
             name: $name,
             path: concat!("scenes/", $set, "/", $name, ".xml"),
-            text: include_str!(concat!("../scenes/", $set, "/", $name, ".xml")),
+            text: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/scenes/",
+                $set,
+                "/",
+                $name,
+                ".xml"
+            )),
         }
     };
 }

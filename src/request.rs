@@ -5,7 +5,7 @@
 //! scene, with one precedence:
 //!
 //! 1. the method's options for the scene: `auto` plans them per scene
-//!    (exact, the reference image), a study method fixes them;
+//!    (exact, the reference image), another method fixes them;
 //! 2. an anti-aliasing the user asked for (`--aa N`, View › Anti-aliasing
 //!    above 1×1) replaces the method's; none asked, the method's stays
 //!    (`aa4` renders 4×4);
@@ -13,14 +13,13 @@
 //!    region of the image to render (none: all of it).
 
 use crate::region::Region;
-use crate::render::{self, RenderOptions};
+use crate::render::{self, Method, RenderOptions};
 use crate::scene::Scene;
-use crate::study::Method;
 
 /// What a front end asks to render with.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct RenderRequest {
-    /// A study method; `None`: `auto`.
+    /// A render method ([`render::methods`]); `None`: `auto`.
     pub method: Option<Method>,
     /// Anti-aliasing the user asked for (N×N rays a pixel); `None`: the
     /// method's.
@@ -47,31 +46,15 @@ impl RenderRequest {
     }
 }
 
-impl From<RenderOptions> for RenderRequest {
-    /// A request for exactly `options`, whatever the scene (tests, tools).
-    fn from(options: RenderOptions) -> RenderRequest {
-        RenderRequest {
-            threads: options.threads,
-            region: options.region,
-            method: Some(Method {
-                name: "given",
-                options: crate::study::Options::Fixed(options),
-            }),
-            aa: None,
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::study;
 
     #[test]
     fn the_users_anti_aliasing_wins_over_the_methods() {
         let scene = crate::scene::parse(crate::EXAMPLE_SCENE, std::path::Path::new("e.xml"))
             .expect("the example loads");
-        let aa4 = study::method("aa4");
+        let aa4 = render::method("aa4");
         let request = |method: Option<Method>, aa| RenderRequest {
             method,
             aa,

@@ -14,7 +14,7 @@ mod common;
 use rayoflight::gui::document::Reload;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
-use rayoflight::render::RenderOptions;
+use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::{Edit, Field, Value};
 use rayoflight::scene::{self, Scene};
 use std::path::Path;
@@ -107,7 +107,7 @@ fn parsing_again_shares_the_objects_that_did_not_change() {
 
 /// Renders `scene` in the worker and waits for its last pass.
 fn render(worker: &Worker, scene: &Scene) {
-    let generation = worker.request(Arc::new(scene.clone()), RenderOptions::default());
+    let generation = worker.request(Arc::new(scene.clone()), RenderRequest::default());
     loop {
         match worker.next_event(Duration::from_secs(20)) {
             Some(Event::PassFinished {
@@ -138,7 +138,8 @@ fn moving_the_camera_does_not_prepare_the_scene_again() {
     let after = worker.prepared(&moved).unwrap();
     assert!(after.same_world(&first));
     assert_eq!(after.camera().ray(12.0, 12.0), {
-        let fresh = rayoflight::render::prepare(&moved, &RenderOptions::default());
+        let fresh =
+            rayoflight::render::prepare(&moved, &rayoflight::render::RenderOptions::default());
         fresh.camera().ray(12.0, 12.0)
     });
 

@@ -81,7 +81,7 @@ fn help_and_version_succeed_on_stdout() {
     let (dir, _) = workdir();
     let o = rayoflight(dir.path(), &["--help"]);
     assert!(o.status.success());
-    assert!(stdout(&o).contains("-out, --out FILE"));
+    assert!(stdout(&o).contains("-o, --out <FILE>"), "{}", stdout(&o));
     let o = rayoflight(dir.path(), &["-V"]);
     assert!(o.status.success());
     assert!(stdout(&o).starts_with("rayoflight "));
@@ -260,7 +260,7 @@ fn study_writes_a_csv_row_per_method() {
         Some("scene,method,time_ms,rays,max_diff,mean_diff,within1,failed")
     );
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    let methods = rayoflight::study::methods();
+    let methods = rayoflight::render::methods();
     assert_eq!(rows.len(), methods.len());
     for (row, method) in rows.iter().zip(&methods) {
         assert_eq!(row.len(), 8, "{row:?}");

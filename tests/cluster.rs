@@ -13,7 +13,7 @@ use rayoflight::region::Region;
 use rayoflight::render::{self, RenderOptions};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
-use rayoflight::{output, split, study};
+use rayoflight::{output, split};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -49,7 +49,7 @@ fn a_region_is_the_same_rectangle_of_the_whole_render_with_every_method() {
     for path in common::golden_scenes() {
         let scene = scene::load(&path).unwrap();
         let (width, height) = (scene.camera.width, scene.camera.height);
-        let mut requests: Vec<RenderRequest> = study::methods()
+        let mut requests: Vec<RenderRequest> = rayoflight::render::methods()
             .into_iter()
             .map(|method| RenderRequest {
                 method: Some(method),

@@ -633,7 +633,7 @@ fn ctrl_z_and_the_edit_menu_undo_and_redo_in_the_app() {
     harness.run_steps(2);
     harness.get_by_label("Edit").click();
     harness.run_steps(2);
-    harness.get_by_label("Undo type of model  Ctrl+Z");
+    harness.get_by_label("Undo type of model Ctrl+Z");
     harness.key_press(egui::Key::Escape);
     harness.run_steps(2);
     ctrl(&mut harness, egui::Key::Z);

@@ -15,6 +15,7 @@ use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::render::{self, RenderOptions};
+use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
 use std::path::Path;
 use std::sync::Arc;
@@ -81,7 +82,7 @@ fn until_finished(worker: &Worker, generation: u64, limit: Duration) -> (Vec<Eve
 fn worker_renders_the_same_image_as_the_cli_path() {
     let s = parse(&scene_text(1.0, 300));
     let worker = Worker::spawn(1, || {});
-    let generation = worker.request(Arc::new(s.clone()), RenderOptions::default());
+    let generation = worker.request(Arc::new(s.clone()), RenderRequest::default());
     let (events, _) = until_finished(&worker, generation, Duration::from_secs(30));
     let mut preview = Preview::default();
     for e in events {
@@ -96,7 +97,7 @@ fn worker_renders_the_same_image_as_the_cli_path() {
 fn coarse_passes_come_first_for_large_images() {
     let s = parse(&scene_text(1.0, 600));
     let worker = Worker::spawn(1, || {});
-    let generation = worker.request(Arc::new(s), RenderOptions::default());
+    let generation = worker.request(Arc::new(s), RenderRequest::default());
     let (events, _) = until_finished(&worker, generation, Duration::from_secs(30));
     let scales: Vec<u32> = events
         .iter()
@@ -114,9 +115,9 @@ fn a_newer_request_cancels_the_older_within_100_ms() {
     let heavy = mirrors(10_000, 3840, 2160);
     let light = parse(&scene_text(0.3, 32));
     let worker = Worker::spawn(Worker::default_threads(), || {});
-    let old = worker.request(Arc::new(heavy), RenderOptions::default());
+    let old = worker.request(Arc::new(heavy), RenderRequest::default());
     std::thread::sleep(Duration::from_millis(300));
-    let new = worker.request(Arc::new(light.clone()), RenderOptions::default());
+    let new = worker.request(Arc::new(light.clone()), RenderRequest::default());
     // The light scene takes well under a millisecond: what is measured is
     // the time for the heavy render to notice it was cancelled.
     let (events, took) = until_finished(&worker, new, Duration::from_secs(10));
@@ -146,7 +147,7 @@ fn dropping_the_worker_stops_a_long_render_promptly() {
     let worker = Worker::spawn(Worker::default_threads(), || {});
     worker.request(
         Arc::new(mirrors(10_000, 3840, 2160)),
-        RenderOptions::default(),
+        RenderRequest::default(),
     );
     std::thread::sleep(Duration::from_millis(200));
     let start = Instant::now();
@@ -164,7 +165,7 @@ fn queued_requests_collapse_to_the_newest() {
         .collect();
     let mut last = 0;
     for s in &scenes {
-        last = worker.request(s.clone(), RenderOptions::default());
+        last = worker.request(s.clone(), RenderRequest::default());
     }
     let (events, _) = until_finished(&worker, last, Duration::from_secs(30));
     let finished: Vec<u64> = events
@@ -401,7 +402,7 @@ fn the_worker_runs_the_study_row_by_row() {
     let worker = Worker::spawn(1, || {});
     let generation = worker.study(scene, 1);
     let (events, _) = until_study_ends(&worker, generation, Duration::from_secs(60));
-    let methods = rayoflight::study::methods();
+    let methods = rayoflight::render::methods();
     assert!(matches!(events[0], Event::StudyStarted { total, .. } if total == methods.len()));
     let rows: Vec<_> = events
         .iter()
@@ -484,7 +485,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
         std::thread::sleep(Duration::from_millis(20));
     }
     harness.run_steps(2);
-    let methods = rayoflight::study::methods();
+    let methods = rayoflight::render::methods();
     assert_eq!(harness.state().study_window().rows().len(), methods.len());
 
     // The chart's legend stands beside the chart, not over it: the
@@ -541,7 +542,7 @@ fn the_study_window_runs_the_study_and_picks_the_preview_method() {
 #[test]
 fn the_dragging_method_applies_only_while_dragging() {
     use rayoflight::gui::study::PreviewMethods;
-    use rayoflight::study::method;
+    use rayoflight::render::method;
     let scene = parse(&scene_text(1.0, 32));
     let methods = PreviewMethods {
         preview: method("auto").unwrap(),

@@ -21,8 +21,9 @@
 //! A fixed ε of 1e-4 fails on none of the study scenes: it is far above
 //! f64's spacing even at 1e7.
 
+use rayoflight::render::Method;
 use rayoflight::render::{self, RenderOptions};
-use rayoflight::study::{self, Method, StudyScene};
+use rayoflight::study::{self, StudyScene};
 
 fn scene(name: &str) -> StudyScene {
     study::builtin_scenes()
@@ -33,7 +34,7 @@ fn scene(name: &str) -> StudyScene {
 }
 
 fn method(name: &str) -> Method {
-    study::method(name).unwrap_or_else(|| panic!("no method {name}"))
+    rayoflight::render::method(name).unwrap_or_else(|| panic!("no method {name}"))
 }
 
 fn reference(scene: &StudyScene) -> image::RgbImage {
@@ -138,7 +139,7 @@ fn draft_and_depth_cut_trace_fewer_rays() {
 #[test]
 fn anti_aliasing_is_measured_against_the_supersampled_reference() {
     let s = scene("example");
-    let methods = study::methods();
+    let methods = rayoflight::render::methods();
     let pool = rayoflight::measure::RenderPool::new(None).unwrap();
     let refs = study::References::new(&s.scene, &methods, &pool, &render::Cancel::never()).unwrap();
     let supersampled = refs.supersampled.as_ref().unwrap();

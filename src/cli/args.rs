@@ -17,10 +17,9 @@ use super::edit::{self, EditArg};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
 use rayoflight::region::Region;
-use rayoflight::render::Pass;
+use rayoflight::render::{self, Method, Pass};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::EditError;
-use rayoflight::study::{self, Method};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
@@ -40,78 +39,10 @@ Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
        rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]
        rayoflight --help | --version";
 
-/// The top-level `--help`, written by hand: it shows the brief's
-/// single-dash spellings, which clap's generated help cannot. Each
-/// subcommand's `--help` is clap's, from the doc comments below.
-const HELP: &str = "\
-Renders an XML scene (spheres, planes, lights, one camera, an illumination
-model) to an image.
-
-Options:
-  -out, --out FILE   image to write; the format follows the extension
-                     (png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp,
-                     exr: 32-bit floats, unclamped).
-                     Default: the scene's path with the extension .png
-  --region X0,Y0,X1,Y1
-                     render only this rectangle of the image (pixels from
-                     the top left, X1 and Y1 excluded) into the PNG part
-                     -out names (required): its pixels are the whole
-                     render's, and it records where it belongs;
-                     'rayoflight assemble' puts parts together
-  --pass NAME        write one render pass instead of the image: final
-                     (default), ambient, diffuse, specular, reflection (the
-                     camera ray's terms; in .exr they add up to final),
-                     normal, depth, object
-  -time, --time      print the render time (prepare + trace) as 'render: N ns'
-  --set PATH=VALUE   render with a value changed (object[2].material.ka=0.5),
-                     in memory only: the scene file is not written.
-                     Repeatable; the paths are listed by 'rayoflight edit --help'
-  --threads N        render threads (default: one per core)
-  --aa N             N×N rays per pixel, 1 to 16 (default 1: the pixel centre)
-  --method NAME      render with a study method instead of auto (default,
-                     auto, f32, textbook, draft, …; see docs/study.md)
-  --no-gui           never open a window (the headless build never does)
-  -q, --quiet        no progress bar (one shows on a terminal for renders
-                     over a second: percentage, rays/s, time left)
-  -h, --help         this help ('rayoflight SUBCOMMAND --help' for each one)
-  -V, --version      the version
-
-Subcommands:
-  explain            why pixel X Y (from the top left, 0-based) has its
-                     colour: each bounce's object, t, M, N, each light's
-                     cos θ and cos α, the terms ka·C, Σ I·kd·cos θ,
-                     Σ I·ks·cos^m α and ks·Ir, where the chain ended, and
-                     the 8-bit value; --json for one JSON object
-  edit               change values of a scene file, add or remove elements,
-                     keeping every other byte: --set PATH=VALUE, --remove
-                     PATH, --add sphere|plane|light, applied in the order
-                     given; the file is rewritten in place, or -out FILE
-  split              N regions of the image, one a line (X0,Y0,X1,Y1), of
-                     even estimated cost (a coarse pre-pass counts the rays
-                     each part of the image costs), for a Slurm array or
-                     xargs -P: each task renders one with --region
-  assemble           put the parts --region wrote together into the full
-                     image, the same file as one render of the whole;
-                     refuses parts of other scenes or options, overlaps,
-                     gaps, regions outside the image, naming the culprit
-  sheet              a contact sheet: the images side by side in a grid,
-                     each named under it (the renders of a --set sweep)
-  export-pov         write the scene as a POV-Ray 3.7 file for cross-checking
-  plan               what 'auto' will do for the scene, and why (renders
-                     use it: precision, BVH and culling, early stop, terms)
-  bench              time the bench scenes (against POV-Ray when installed),
-                     thread scaling, cost against object count, peak memory,
-                     a 16000x16000 render split into 64 regions and assembled
-                     against one render of the whole; --runs K (default 3),
-                     --csv FILE, --no-pov, --split-size PIXELS (0: skip)
-  study              speed against accuracy: every method (f32, textbook
-                     quadratic, offsets, anti-aliasing, depth cut, early
-                     stop, draft, auto) on the study scenes, or on the scene
-                     files given; a table on stdout, DIR/study.csv, the chart
-                     DIR/study.png and a picture of each failure
-                     (--out DIR, default ./study; --runs K, default 3)
-
-A scene file named like a subcommand is given as a path: ./bench.
+/// What the top-level help says after the flags and subcommands.
+const AFTER_HELP: &str = "\
+The brief's single-dash spellings -out and -time are the same flags as --out
+and --time. A scene file named like a subcommand is given as a path: ./bench.
 
 Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
 
@@ -260,7 +191,13 @@ pub enum UsageError {
 #[command(
     name = "rayoflight",
     version,
-    override_help = format!("{USAGE}\n\n{HELP}"),
+    about = "Renders an XML scene (spheres, planes, lights, one camera, an \
+             illumination model) to an image; without -out, -time or --no-gui \
+             (GUI build), opens the live previewer on it.",
+    override_usage = USAGE.trim_start_matches("Usage: "),
+    // The usage first, as `rayoflight` alone prints it.
+    help_template = "{usage-heading} {usage}\n\n{about-with-newline}\n{all-args}{after-help}",
+    after_help = AFTER_HELP,
     // `rayoflight scene.xml` renders, `rayoflight bench` runs the bench: a
     // first argument that is not a subcommand's name is the scene.
     args_conflicts_with_subcommands = true,
@@ -279,28 +216,54 @@ struct Cli {
 struct RenderFlags {
     /// The scene file (none: the app opens on the built-in example).
     scene: Option<PathBuf>,
-    /// The image to write; its extension picks the format.
+    /// The image to write (also -out); the extension picks the format.
+    ///
+    /// png, jpg, jpeg, gif, bmp, tga, ppm, tif, tiff, qoi, webp, or exr
+    /// (32-bit floats, unclamped). Default: the scene's path with the
+    /// extension .png.
     #[arg(short, long, value_name = "FILE")]
     out: Option<PathBuf>,
-    /// Print the render time as 'render: N ns'.
+    /// Print the render time (prepare + trace) as 'render: N ns' (also
+    /// -time).
     #[arg(long)]
     time: bool,
+    /// Render threads [default: one per core]
     #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
     threads: Option<usize>,
+    /// N×N rays per pixel, 1 to 16 [default: 1, the pixel centre]
     #[arg(long, value_name = "N", value_parser = aa, allow_negative_numbers = true)]
     aa: Option<u32>,
+    /// Render with this method instead of auto (default, auto, f32,
+    /// textbook, draft, …; see docs/study.md).
     #[arg(long, value_name = "NAME", value_parser = method)]
     method: Option<Method>,
+    /// Never open a window (the headless build never does).
     #[arg(long)]
     no_gui: bool,
-    /// Render with this value changed, in memory only.
+    /// Render with a value changed (object[2].material.ka=0.5), in memory
+    /// only: the scene file is not written.
+    ///
+    /// Repeatable; the paths are listed by 'rayoflight edit --help'.
     #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
     set: Vec<(String, String)>,
     /// No progress bar on stderr.
+    ///
+    /// One shows on a terminal for renders over a second: percentage,
+    /// rays/s, time left.
     #[arg(short, long)]
     quiet: bool,
+    /// Write one render pass instead of the image.
+    ///
+    /// final (default), ambient, diffuse, specular, reflection (the camera
+    /// ray's terms; in .exr they add up to final), normal, depth, object.
     #[arg(long, value_name = "NAME", value_parser = pass)]
     pass: Option<Pass>,
+    /// Render only this rectangle of the image, into the PNG part -out
+    /// names.
+    ///
+    /// Pixels from the top left, X1 and Y1 excluded; -out is required.
+    /// The part's pixels are the whole render's, and it records where it
+    /// belongs: 'rayoflight assemble' puts parts together.
     #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = region, allow_hyphen_values = true)]
     region: Option<Region>,
 }
@@ -632,8 +595,8 @@ fn pass(text: &str) -> Result<Pass, String> {
 }
 
 fn method(text: &str) -> Result<Method, String> {
-    study::method(text).ok_or_else(|| {
-        let names: Vec<_> = study::methods().iter().map(|m| m.name).collect();
+    render::method(text).ok_or_else(|| {
+        let names: Vec<_> = render::methods().iter().map(|m| m.name).collect();
         format!("expects one of {}", names.join(", "))
     })
 }
@@ -1209,7 +1172,14 @@ mod tests {
         let Ok(Command::Print(help)) = p(&["--help"]) else {
             panic!()
         };
-        assert!(help.starts_with(USAGE) && help.contains("-out, --out FILE"));
+        assert!(
+            help.starts_with(USAGE) && help.contains("-o, --out <FILE>"),
+            "{help}"
+        );
+        assert!(
+            help.contains("also -out") && help.contains("Exit status"),
+            "{help}"
+        );
         let Ok(Command::Print(help)) = p(&["plan", "-h"]) else {
             panic!()
         };

@@ -15,7 +15,7 @@ use rayoflight::render::explain::{
 };
 use rayoflight::render::{Prepared, prepare};
 use rayoflight::scene::edit::Edited;
-use rayoflight::scene::{self, Scene, splice};
+use rayoflight::scene::{self, Scene, names};
 use serde_json::{Value, json};
 use std::io::{self, Write};
 use std::ops::ControlFlow;
@@ -44,7 +44,7 @@ pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
     let prepared = prepare(scene, &options);
     let names = Names {
         scene,
-        comments: splice::object_labels(&text),
+        comments: names::object_labels(&text),
     };
     let mut out = io::BufWriter::with_capacity(1 << 16, io::stdout().lock());
     let pixel = (args.x, args.y);
@@ -110,7 +110,7 @@ impl Names<'_> {
             .get(n)
             .map_or("object", |o| o.shape.name());
         let words = self.comments.get(n).and_then(|w| w.as_deref());
-        splice::object_name(n, shape, words)
+        names::object_name(n, shape, words)
     }
 }
 

@@ -40,7 +40,7 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
     for file in [&csv, &png] {
         output::check_file_target(file).map_err(|e| e.to_string())?;
     }
-    let methods = study::methods();
+    let methods = rayoflight::render::methods();
     out(&format!(
         "RayOfLight study: {} methods × {} scenes, median of {} runs; reference: the default \
          image (aa methods: the default supersampled 16×16); failed: within 1 < {}\n\n",

@@ -7,7 +7,7 @@
 //! distance along the unit world direction: hits on differently scaled
 //! objects compare directly (contract section 2).
 //!
-//! [`Primitive`] flattens what the transform allows (a sphere under a
+//! [`Shape`] is what an object is in its own space; [`Primitive`] flattens what the transform allows (a sphere under a
 //! similarity is a world centre and radius; a plane a world point and
 //! normal); [`Bvh`] finds the nearest of many bounded primitives.
 //!
@@ -26,6 +26,7 @@ mod plane;
 mod precision;
 mod primitive;
 mod ray;
+mod shape;
 mod single;
 mod sphere;
 #[cfg(test)]
@@ -38,6 +39,7 @@ pub use plane::{intersect_plane_world, plane_hit};
 pub use precision::{DVec3x4, F64x4, Lanes, MAX_LANES, Mask, Mask4, Real, Vec3x4, Vector};
 pub use primitive::{Ellipsoid, Primitive};
 pub use ray::Ray;
+pub use shape::Shape;
 pub use single::{Primitive32, Ray32};
 pub use sphere::{
     Found, Leading, Receding, UnitDirection, intersect_ball, intersect_ball_textbook,

@@ -9,12 +9,12 @@
 //! - A plane stays a plane under every affine map: a world point and unit
 //!   normal.
 
+use super::Shape;
 use super::{
     Aabb, Found, Lanes, MAX_LANES, Ray, intersect_ball, intersect_ball_textbook,
     intersect_plane_world, intersect_sphere, intersect_sphere_textbook,
 };
 use crate::math::Transform;
-use crate::scene::Shape;
 use glam::{DAffine3, DMat3, DVec3};
 
 #[derive(Debug, Clone, PartialEq)]

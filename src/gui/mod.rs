@@ -9,8 +9,8 @@
 //!   and redo, saves that never write over unread text, merges.
 //! - [`worker`]: the background render thread, coarse to fine, newest wins.
 //! - [`pace`]: how coarse to render while the mouse moves.
-//! - [`settings`]: what the app remembers between runs ([`recent`] files
-//!   among it).
+//! - [`settings`]: what the app remembers between runs, the recent files
+//!   among it.
 //! - [`preview`]: the picture assembled from the worker's tiles.
 //! - [`texture`]: that picture on the GPU, uploaded a changed tile (or a
 //!   band of rows) at a time.
@@ -28,7 +28,6 @@ pub mod journal;
 pub mod pace;
 mod panel;
 pub mod preview;
-pub mod recent;
 pub mod settings;
 pub mod study;
 pub mod texture;

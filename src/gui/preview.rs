@@ -19,8 +19,9 @@ pub enum RenderState {
     Waiting,
     Rendering {
         scale: u32,
-        tiles_done: usize,
-        tiles_total: usize,
+        /// Pixels of the pass painted so far, and in all.
+        pixels_done: u64,
+        pixels_total: u64,
     },
     Done {
         elapsed: Duration,
@@ -112,16 +113,16 @@ impl Preview {
     /// second or more, the time it has left at its pace so far.
     pub fn progress(&self) -> Option<(f32, Option<Duration>)> {
         let RenderState::Rendering {
-            tiles_done,
-            tiles_total,
+            pixels_done,
+            pixels_total,
             ..
         } = self.state
         else {
             return None;
         };
-        let fraction = tiles_done as f32 / tiles_total.max(1) as f32;
+        let fraction = (pixels_done as f64 / pixels_total.max(1) as f64) as f32;
         let elapsed = self.pass_started?.elapsed();
-        let left = crate::render::time_left(elapsed, tiles_done as u64, tiles_total as u64);
+        let left = crate::render::time_left(elapsed, pixels_done, pixels_total);
         Some((fraction, left))
     }
 
@@ -212,17 +213,13 @@ impl Preview {
                     blow_up(&mut self.image, 0, 0, coarse.scale, &coarse.image);
                     self.dirty = Dirty::Whole;
                 }
-                let tiles_total = crate::render::tiles(
-                    width.div_ceil(scale),
-                    height.div_ceil(scale),
-                    crate::render::TILE_SIZE,
-                )
-                .len();
+                let pixels_total =
+                    u64::from(width.div_ceil(scale)) * u64::from(height.div_ceil(scale));
                 self.pass_started = Some(Instant::now());
                 self.state = RenderState::Rendering {
                     scale,
-                    tiles_done: 0,
-                    tiles_total,
+                    pixels_done: 0,
+                    pixels_total,
                 };
             }
             Event::Tile {
@@ -235,8 +232,8 @@ impl Preview {
                     Some(coarse) if coarse.scale == scale => coarse.paint(&tile, pixels),
                     _ => self.paint(scale, &tile, pixels),
                 }
-                if let RenderState::Rendering { tiles_done, .. } = &mut self.state {
-                    *tiles_done += 1;
+                if let RenderState::Rendering { pixels_done, .. } = &mut self.state {
+                    *pixels_done += u64::from(tile.width) * u64::from(tile.height);
                 }
             }
             Event::PassFinished {

@@ -1,8 +1,10 @@
 //! What the app remembers between runs, in its own struct: the window's
 //! size, the anti-aliasing, the study's runs and the last file open
-//! ([`Settings`]), and the
-//! recent files ([`Recent`]). Both live in `$XDG_CONFIG_HOME/rayoflight/`
-//! (or `~/.config/rayoflight/`); tests use them in memory only. Beside
+//! ([`Settings`], `settings.txt`), and the recent files ([`Recent`],
+//! `recent.txt`, one path per line, newest first). Both live in
+//! `$XDG_CONFIG_HOME/rayoflight/` (or `~/.config/rayoflight/`) and are
+//! written the same way ([`store`]: atomically, best effort); tests use
+//! them in memory only. Beside
 //! them, where the journal of unsaved edits goes (a state, not a setting:
 //! `$XDG_STATE_HOME`, [`crate::gui::journal`]).
 //!
@@ -11,7 +13,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::recent::Recent;
+const MAX_RECENT: usize = 10;
 
 /// The file `name` in the app's config directory, if there is a home.
 pub fn config_file(name: &str) -> Option<PathBuf> {
@@ -129,12 +131,7 @@ impl Settings {
         }
         text.push_str(&format!("aa = {}\n", self.aa));
         text.push_str(&format!("study_runs = {}\n", self.study_runs));
-        // A path this line format cannot hold as it is (not UTF-8, a line
-        // break, spaces at its ends) is not remembered.
-        if let Some(path) = self.last_file.as_deref().and_then(Path::to_str)
-            && !path.contains(['\n', '\r'])
-            && path.trim() == path
-        {
+        if let Some(path) = self.last_file.as_deref().and_then(as_line) {
             text.push_str(&format!("last_file = {path}\n"));
         }
         text
@@ -143,11 +140,80 @@ impl Settings {
     /// Writes them where they were loaded from (best effort: a read-only
     /// home only loses them).
     pub fn save(&self) {
-        let Some(file) = &self.store else { return };
-        if let Some(dir) = file.parent() {
-            let _ = std::fs::create_dir_all(dir);
-        }
-        let _ = crate::output::write_atomic(file, self.to_text().as_bytes());
+        store(self.store.as_deref(), &self.to_text());
+    }
+}
+
+/// `path` as one line of these files, or `None` where the line format
+/// cannot hold it as it is (not UTF-8, a line break, spaces at its ends):
+/// such a path is not remembered.
+fn as_line(path: &Path) -> Option<&str> {
+    path.to_str()
+        .filter(|p| !p.contains(['\n', '\r']) && p.trim() == *p)
+}
+
+/// Writes `text` to `file` atomically, making its folder (best effort: a
+/// read-only home only loses what would have been remembered). `None`:
+/// kept in memory only.
+fn store(file: Option<&Path>, text: &str) {
+    let Some(file) = file else { return };
+    if let Some(dir) = file.parent() {
+        let _ = std::fs::create_dir_all(dir);
+    }
+    let _ = crate::output::write_atomic(file, text.as_bytes());
+}
+
+/// The recent files: the list and where it is stored.
+#[derive(Debug, Clone, Default)]
+pub struct Recent {
+    paths: Vec<PathBuf>,
+    /// `None`: kept in memory only (tests, a home without a config
+    /// directory).
+    store: Option<PathBuf>,
+}
+
+impl Recent {
+    /// The user's list, from the config directory.
+    pub fn user() -> Recent {
+        let store = config_file("recent.txt");
+        let paths = store
+            .as_ref()
+            .and_then(|f| std::fs::read_to_string(f).ok())
+            .map(|text| {
+                text.lines()
+                    .filter(|l| !l.trim().is_empty())
+                    .map(PathBuf::from)
+                    .take(MAX_RECENT)
+                    .collect()
+            })
+            .unwrap_or_default();
+        Recent { paths, store }
+    }
+
+    /// An empty list that is never written anywhere.
+    pub fn in_memory() -> Recent {
+        Recent::default()
+    }
+
+    /// The files of the list that still exist, newest first.
+    pub fn existing(&self) -> Vec<PathBuf> {
+        self.paths.iter().filter(|p| p.exists()).cloned().collect()
+    }
+
+    /// Puts `path` first and stores the list ([`store`]; a path the file
+    /// cannot hold stays in this run's list only).
+    pub fn push(&mut self, path: &Path) {
+        let path = crate::files::absolute(path);
+        self.paths.retain(|p| p != &path);
+        self.paths.insert(0, path);
+        self.paths.truncate(MAX_RECENT);
+        let text: String = self
+            .paths
+            .iter()
+            .filter_map(|p| as_line(p))
+            .map(|p| format!("{p}\n"))
+            .collect();
+        store(self.store.as_deref(), &text);
     }
 }
 

@@ -175,9 +175,9 @@ impl Worker {
 
     /// Asks for a render, coarse to fine ([`passes`]); cancels any older
     /// one. Returns its generation.
-    pub fn request(&self, scene: Arc<Scene>, request: impl Into<RenderRequest>) -> u64 {
+    pub fn request(&self, scene: Arc<Scene>, request: RenderRequest) -> u64 {
         let passes = passes(scene.camera.width, scene.camera.height);
-        self.request_passes(scene, request.into(), passes)
+        self.request_passes(scene, request, passes)
     }
 
     /// Asks for a render in the given passes (1/scale of each side,
@@ -409,7 +409,7 @@ impl WorkerThread {
 impl WorkerThread {
     /// Runs the study on the worker's pool, one row at a time.
     fn study(&self, generation: u64, scene: &StudyScene, runs: usize, cancel: &Cancel) {
-        let methods = study::methods();
+        let methods = render::methods();
         self.send(Event::StudyStarted {
             generation,
             total: methods.len(),

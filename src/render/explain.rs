@@ -23,25 +23,11 @@
 //! [`Prepared::explain`]: super::Prepared::explain
 //! [`Prepared::explain_each`]: super::Prepared::explain_each
 
-use super::prepared::Observer;
+pub use super::observer::Ended;
+use super::observer::Observer;
 use crate::geometry::{Lanes, Mask, Ray};
 use crate::shading::{Illumination, LightObserver, SurfacePoint, Terms};
 use glam::DVec3;
-
-/// Why a chain of reflections ended.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Ended {
-    /// The last ray hit nothing (black).
-    Missed,
-    /// The model's reflection depth is reached (0 for every model but
-    /// whitted).
-    Depth,
-    /// The surface hit has ks = 0: it reflects nothing.
-    NoMirror,
-    /// The exact early stop: the rest of the chain could add at most
-    /// `bound` per channel, too little to change the 8-bit value.
-    EarlyStop { bound: DVec3 },
-}
 
 impl Ended {
     /// In words, for people.

@@ -1,9 +1,9 @@
 //! Rendering: from a loaded [`Scene`] to an 8-bit image.
 //!
 //! [`prepare`] turns the scene into a [`Prepared`] scene (what tracing needs
-//! and nothing more); [`render_tile`] traces one rectangle of pixels, checking
-//! a [`Cancel`] token once per pixel; [`trace_tiles`] is the one tile loop
-//! (bands over the rayon pool, counting [`Progress`]) that [`render`], the
+//! and nothing more); [`trace_tiles`] is the one tile loop (bands over the
+//! rayon pool, a [`Cancel`] token checked once per pixel, counting
+//! [`Progress`]) that [`render`], the
 //! app's worker and `--region` share: a region of the image is traced in
 //! the whole image's tiles, so its pixels are the whole render's.
 //! [`RenderOptions`] holds every method choice (and the region to render);
@@ -12,12 +12,16 @@
 //! same tile loop; [`explain`] says why a pixel has its colour, from the
 //! same trace. [`navigate`] moves the camera as a viewport does (orbit,
 //! pan, dolly); [`object_ids`] says which object each pixel shows.
+//! [`methods`] are the named ways to render (`auto`, `f32`, `aa4`, …) that
+//! `--method`, the app's preview and the study choose among.
 
 mod auto;
 mod camera;
 pub mod explain;
 mod ids;
+mod method;
 pub mod navigate;
+mod observer;
 mod pass;
 mod prepared;
 mod progress;
@@ -27,13 +31,14 @@ pub use auto::{Decision, Plan, auto};
 pub use camera::CameraRays;
 pub use explain::Explanation;
 pub use ids::{ObjectIds, object_ids};
+pub use method::{Method, Options as MethodOptions, method, methods};
 pub use pass::{
     KeptPass, Pass, PassForm, PassImage, PassPixels, Texel, f32_keeping_level, in_exr, in_f32,
     object_color, render_pass, render_pass_as, shown,
 };
 pub use prepared::{Hit, Prepared, prepare};
 pub use progress::{Progress, time_left};
-pub use tile::{Cancel, TILE_SIZE, Tile, render_tile, tiles};
+pub use tile::{Cancel, TILE_SIZE, Tile};
 
 use crate::geometry::{Ray, Real, Vector};
 use crate::region::{Region, RegionError};
@@ -408,5 +413,25 @@ pub fn to_8bit(c: f64) -> u8 {
         (c.min(1.0) * 255.0 + 0.5) as u8
     } else {
         0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_grid_cuts_a_span_once_at_the_images_tile_lines() {
+        for (start, end) in [(0, 1), (0, 64), (0, 65), (5, 33), (31, 32), (40, 200)] {
+            let cuts: Vec<_> = grid_cuts(start, end).collect();
+            assert_eq!(cuts.first().map(|c| c.0), Some(start));
+            assert_eq!(cuts.last().map(|c| c.1), Some(end));
+            for pair in cuts.windows(2) {
+                assert_eq!(pair[0].1, pair[1].0, "{start}..{end}");
+                assert_eq!(pair[0].1 % TILE_SIZE, 0, "{start}..{end}");
+            }
+            assert!(cuts.iter().all(|(a, b)| a < b && b - a <= TILE_SIZE));
+        }
+        assert_eq!(grid_cuts(7, 7).count(), 0);
     }
 }

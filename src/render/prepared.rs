@@ -28,7 +28,8 @@
 //!   same scene ([`Prepared::with_view`]: a coarse pass, a moved camera, a
 //!   pick) prepares nothing again.
 
-use super::explain::{Ended, Explanation, PixelValue, Recorder, Sample};
+use super::explain::{Explanation, PixelValue, Recorder, Sample};
+use super::observer::{Ended, Observer};
 use super::{
     CameraRays, Cancel, Offset, Pass, Precision, RenderOptions, SphereTest, Texel, Tile, in_f32,
     to_8bit,
@@ -40,9 +41,7 @@ use crate::geometry::{
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
 use crate::scene::{Camera, Scene};
-use crate::shading::{
-    Color, Illumination, Light, LightObserver, Material, SurfacePoint, Terms, local_color,
-};
+use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, Terms, local_color};
 use glam::DVec3;
 use std::marker::PhantomData;
 use std::ops::ControlFlow;
@@ -273,46 +272,6 @@ impl<L: Lanes> Traced<L> {
         }
     }
 }
-
-/// Sees a trace step by step: how the explained pixel's tree is recorded
-/// from the render's own loop ([`Prepared::explain`]). `()` sees nothing
-/// and compiles to nothing (renders).
-pub(super) trait Observer<L: Lanes>: LightObserver<L> {
-    /// Bounce `bounce`'s rays (f64) leave.
-    #[inline(always)]
-    fn ray(&mut self, bounce: u32, rays: &Ray<L::Vector>) {
-        let _ = (bounce, rays);
-    }
-    /// The lanes of `missed` hit nothing: their chains end.
-    #[inline(always)]
-    fn missed(&mut self, missed: L::Mask) {
-        let _ = missed;
-    }
-    /// The `alive` lanes hit `object` (of reflectance `ks`) at distance
-    /// `t` and `point`; their own colour's terms, and the weight it enters
-    /// the pixel with.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn hit(
-        &mut self,
-        alive: L::Mask,
-        object: L,
-        t: L,
-        point: &SurfacePoint<L::Vector>,
-        terms: &Terms<L::Vector>,
-        ks: L,
-        weight: L,
-    ) {
-        let _ = (alive, object, t, point, terms, ks, weight);
-    }
-    /// The chains of `lanes` end after their hit, for this reason.
-    #[inline(always)]
-    fn ended(&mut self, lanes: L::Mask, why: Ended) {
-        let _ = (lanes, why);
-    }
-}
-
-impl<L: Lanes> Observer<L> for () {}
 
 /// A kernel's intersection test of its rays against one primitive `P`.
 /// (A trait rather than a closure: the AVX path needs it inlined, and

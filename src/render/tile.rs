@@ -1,6 +1,5 @@
 //! Tiles of the image and the cancellation token checked inside them.
 
-use super::Prepared;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -14,24 +13,6 @@ pub struct Tile {
     pub y: u32,
     pub width: u32,
     pub height: u32,
-}
-
-/// Cuts a width × height image into tiles of at most `size` × `size`, in
-/// reading order.
-pub fn tiles(width: u32, height: u32, size: u32) -> Vec<Tile> {
-    let size = size.max(1);
-    let mut out = Vec::new();
-    for y in (0..height).step_by(size as usize) {
-        for x in (0..width).step_by(size as usize) {
-            out.push(Tile {
-                x,
-                y,
-                width: size.min(width - x),
-                height: size.min(height - y),
-            });
-        }
-    }
-    out
 }
 
 /// A cancellation token: a render request's generation compared with the
@@ -82,33 +63,9 @@ impl Cancel {
     }
 }
 
-/// Traces one tile: row-major RGB8 pixels, or `None` if cancelled (checked
-/// before every pixel).
-pub fn render_tile(prepared: &Prepared, tile: &Tile, cancel: &Cancel) -> Option<Vec<u8>> {
-    let mut pixels = Vec::with_capacity(tile.width as usize * tile.height as usize * 3);
-    prepared
-        .render_tile_into(tile, cancel, &mut pixels)
-        .map(|_| pixels)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn tiles_cover_the_image_once() {
-        for (w, h) in [(1, 1), (1, 100), (100, 1), (65, 33), (64, 64)] {
-            let mut count = vec![0u8; (w * h) as usize];
-            for t in tiles(w, h, 32) {
-                for y in t.y..t.y + t.height {
-                    for x in t.x..t.x + t.width {
-                        count[(y * w + x) as usize] += 1;
-                    }
-                }
-            }
-            assert!(count.iter().all(|&c| c == 1), "{w}x{h}");
-        }
-    }
 
     #[test]
     fn cancel_follows_the_newest_generation() {

@@ -10,13 +10,15 @@
 //! [`edit`] is the one way a scene changes (the app's panel and undo, the
 //! command line's `edit` and `--set`); [`splice`] writes those changes back
 //! into the file's text, keeping every byte that was not edited; [`merge`]
-//! replays unsaved edits onto a version of the file another program saved.
+//! replays unsaved edits onto a version of the file another program saved;
+//! [`names`] names objects for people (`#2 RED sphere`).
 
 pub mod edit;
 mod error;
 pub mod identity;
 mod load;
 pub mod merge;
+pub mod names;
 pub mod splice;
 mod xml;
 
@@ -26,28 +28,10 @@ pub use load::{
     load_sharing, load_with_text, parse, parse_sharing,
 };
 
+pub use crate::geometry::Shape;
 use crate::math::Transform;
 pub use crate::shading::{Color, Illumination, Light, Material, Model};
 use std::sync::Arc;
-
-/// What an object is in its own space.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Shape {
-    /// The unit sphere centred on the origin.
-    Sphere,
-    /// The plane z = 0, infinite and two-sided.
-    Plane,
-}
-
-impl Shape {
-    /// The element name in the scene format.
-    pub fn name(self) -> &'static str {
-        match self {
-            Shape::Sphere => "sphere",
-            Shape::Plane => "plane",
-        }
-    }
-}
 
 /// A sphere or plane placed in the world.
 #[derive(Debug, Clone, PartialEq)]

@@ -221,11 +221,10 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
     save(text, path, &by_index)
 }
 
-/// The first words of the comment directly above each object (spheres and
-/// planes in file order), for naming it in the panel: up to three, before
-/// any punctuation ("RED sphere" for `<!-- RED sphere, left -->`). `None`
-/// where no comment touches the object.
-pub fn object_labels(text: &str) -> Vec<Option<String>> {
+/// The comment directly above each object (spheres and planes in file
+/// order), between its `<!--` and `-->`; `None` where no comment touches
+/// the object. [`super::names`] makes the panel's labels of them.
+pub(super) fn object_comments(text: &str) -> Vec<Option<&str>> {
     // The root and its children are all it needs: the objects' own
     // elements are not kept (a million objects hold five million).
     let Ok(doc) = Doc::scan(text, Keep::TopLevel) else {
@@ -235,30 +234,9 @@ pub fn object_labels(text: &str) -> Vec<Option<String>> {
         .into_iter()
         .map(|node| {
             let comment = doc.comments_above(doc.node(node).start).last()?.clone();
-            let inner = doc.text.get(comment.start + 4..comment.end - 3)?;
-            // Up to the first punctuation, at most three words.
-            let phrase = inner
-                .split([',', '.', ':', ';', '(', '-', '\n'])
-                .find(|p| !p.trim().is_empty())?;
-            let label = phrase
-                .split_whitespace()
-                .take(3)
-                .collect::<Vec<_>>()
-                .join(" ");
-            (!label.is_empty()).then_some(label)
+            text.get(comment.start + 4..comment.end - 3)
         })
         .collect()
-}
-
-/// The panel's name for object `n` (0-based) of shape `shape`, given the
-/// first words of the comment above it ([`object_labels`]): `#2 RED
-/// sphere`, `#2 sphere` without a comment.
-pub fn object_name(n: usize, shape: &str, words: Option<&str>) -> String {
-    match words {
-        Some(w) if w.to_lowercase().ends_with(shape) => format!("#{} {w}", n + 1),
-        Some(w) => format!("#{} {w} {shape}", n + 1),
-        None => format!("#{} {shape}", n + 1),
-    }
 }
 
 /// A fresh scene file for `scene`, indented by two spaces:

@@ -416,7 +416,7 @@ mod tests {
 
     #[test]
     fn no_two_methods_share_a_colour() {
-        let n = crate::study::methods().len();
+        let n = crate::render::methods().len();
         let colours: std::collections::HashSet<_> = (0..n).map(method_colour).collect();
         assert_eq!(colours.len(), n, "{n} methods");
     }

@@ -3,22 +3,12 @@
 //! ([`RayOfLightApp::run`]), asking first when a command would drop unsaved
 //! edits.
 
-use super::*;
-
-pub(super) const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
-
-pub(super) const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S);
-
-pub(super) const EXPORT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::E);
-
-pub(super) const QUIT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Q);
-
-pub(super) const UNDO: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
-
-pub(super) const REDO: KeyboardShortcut =
-    KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::Z);
-
-pub(super) const REDO_Y: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Y);
+use super::RayOfLightApp;
+use super::dialogs::{Confirm, DialogKind, PathPrompt};
+use super::picture::View;
+use crate::gui::document::Document;
+use egui::{Key, KeyboardShortcut, Modifiers};
+use std::path::{Path, PathBuf};
 
 /// Everything the menus and keys can ask for.
 #[derive(Debug, Clone, PartialEq)]
@@ -66,10 +56,215 @@ pub enum Command {
     /// Show or hide what is drawn over the picture: light markers, the
     /// selection's outline, the explained ray's path (O).
     Overlays,
+    /// Render the preview and exports with N×N rays a pixel (View ›
+    /// Anti-aliasing).
+    AntiAliasing(u32),
 }
 
-/// Every key and mouse action, for the help window (F1).
-pub const HELP: &[(&str, &str)] = &[
+/// What runs a command from the keyboard.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Trigger {
+    /// A chord that works everywhere, also while a text field is typed in.
+    Chord(KeyboardShortcut),
+    /// A chord that belongs to a text field while one is typed in (undo,
+    /// redo).
+    EditChord(KeyboardShortcut),
+    /// A key pressed alone, not while typing.
+    Key(Key),
+    /// A character typed, not in a text field (`?`).
+    Char(&'static str),
+}
+
+impl Trigger {
+    /// As the menus and the help show it: `Ctrl+S`, `F1`, `?`.
+    pub(super) fn text(&self, ctx: &egui::Context) -> String {
+        match self {
+            Trigger::Chord(chord) | Trigger::EditChord(chord) => ctx.format_shortcut(chord),
+            Trigger::Key(key) => key.symbol_or_name().to_owned(),
+            Trigger::Char(c) => (*c).to_owned(),
+        }
+    }
+}
+
+/// A command, its menu label and its keys: the one table the keys, the
+/// menus (their shortcut text) and the help window (F1) are made from.
+pub(super) struct Binding {
+    pub command: Command,
+    /// The menu item's text; `""` where no menu shows the command.
+    pub label: &'static str,
+    /// The keys, the first one shown in the menu.
+    pub keys: &'static [Trigger],
+    /// What the help window says the keys do; `""`: not listed.
+    pub help: &'static str,
+}
+
+const fn chord(modifiers: Modifiers, key: Key) -> KeyboardShortcut {
+    KeyboardShortcut::new(modifiers, key)
+}
+
+const CTRL: Modifiers = Modifiers::COMMAND;
+const CTRL_SHIFT: Modifiers = Modifiers::COMMAND.plus(Modifiers::SHIFT);
+
+/// Every command with a fixed label or a key. The keys are tried in this
+/// order, so Redo comes before Undo: Ctrl+Shift+Z also matches Ctrl+Z.
+pub(super) const BINDINGS: &[Binding] = &[
+    Binding {
+        command: Command::Open,
+        label: "Open…",
+        keys: &[Trigger::Chord(chord(CTRL, Key::O))],
+        help: "open a scene",
+    },
+    Binding {
+        command: Command::OpenPath,
+        label: "Open path…",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::OpenBuiltin,
+        label: "Open built-in example",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::Reload,
+        label: "Reload from disk",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::Save,
+        label: "Save",
+        keys: &[Trigger::Chord(chord(CTRL, Key::S))],
+        help: "save (merges with changes made by other programs)",
+    },
+    Binding {
+        command: Command::SaveAs,
+        label: "Save as…",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::SaveAsPath,
+        label: "Save as path…",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::RevertEdits,
+        label: "Revert edits",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::Export,
+        label: "Export image…",
+        keys: &[Trigger::Chord(chord(CTRL, Key::E))],
+        help: "export the image",
+    },
+    Binding {
+        command: Command::ExportPath,
+        label: "Export to path…",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::Quit,
+        label: "Quit",
+        keys: &[Trigger::Chord(chord(CTRL, Key::Q))],
+        help: "quit (asks about unsaved edits)",
+    },
+    Binding {
+        command: Command::Redo,
+        label: "Redo",
+        keys: &[
+            Trigger::EditChord(chord(CTRL_SHIFT, Key::Z)),
+            Trigger::EditChord(chord(CTRL, Key::Y)),
+        ],
+        help: "redo",
+    },
+    Binding {
+        command: Command::Undo,
+        label: "Undo",
+        keys: &[Trigger::EditChord(chord(CTRL, Key::Z))],
+        help: "undo",
+    },
+    Binding {
+        command: Command::Fit,
+        label: "Fit",
+        keys: &[Trigger::Key(Key::F)],
+        help: "fit the picture to the window",
+    },
+    Binding {
+        command: Command::OneToOne,
+        label: "1:1",
+        keys: &[Trigger::Key(Key::Num1)],
+        help: "show the picture 1:1",
+    },
+    Binding {
+        command: Command::ZoomIn,
+        label: "",
+        keys: &[Trigger::Key(Key::Plus), Trigger::Key(Key::Equals)],
+        help: "zoom the picture in",
+    },
+    Binding {
+        command: Command::ZoomOut,
+        label: "",
+        keys: &[Trigger::Key(Key::Minus)],
+        help: "zoom the picture out",
+    },
+    Binding {
+        command: Command::CameraFromFile,
+        label: "Camera from file",
+        keys: &[Trigger::Key(Key::Home)],
+        help: "back to the camera the file has",
+    },
+    Binding {
+        command: Command::Study,
+        label: "Study…",
+        keys: &[],
+        help: "",
+    },
+    Binding {
+        command: Command::Help,
+        label: "Keys and mouse…",
+        keys: &[Trigger::Key(Key::F1), Trigger::Char("?")],
+        help: "this list",
+    },
+    Binding {
+        command: Command::Grab,
+        label: "",
+        keys: &[Trigger::Key(Key::G)],
+        help: "move the selected object in the view plane (click: place; Esc, right click: cancel)",
+    },
+    Binding {
+        command: Command::Explain,
+        label: "Explain pixel",
+        keys: &[Trigger::Key(Key::E)],
+        help: "then click: explain the pixel: its rays, hits and the terms of its colour",
+    },
+    Binding {
+        command: Command::Overlays,
+        label: "Overlays",
+        keys: &[Trigger::Key(Key::O)],
+        help: "show or hide the overlays: light markers, outline, ray path",
+    },
+    Binding {
+        command: Command::Render,
+        label: "Render again",
+        keys: &[Trigger::Key(Key::F5)],
+        help: "render again (after Esc)",
+    },
+    Binding {
+        command: Command::CancelRender,
+        label: "",
+        keys: &[Trigger::Key(Key::Escape)],
+        help: "cancel the move or the explain click, close this list, else stop the render",
+    },
+];
+
+/// The mouse's actions, for the help window beside [`BINDINGS`]' keys.
+pub(super) const MOUSE: &[(&str, &str)] = &[
     (
         "drag on the picture",
         "orbit the camera around the point under the cursor",
@@ -79,40 +274,18 @@ pub const HELP: &[(&str, &str)] = &[
         "pan the camera in its view plane",
     ),
     ("mouse wheel", "dolly toward the point under the cursor"),
-    ("Home", "back to the camera the file has"),
     ("click", "select the object under the cursor"),
-    (
-        "G, Alt+drag",
-        "move the selected object in the view plane (click: place; Esc, right click: cancel)",
-    ),
+    ("Alt+drag", "move the selected object in the view plane"),
     ("drag a light's marker", "move the light in the view plane"),
-    (
-        "E then click, Alt+click",
-        "explain the pixel: its rays, hits and the terms of its colour",
-    ),
-    ("Ctrl+wheel, + / -", "zoom the picture"),
+    ("Alt+click", "explain the pixel under the cursor"),
+    ("Ctrl+wheel", "zoom the picture"),
     ("Ctrl+drag", "pan the picture"),
-    ("F / 1", "fit the picture / show it 1:1"),
-    (
-        "Esc",
-        "cancel the move or the explain click, close this list, else stop the render",
-    ),
-    ("F5", "render again (after Esc)"),
-    (
-        "O",
-        "show or hide the overlays: light markers, outline, ray path",
-    ),
-    ("Ctrl+Z", "undo"),
-    ("Ctrl+Shift+Z, Ctrl+Y", "redo"),
-    (
-        "Ctrl+S",
-        "save (merges with changes made by other programs)",
-    ),
-    ("Ctrl+O", "open a scene"),
-    ("Ctrl+E", "export the image"),
-    ("Ctrl+Q", "quit (asks about unsaved edits)"),
-    ("F1, ?", "this list"),
 ];
+
+/// The binding of `command`, if the table has one.
+pub(super) fn binding(command: &Command) -> Option<&'static Binding> {
+    BINDINGS.iter().find(|b| &b.command == command)
+}
 
 impl Command {
     /// Whether carrying it out drops unsaved edits.
@@ -125,8 +298,21 @@ impl Command {
 }
 
 impl RayOfLightApp {
-    /// The help window: [`HELP`] as a table.
+    /// The help window: the mouse's actions, then every key of
+    /// [`BINDINGS`].
     pub(super) fn help_window(&mut self, ctx: &egui::Context) {
+        let keys: Vec<(String, &str)> = BINDINGS
+            .iter()
+            .filter(|b| !b.keys.is_empty() && !b.help.is_empty())
+            .map(|b| {
+                let keys: Vec<String> = b.keys.iter().map(|k| k.text(ctx)).collect();
+                (keys.join(", "), b.help)
+            })
+            .collect();
+        let rows = MOUSE
+            .iter()
+            .map(|&(what, does)| (what.to_owned(), does))
+            .chain(keys);
         egui::Window::new("Keys and mouse")
             .open(&mut self.help_open)
             .resizable(false)
@@ -136,9 +322,9 @@ impl RayOfLightApp {
                     .num_columns(2)
                     .striped(true)
                     .show(ui, |ui| {
-                        for (keys, action) in HELP {
-                            ui.strong(*keys);
-                            ui.label(*action);
+                        for (keys, action) in rows {
+                            ui.strong(keys);
+                            ui.label(action);
                             ui.end_row();
                         }
                     });
@@ -148,6 +334,13 @@ impl RayOfLightApp {
     /// Carries out a command from a menu or a key. Commands that would drop
     /// unsaved edits ask first.
     pub fn run(&mut self, command: Command) {
+        if command == Command::Quit
+            && let Some(saving) = &mut self.saving
+        {
+            saving.then = Some(Command::Quit);
+            self.notify("saving: the window closes when the file is written".into());
+            return;
+        }
         if command.drops_edits() && self.doc.has_unsaved_edits() {
             self.confirm = Some(Confirm::Discard(command));
             return;
@@ -176,7 +369,7 @@ impl RayOfLightApp {
                     && self
                         .doc
                         .path()
-                        .is_none_or(|current| !dialogs::same_file(current, &path));
+                        .is_none_or(|current| !crate::files::same_file(current, &path));
                 if other_file {
                     self.confirm = Some(Confirm::Replace(path));
                 } else {
@@ -240,6 +433,10 @@ impl RayOfLightApp {
                 self.study.open = true;
                 self.study.set_plan(self.doc.scene());
             }
+            Command::AntiAliasing(aa) => {
+                self.aa = aa;
+                self.request_render();
+            }
         }
     }
 
@@ -248,56 +445,28 @@ impl RayOfLightApp {
         if self.confirm.is_some() || self.doc.conflict().is_some() || self.path_prompt.is_some() {
             return;
         }
+        // Undo, redo and bare keys belong to a text field while one is
+        // being typed in.
+        let typing = ctx.egui_wants_keyboard_input();
         let mut commands = Vec::new();
-        // Redo before undo: Ctrl+Shift+Z also matches Ctrl+Z.
-        for (shortcut, command) in [
-            (OPEN, Command::Open),
-            (SAVE, Command::Save),
-            (EXPORT, Command::Export),
-            (QUIT, Command::Quit),
-        ] {
-            if ctx.input_mut(|i| i.consume_shortcut(&shortcut)) {
-                commands.push(command);
-            }
-        }
-        // Undo and redo belong to a text field while one is being typed in.
-        if !ctx.egui_wants_keyboard_input() {
-            for (shortcut, command) in [
-                (REDO, Command::Redo),
-                (REDO_Y, Command::Redo),
-                (UNDO, Command::Undo),
-            ] {
-                if ctx.input_mut(|i| i.consume_shortcut(&shortcut)) {
-                    commands.push(command);
-                }
-            }
-            ctx.input(|i| {
-                for (key, command) in [
-                    (Key::F, Command::Fit),
-                    (Key::Num1, Command::OneToOne),
-                    (Key::Plus, Command::ZoomIn),
-                    (Key::Equals, Command::ZoomIn),
-                    (Key::Minus, Command::ZoomOut),
-                    (Key::Escape, Command::CancelRender),
-                    (Key::Home, Command::CameraFromFile),
-                    (Key::F1, Command::Help),
-                    (Key::G, Command::Grab),
-                    (Key::E, Command::Explain),
-                    (Key::F5, Command::Render),
-                    (Key::O, Command::Overlays),
-                ] {
-                    if i.key_pressed(key) && i.modifiers.is_none() {
-                        commands.push(command);
+        ctx.input_mut(|i| {
+            for binding in BINDINGS {
+                let pressed = binding.keys.iter().any(|trigger| match trigger {
+                    Trigger::Chord(chord) => i.consume_shortcut(chord),
+                    Trigger::EditChord(chord) => !typing && i.consume_shortcut(chord),
+                    Trigger::Key(key) => !typing && i.modifiers.is_none() && i.key_pressed(*key),
+                    Trigger::Char(c) => {
+                        !typing
+                            && i.events
+                                .iter()
+                                .any(|e| matches!(e, egui::Event::Text(t) if t == c))
                     }
+                });
+                if pressed {
+                    commands.push(binding.command.clone());
                 }
-                if i.events
-                    .iter()
-                    .any(|e| matches!(e, egui::Event::Text(t) if t == "?"))
-                {
-                    commands.push(Command::Help);
-                }
-            });
-        }
+            }
+        });
         let dropped: Option<PathBuf> = ctx.input(|i| {
             i.raw
                 .dropped_files
@@ -315,113 +484,100 @@ impl RayOfLightApp {
 
     pub(super) fn menu_bar(&mut self, ui: &mut egui::Ui) {
         let chosen = std::cell::Cell::new(None);
-        let pick = |ui: &mut egui::Ui, enabled: bool, text: &str, command: Command| {
-            if ui.add_enabled(enabled, egui::Button::new(text)).clicked() {
+        let ctx = ui.ctx().clone();
+        // A menu item: `text` with its command's first key beside it.
+        let item = |ui: &mut egui::Ui,
+                    enabled: bool,
+                    selected: Option<bool>,
+                    text: &str,
+                    command: Command| {
+            let mut button = match selected {
+                Some(on) => egui::Button::selectable(on, text),
+                None => egui::Button::new(text),
+            };
+            if let Some(key) = binding(&command).and_then(|b| b.keys.first()) {
+                button = button.shortcut_text(key.text(&ctx));
+            }
+            if ui.add_enabled(enabled, button).clicked() {
                 chosen.set(Some(command));
                 ui.close();
             }
         };
+        // A command's item with the table's label.
+        let pick = |ui: &mut egui::Ui, enabled: bool, command: Command| {
+            let label = binding(&command).map_or("", |b| b.label);
+            item(ui, enabled, None, label, command);
+        };
         let dirty = self.doc.has_unsaved_edits();
         let shown_pass = self.pass;
         let has_file = self.doc.path().is_some();
-        let undo = self.doc.undo_label().map(|l| format!("Undo {l}  Ctrl+Z"));
-        let redo = self
-            .doc
-            .redo_label()
-            .map(|l| format!("Redo {l}  Ctrl+Shift+Z"));
+        let undo = self.doc.undo_label().map(|l| format!("Undo {l}"));
+        let redo = self.doc.redo_label().map(|l| format!("Redo {l}"));
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
-                pick(ui, true, "Open…  Ctrl+O", Command::Open);
-                pick(ui, true, "Open path…", Command::OpenPath);
-                pick(ui, true, "Open built-in example", Command::OpenBuiltin);
+                pick(ui, true, Command::Open);
+                pick(ui, true, Command::OpenPath);
+                pick(ui, true, Command::OpenBuiltin);
                 ui.menu_button("Recent", |ui| {
                     let recent = self.recent.existing();
                     if recent.is_empty() {
                         ui.label("(none)");
                     }
                     for path in &recent {
-                        pick(
-                            ui,
-                            true,
-                            &path.display().to_string(),
-                            Command::OpenFile(path.clone()),
-                        );
+                        let text = path.display().to_string();
+                        item(ui, true, None, &text, Command::OpenFile(path.clone()));
                     }
                 });
-                pick(ui, has_file, "Reload from disk", Command::Reload);
+                pick(ui, has_file, Command::Reload);
                 ui.separator();
-                pick(ui, true, "Save  Ctrl+S", Command::Save);
-                pick(ui, true, "Save as…", Command::SaveAs);
-                pick(ui, true, "Save as path…", Command::SaveAsPath);
-                pick(ui, dirty, "Revert edits", Command::RevertEdits);
+                pick(ui, true, Command::Save);
+                pick(ui, true, Command::SaveAs);
+                pick(ui, true, Command::SaveAsPath);
+                pick(ui, dirty, Command::RevertEdits);
                 ui.separator();
-                pick(ui, true, "Export image…  Ctrl+E", Command::Export);
-                pick(ui, true, "Export to path…", Command::ExportPath);
+                pick(ui, true, Command::Export);
+                pick(ui, true, Command::ExportPath);
                 ui.separator();
-                pick(ui, true, "Quit  Ctrl+Q", Command::Quit);
+                pick(ui, true, Command::Quit);
             });
             ui.menu_button("Edit", |ui| {
-                pick(
-                    ui,
-                    undo.is_some(),
-                    undo.as_deref().unwrap_or("Undo  Ctrl+Z"),
-                    Command::Undo,
-                );
-                pick(
-                    ui,
-                    redo.is_some(),
-                    redo.as_deref().unwrap_or("Redo  Ctrl+Shift+Z"),
-                    Command::Redo,
-                );
+                let undo_text = undo.as_deref().unwrap_or("Undo");
+                item(ui, undo.is_some(), None, undo_text, Command::Undo);
+                let redo_text = redo.as_deref().unwrap_or("Redo");
+                item(ui, redo.is_some(), None, redo_text, Command::Redo);
             });
             ui.menu_button("View", |ui| {
-                pick(ui, true, "Fit  F", Command::Fit);
-                pick(ui, true, "1:1  1", Command::OneToOne);
-                pick(ui, true, "Camera from file  Home", Command::CameraFromFile);
-                pick(ui, true, "Study…", Command::Study);
-                pick(ui, true, "Keys and mouse…  F1", Command::Help);
-                pick(ui, true, "Explain pixel  E", Command::Explain);
-                let overlays = self.overlays;
-                if ui
-                    .add(egui::Button::selectable(overlays, "Overlays  O"))
-                    .on_hover_text(
-                        "light markers, the selection's outline, the explained ray's path",
-                    )
-                    .clicked()
-                {
-                    chosen.set(Some(Command::Overlays));
-                    ui.close();
-                }
-                pick(ui, true, "Render again  F5", Command::Render);
+                pick(ui, true, Command::Fit);
+                pick(ui, true, Command::OneToOne);
+                pick(ui, true, Command::CameraFromFile);
+                pick(ui, true, Command::Study);
+                pick(ui, true, Command::Help);
+                pick(ui, true, Command::Explain);
+                let overlays = binding(&Command::Overlays).map_or("", |b| b.label);
+                item(ui, true, Some(self.overlays), overlays, Command::Overlays);
+                pick(ui, true, Command::Render);
                 ui.menu_button("Pass", |ui| {
                     for pass in crate::render::Pass::ALL {
-                        let button = egui::Button::selectable(pass == shown_pass, pass.name());
-                        if ui.add(button).clicked() {
-                            chosen.set(Some(Command::ShowPass(pass)));
-                            ui.close();
-                        }
+                        let selected = Some(pass == shown_pass);
+                        item(ui, true, selected, pass.name(), Command::ShowPass(pass));
                     }
                 });
                 ui.separator();
                 ui.label("Anti-aliasing");
                 for aa in [1, 2, 3, 4] {
-                    if ui
-                        .selectable_label(self.aa == aa, format!("{aa}×{aa} rays per pixel"))
-                        .clicked()
-                    {
-                        self.aa = aa;
-                        self.request_render();
-                    }
+                    let text = format!("{aa}×{aa} rays per pixel");
+                    item(
+                        ui,
+                        true,
+                        Some(self.aa == aa),
+                        &text,
+                        Command::AntiAliasing(aa),
+                    );
                 }
             });
         });
         if let Some(command) = chosen.take() {
-            // Quit goes through the window's close, which asks about edits.
-            if command == Command::Quit {
-                self.ctx.send_viewport_cmd(egui::ViewportCommand::Close);
-            } else {
-                self.run(command);
-            }
+            self.run(command);
         }
     }
 }

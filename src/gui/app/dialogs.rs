@@ -30,14 +30,6 @@ pub(super) enum Answer {
     Cancel,
 }
 
-/// Whether two paths name the same file (through links).
-pub(super) fn same_file(a: &Path, b: &Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    }
-}
-
 /// A plain path field, offered where no file dialog can open.
 pub(super) struct PathPrompt {
     kind: DialogKind,
@@ -352,13 +344,10 @@ impl RayOfLightApp {
         if !ctx.input(|i| i.viewport().close_requested()) || self.allow_close {
             return;
         }
-        if let Some(saving) = &mut self.saving {
+        // The window's close button asks as Quit does.
+        if self.saving.is_some() || self.doc.has_unsaved_edits() {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            saving.then = Some(Command::Quit);
-            self.notify("saving: the window closes when the file is written".into());
-        } else if self.doc.has_unsaved_edits() {
-            ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
-            self.confirm = Some(Confirm::Discard(Command::Quit));
+            self.run(Command::Quit);
         }
     }
 
@@ -547,7 +536,7 @@ pub(super) struct Loading {
 /// A save under way (see [`RayOfLightApp::save_then`]).
 pub(super) struct Saving {
     /// What to do once saved.
-    then: Option<Command>,
+    pub(super) then: Option<Command>,
     /// The file's changes were merged into the edits on the way.
     merged: bool,
     pub(super) started: Instant,

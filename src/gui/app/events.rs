@@ -167,13 +167,13 @@ impl RayOfLightApp {
             study::Action::Run => self.run_study(),
             study::Action::Cancel => self.worker.cancel(),
             study::Action::Preview(name) => {
-                if let Some(method) = crate::study::method(name) {
+                if let Some(method) = crate::render::method(name) {
                     self.methods.preview = method;
                     self.request_render();
                 }
             }
             study::Action::WhileDragging(name) => {
-                self.methods.dragging = name.and_then(crate::study::method);
+                self.methods.dragging = name.and_then(crate::render::method);
             }
         }
     }

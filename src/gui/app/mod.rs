@@ -43,14 +43,13 @@ use super::document::{Document, FileState, Reload, SaveError, SaveJob, SaveOutco
 use super::pace::Pace;
 use super::panel::{self, Selection};
 use super::preview::{Preview, RenderState};
-use super::recent::Recent;
-use super::settings::{Persisted, Settings};
+use super::settings::{Persisted, Recent, Settings};
 use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
 use super::worker::{Event, Worker};
 use crate::render::{self, RenderOptions};
 use crate::scene::merge::Choice;
-use egui::{Color32, Key, KeyboardShortcut, Modifiers, Pos2, Rect, Sense, TextureOptions, Vec2};
+use egui::{Color32, Key, Pos2, Rect, Sense, TextureOptions, Vec2};
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;

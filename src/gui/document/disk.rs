@@ -2,7 +2,14 @@
 //! bytes, another version to merge with, a broken or missing file), and
 //! the fingerprint that tells them apart. Saving is in `save`.
 
-use super::*;
+use super::{Document, FileState, Version};
+use crate::scene::edit::{Edit, EditError};
+use crate::scene::merge::{self, Choice, Conflict};
+use crate::scene::{LoadError, LoadErrorKind, Scene, names};
+use std::collections::BTreeMap;
+use std::hash::Hasher;
+use std::path::Path;
+use std::sync::Arc;
 
 /// What a change of the file on disk did.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -58,7 +65,7 @@ impl FileRead {
     pub fn new(text: String, scene: Scene) -> FileRead {
         FileRead {
             fingerprint: fingerprint(text.as_bytes()),
-            labels: splice::object_labels(&text),
+            labels: names::object_labels(&text),
             text,
             scene,
         }

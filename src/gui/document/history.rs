@@ -9,7 +9,9 @@
 //! origins are good again by the time they are undone: undoing everything
 //! gives back the text as first read, byte for byte.
 
-use super::*;
+use super::{Document, Version};
+use crate::scene::Scene;
+use crate::scene::edit::{Edit, EditError, Field, Owner, Undo};
 
 /// One entry of the undo (or redo) stack.
 #[derive(Debug, Clone)]

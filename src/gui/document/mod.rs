@@ -41,15 +41,12 @@ use history::Step;
 pub use restore::{TextWriter, fingerprint_text};
 pub use save::{SaveJob, SaveOutcome, SaveStep};
 
-use std::collections::BTreeMap;
-use std::hash::Hasher;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use crate::scene::edit::{Edit, EditError, Edited, Field, Owner, Undo};
-use crate::scene::merge::{self, Choice, Conflict};
-use crate::scene::{self, LoadError, LoadErrorKind, Scene, splice};
+use crate::scene::edit::Edited;
+use crate::scene::{self, LoadError, LoadErrorKind, Scene, names};
 
 /// Where the scene comes from, and how that source is doing.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -138,7 +135,7 @@ fn next_generation() -> u64 {
 
 impl Document {
     fn from_text(path: Option<PathBuf>, text: String, scene: Scene, state: FileState) -> Document {
-        let labels = Arc::new(splice::object_labels(&text));
+        let labels = Arc::new(names::object_labels(&text));
         let disk = Some(fingerprint(text.as_bytes()));
         let file = Version::new(Arc::new(text), scene, labels);
         Document {
@@ -276,7 +273,7 @@ impl Document {
     /// The panel's name for object `n`: `#2 RED sphere` when a comment
     /// directly above it in the file starts with "RED", else `#2 sphere`.
     pub fn object_label(&self, n: usize) -> String {
-        splice::object_name(n, self.object_shape(n), self.comment_words(n))
+        names::object_name(n, self.object_shape(n), self.comment_words(n))
     }
 
     fn object_shape(&self, n: usize) -> &'static str {

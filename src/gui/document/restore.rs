@@ -4,7 +4,9 @@
 //! engine with the file as it is now.
 
 use super::disk::{Fingerprint, fingerprint};
-use super::*;
+use super::{Document, FileRead, FileState, Reload};
+use crate::scene::edit::Edit;
+use crate::scene::{self, splice};
 
 /// Writes a text, on any thread.
 pub type TextWriter = Box<dyn Fn(&mut dyn std::io::Write) -> std::io::Result<()> + Send>;

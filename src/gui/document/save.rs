@@ -18,7 +18,9 @@
 //! [`Document::save`] does the three in a row.
 
 use super::disk::{FingerprintError, fingerprint, fingerprint_file};
-use super::*;
+use super::{Document, FileRead, FileState, Reload, SaveError, Version};
+use crate::scene::{self, splice};
+use std::path::{Path, PathBuf};
 
 /// A save taken from a document, to run on any thread.
 #[derive(Debug, Clone)]

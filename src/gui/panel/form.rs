@@ -2,7 +2,11 @@
 //! integer) and the [`Form`] that turns what the user did with them this
 //! frame into [`Edit`]s: only a real change of a value is an edit.
 
-use super::*;
+use super::PanelOutput;
+use crate::scene::Scene;
+use crate::scene::edit::{Edit, Field, Value, number_text};
+use egui::{DragValue, Response, Ui};
+use std::ops::RangeInclusive;
 
 /// Collects the edits of one frame.
 pub(super) struct Form<'s> {

@@ -16,16 +16,15 @@
 //! computed again only when the query or the scene changes), and the
 //! selected object's values below it.
 
-use std::ops::RangeInclusive;
 use std::sync::Arc;
 
 use super::document::Document;
 use crate::math::{TransformStep, Vec3};
 use crate::scene::edit::{
-    Axis, Channel, Coef, Edit, Field, Item, NewElement, Owner, StepAttr, Value, number_text,
+    Axis, Channel, Coef, Edit, Field, Item, NewElement, Owner, StepAttr, Value,
 };
-use crate::scene::{Illumination, Model, Scene};
-use egui::{CollapsingHeader, DragValue, Response, Ui};
+use crate::scene::{Illumination, Model};
+use egui::{CollapsingHeader, Ui};
 
 mod form;
 use form::Form;

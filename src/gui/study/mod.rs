@@ -12,10 +12,10 @@
 mod plot;
 
 use super::worker::Event;
-use crate::render::{self, Decision};
+use crate::render::{self, Decision, Method};
 use crate::request::RenderRequest;
 use crate::scene::Scene;
-use crate::study::{self, Method, Row};
+use crate::study::{self, Row};
 use egui::{Color32, RichText, TextureHandle, TextureOptions};
 use image::RgbImage;
 use std::time::Duration;
@@ -52,7 +52,7 @@ pub struct PreviewMethods {
 impl Default for PreviewMethods {
     fn default() -> Self {
         PreviewMethods {
-            preview: study::method("auto").expect("the study has an auto method"),
+            preview: render::method("auto").expect("the study has an auto method"),
             dragging: None,
         }
     }
@@ -281,7 +281,7 @@ impl StudyWindow {
         live: &PreviewMethods,
         actions: &mut Vec<Action>,
     ) {
-        let methods = study::methods();
+        let methods = render::methods();
         egui::Grid::new("preview-methods").show(ui, |ui| {
             ui.label("Live preview");
             egui::ComboBox::from_id_salt("preview-method")

@@ -36,7 +36,7 @@ struct Series {
 /// One series per study method that has rows, in the study's order of
 /// methods (so that a method keeps its colour and shape whatever ran).
 fn series(rows: &[Row]) -> Vec<Series> {
-    study::methods()
+    crate::render::methods()
         .iter()
         .enumerate()
         .filter_map(|(i, method)| {
@@ -260,7 +260,7 @@ mod tests {
         assert_eq!(names, ["default", "draft"], "the study's order");
         assert_eq!(series[1].marks.len(), 2);
         // A method's look is its number in the study, whatever else ran.
-        let i = study::methods()
+        let i = crate::render::methods()
             .iter()
             .position(|m| m.name == "draft")
             .unwrap();
@@ -270,9 +270,12 @@ mod tests {
 
     #[test]
     fn no_two_methods_look_alike() {
-        let rows: Vec<Row> = study::methods().iter().map(|m| row(m.name, 1.0)).collect();
+        let rows: Vec<Row> = crate::render::methods()
+            .iter()
+            .map(|m| row(m.name, 1.0))
+            .collect();
         let series = series(&rows);
-        assert_eq!(series.len(), study::methods().len());
+        assert_eq!(series.len(), crate::render::methods().len());
         for (i, a) in series.iter().enumerate() {
             for b in &series[i + 1..] {
                 assert_ne!(a.colour, b.colour, "{} and {}", a.name, b.name);

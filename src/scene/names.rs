@@ -1,0 +1,39 @@
+//! How objects are named for people: `#2 RED sphere` in the panel and the
+//! explain output, `#2 sphere` in an undo step's label. The number counts
+//! from 1 in file order (as paths do); the words are the first ones of the
+//! comment directly above the object in the file ([`object_labels`]).
+
+use super::splice;
+
+/// The first words of the comment directly above each object (spheres and
+/// planes in file order), for naming it in the panel: up to three, before
+/// any punctuation ("RED sphere" for `<!-- RED sphere, left -->`). `None`
+/// where no comment touches the object.
+pub fn object_labels(text: &str) -> Vec<Option<String>> {
+    splice::object_comments(text)
+        .into_iter()
+        .map(|comment| {
+            // Up to the first punctuation, at most three words.
+            let phrase = comment?
+                .split([',', '.', ':', ';', '(', '-', '\n'])
+                .find(|p| !p.trim().is_empty())?;
+            let label = phrase
+                .split_whitespace()
+                .take(3)
+                .collect::<Vec<_>>()
+                .join(" ");
+            (!label.is_empty()).then_some(label)
+        })
+        .collect()
+}
+
+/// The name of object `n` (0-based) of shape `shape`, given the first
+/// words of the comment above it ([`object_labels`]): `#2 RED sphere`,
+/// `#2 sphere` without a comment.
+pub fn object_name(n: usize, shape: &str, words: Option<&str>) -> String {
+    match words {
+        Some(w) if w.to_lowercase().ends_with(shape) => format!("#{} {w}", n + 1),
+        Some(w) => format!("#{} {w} {shape}", n + 1),
+        None => format!("#{} {shape}", n + 1),
+    }
+}
