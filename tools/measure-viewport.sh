@@ -89,15 +89,13 @@ sed 's/width="1440" height="1080"/width="2880" height="2160"/' scenes/bench/mirr
 
 median() { sort -n | awk '{v[NR] = $1} END {if (NR) print v[int((NR + 1) / 2)]}'; }
 
-# compare SCENE NAME: the command line's -time (median of 5), then the app:
-# its first full picture, and five more asked for with F5 (render again),
-# each from its request to the full picture, with the frames the window
-# drew meanwhile.
+# compare SCENE NAME: the app's first full picture, then five rounds of the
+# command line's -time and the app's picture asked again with F5 (render
+# again), one after the other so that both see the same load: the app from
+# its request to the full picture (every pass), with the frames the window
+# drew meanwhile. Medians of the five.
 compare() {
   local scene=$1 name=$2 log="$out/$2.render.log"
-  local cli
-  cli=$(for k in 1 2 3 4 5; do "$bin" -time "$scene" 2>&1 | sed -n 's/^render: \([0-9]*\) ns.*/\1/p'; done |
-    median | awk '{printf "%.1f", $1 / 1e6}')
   RAYOFLIGHT_STATS=1 "$bin" "$scene" 2>"$log" &
   local app=$!
   local start=$SECONDS
@@ -110,7 +108,9 @@ compare() {
   xdotool windowfocus --sync "$win"
   xdotool mousemove 1200 860
   sleep 2
+  local cli=()
   for k in 1 2 3 4 5; do
+    cli+=("$("$bin" -time "$scene" 2>&1 | sed -n 's/^render: \([0-9]*\) ns.*/\1/p')")
     local seen
     seen=$(grep -c "full picture" "$log")
     xdotool key F5
@@ -119,14 +119,16 @@ compare() {
   done
   kill $app
   wait $app 2>/dev/null || true
-  local lines
+  local lines ms fps cli_ms
   lines=$(grep "full picture" "$log" | tail -n 5)
-  local ms fps
+  cli_ms=$(printf '%s\n' "${cli[@]}" | median | awk '{printf "%.1f", $1 / 1e6}')
   ms=$(sed -n 's/.*full picture \([0-9.]*\) ms.*/\1/p' <<<"$lines" | median)
-  fps=$(sed -n 's/.* \([0-9.]*\) frames\/s.*/\1/p' <<<"$lines" | sort -n | head -n 1)
-  echo "== $name: command line -time $cli ms (median of 5); app full picture $ms ms (median of 5, request to full picture, every pass)"
-  echo "   ratio app/cli: $(awk -v a="$ms" -v c="$cli" 'BEGIN {printf "%.2f", a / c}'); UI frames/s during those renders: lowest $fps"
+  fps=$(sed -n 's/.*(\([0-9.]*\) frames\/s).*/\1/p' <<<"$lines" | median)
+  echo "== $name: command line -time $cli_ms ms; app full picture $ms ms (request to full picture, every pass); medians of 5"
+  echo "   ratio app/cli: $(awk -v a="$ms" -v c="$cli_ms" 'BEGIN {printf "%.2f", a / c}'); UI frames/s while the app rendered: median $fps"
+  echo "   command line ns: ${cli[*]}"
   echo "$lines"
+  echo "   load average: $(cut -d' ' -f1-3 /proc/loadavg)"
 }
 
 if [[ ${2:-} == --render ]]; then
