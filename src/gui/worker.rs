@@ -1,5 +1,7 @@
-//! The render worker: one background thread that owns all rendering for the
-//! app, so the UI thread never traces a ray.
+//! The render worker: the owner of all rendering for the app — a
+//! background thread and its queue, and a thread for each export, all on
+//! its pools — so that the UI thread never traces a ray or prepares a
+//! scene.
 //!
 //! Every request gets a generation number. A newer request cancels the older
 //! one within a pixel (the [`Cancel`] token is checked before every pixel),
