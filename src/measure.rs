@@ -4,7 +4,9 @@
 //! - **Render time** ([`render_timed`]): from the request resolved for the
 //!   scene (`auto`'s planning) through preparing and tracing to the last
 //!   pixel, on a thread pool built before the clock starts ([`RenderPool`]).
-//!   Loading the scene, encoding and writing the image are not in it.
+//!   Loading the scene, encoding and writing the image are not in it. The
+//!   app's progressive render ([`progressive_timed`]) is timed the same
+//!   way, pass by pass, and its full picture from the request.
 //! - **Rays**: the rays actually traced, primary and reflected
 //!   ([`RenderStats::rays`]), never width × height × aa².
 //! - The **median** of runs ([`median_of`]).
@@ -15,13 +17,15 @@
 //!   ([`BuiltinScene`]; the lists are [`crate::bench::SCENES`] and
 //!   [`crate::study::SCENES`]).
 
+pub use crate::render::RenderPool;
 use crate::render::{
-    self, Cancel, KeptPass, Pass, PassForm, PassImage, Progress, RenderError, RenderOptions,
-    RenderStats,
+    self, Cancel, KeptPass, LastPrepared, Pass, PassForm, PassImage, Progress, RenderError,
+    RenderOptions, RenderStats, Step, Tile,
 };
 use crate::request::RenderRequest;
 use crate::scene::{self, LoadError, Scene};
 use image::RgbImage;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// A scene file of `scenes/` built into the binary, so that `rayoflight
@@ -57,42 +61,6 @@ macro_rules! builtin {
 impl BuiltinScene {
     pub fn scene(&self) -> Result<Scene, LoadError> {
         scene::parse(self.text, std::path::Path::new(self.path))
-    }
-}
-
-/// The threads a render runs on, built before any clock starts: a pool of
-/// its own for a thread count, or rayon's global pool (one thread a core).
-pub struct RenderPool {
-    pool: Option<rayon::ThreadPool>,
-}
-
-impl RenderPool {
-    pub fn new(threads: Option<usize>) -> Result<RenderPool, RenderError> {
-        let pool = match threads {
-            None => None,
-            Some(threads) => {
-                let options = RenderOptions {
-                    threads: Some(threads),
-                    ..RenderOptions::default()
-                };
-                options.validate()?;
-                Some(
-                    rayon::ThreadPoolBuilder::new()
-                        .num_threads(threads)
-                        .build()
-                        .map_err(|source| RenderError::ThreadPool { threads, source })?,
-                )
-            }
-        };
-        Ok(RenderPool { pool })
-    }
-
-    /// Runs `work` on the pool's threads.
-    pub fn install<R: Send>(&self, work: impl FnOnce() -> R + Send) -> R {
-        match &self.pool {
-            Some(pool) => pool.install(work),
-            None => work(),
-        }
     }
 }
 
@@ -148,6 +116,79 @@ pub fn kept_pass_timed(
 ) -> Result<Option<Timed<KeptPass>>, RenderError> {
     timed(scene, request, pool, |options| {
         render::render_pass_as(scene, options, pass, form, cancel, progress)
+    })
+}
+
+/// A pass of a progressive render ([`progressive_timed`]), timed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PassTime {
+    /// A pass at 1/`scale` of each side begins.
+    Started { scale: u32 },
+    /// That pass is done.
+    Finished {
+        scale: u32,
+        /// Rays traced in this pass, primary and reflected.
+        rays: u64,
+        /// This pass alone.
+        elapsed: Duration,
+        /// From the request to the end of this pass (every pass so far):
+        /// for the full-size pass, how long the full picture took.
+        since_start: Duration,
+        /// From the request to its first pass: resolving it and preparing
+        /// the scene (next to nothing when the last preparation served).
+        /// With `elapsed` of the full-size pass: render time.
+        prepare: Duration,
+    },
+}
+
+/// Renders `scene` as `request` asks coarse to fine in `passes`
+/// ([`render::render_progressive`], preparing through `last`) on `pool`,
+/// and times each pass: the app's render, measured as [`render_timed`]
+/// measures one. `step` hears each pass begin and end (on the thread that
+/// called this), `tile` gets each finished tile on a render thread.
+/// `Ok(None)` once `cancel` is set.
+// What a render reads and where its passes and tiles go, each one thing.
+#[allow(clippy::too_many_arguments)]
+pub fn progressive_timed(
+    scene: &Arc<Scene>,
+    request: &RenderRequest,
+    passes: &[u32],
+    last: &LastPrepared,
+    pool: &RenderPool,
+    cancel: &Cancel,
+    step: &mut (dyn FnMut(PassTime) + Send),
+    tile: &(dyn Fn(u32, &Tile, &[u8]) + Sync),
+) -> Result<Option<()>, RenderError> {
+    let start = Instant::now();
+    let options = RenderOptions {
+        // The pool is the caller's, built before the clock started.
+        threads: None,
+        ..request.options(scene)
+    };
+    let (mut prepare, mut pass_start) = (Duration::ZERO, start);
+    pool.install(|| {
+        render::render_progressive(
+            scene,
+            &options,
+            passes,
+            last,
+            cancel,
+            &mut |s| match s {
+                Step::Prepared => prepare = start.elapsed(),
+                Step::Started { scale } => {
+                    pass_start = Instant::now();
+                    step(PassTime::Started { scale });
+                }
+                Step::Finished { scale, rays } => step(PassTime::Finished {
+                    scale,
+                    rays,
+                    elapsed: pass_start.elapsed(),
+                    since_start: start.elapsed(),
+                    prepare,
+                }),
+            },
+            tile,
+        )
     })
 }
 

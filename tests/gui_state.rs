@@ -13,7 +13,7 @@ use rayoflight::gui::document::{Document, FileState, Reload, fingerprint_file};
 use rayoflight::gui::preview::{Preview, RenderState};
 use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
-use rayoflight::gui::worker::{Event, Worker};
+use rayoflight::gui::worker::{self, Event, Worker};
 use rayoflight::render::{self, RenderOptions};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
@@ -177,6 +177,154 @@ fn queued_requests_collapse_to_the_newest() {
         .collect();
     assert!(finished.len() < 5, "renders were queued: {finished:?}");
     assert_eq!(finished.last(), Some(&last));
+}
+
+#[test]
+fn tiles_wake_the_window_at_most_once_a_frame() {
+    // 1024×1024 in 32-pixel tiles: a thousand tiles a pass.
+    let s = Arc::new(mirrors(3, 1024, 1024));
+    let wakes = Arc::new(std::sync::atomic::AtomicUsize::new(0));
+    let counted = wakes.clone();
+    let worker = Worker::spawn(Worker::default_threads(), move || {
+        counted.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    });
+    let start = Instant::now();
+    let generation = worker.request_passes(s, Default::default(), vec![1]);
+    let (events, _) = until_finished(&worker, generation, Duration::from_secs(60));
+    let took = start.elapsed();
+    let tiles = events
+        .iter()
+        .filter(|e| matches!(e, Event::Tile { .. }))
+        .count();
+    let passes = events.len() - tiles;
+    let wakes = wakes.load(std::sync::atomic::Ordering::Relaxed);
+    // Each pass event wakes it; tiles at most once a frame.
+    let most = passes + (took.as_secs_f64() / worker::FRAME.as_secs_f64()).ceil() as usize + 1;
+    eprintln!("{tiles} tiles, {passes} pass events in {took:?}: {wakes} wake-ups (at most {most})");
+    assert!(tiles >= 1024, "{tiles}");
+    assert!(
+        wakes <= most,
+        "{wakes} wake-ups for {tiles} tiles in {took:?}"
+    );
+    assert!(wakes >= passes, "every pass event wakes the window");
+}
+
+#[test]
+fn a_render_while_dragging_is_the_same_render_on_fewer_threads() {
+    let s = parse(&scene_text(0.7, 300));
+    let worker = Worker::spawn(Worker::default_threads(), || {});
+    let generation = worker.request_while_dragging(Arc::new(s.clone()), Default::default(), 1);
+    let (events, _) = until_finished(&worker, generation, Duration::from_secs(30));
+    let mut preview = Preview::default();
+    for e in events {
+        assert!(preview.apply(generation, e));
+    }
+    assert_eq!(
+        preview.image(),
+        &render::render(&s, &RenderOptions::default()).unwrap()
+    );
+}
+
+#[test]
+fn passes_ids_and_exports_are_rendered_by_the_worker() {
+    let s = Arc::new(parse(&scene_text(0.4, 96)));
+    let worker = Worker::spawn(Worker::default_threads(), || {});
+    let generation = worker.request(s.clone(), RenderRequest::default());
+    until_finished(&worker, generation, Duration::from_secs(30));
+    let (tx, rx) = mpsc::channel();
+    // A pass: the library's, for the same request.
+    let never = render::Cancel::new(Arc::new(std::sync::atomic::AtomicU64::new(0)), 0);
+    let sent = tx.clone();
+    worker.render_pass(
+        s.clone(),
+        Default::default(),
+        render::Pass::Normal,
+        never.clone(),
+        move |image| {
+            let _ = sent.send(("pass", Some(image), None));
+        },
+    );
+    let (what, image, _) = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    assert_eq!(what, "pass");
+    let expected = render::render_pass(
+        &s,
+        &RenderOptions::default(),
+        render::Pass::Normal,
+        &render::Cancel::never(),
+        &Default::default(),
+    )
+    .unwrap()
+    .unwrap()
+    .0;
+    assert!(image.as_ref() == Some(&expected));
+    // The object ids, in the scene it prepared.
+    let sent = tx.clone();
+    worker.object_ids(s.clone(), 2, move |ids| {
+        let _ = sent.send(("ids", None, Some(ids)));
+    });
+    let (what, _, ids) = rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    assert_eq!(what, "ids");
+    let ids = ids.unwrap();
+    let expected = render::object_ids(
+        &render::prepare(&s, &RenderOptions::default()),
+        &s.camera,
+        2,
+    );
+    assert_eq!((ids.width, ids.height), (48, 48));
+    assert_eq!(ids.is_outline(24, 24, 0), expected.is_outline(24, 24, 0));
+    assert_eq!(
+        (0..48)
+            .flat_map(|y| (0..48).map(move |x| (x, y)))
+            .filter(|&(x, y)| ids.is_outline(x, y, 0))
+            .count(),
+        (0..48)
+            .flat_map(|y| (0..48).map(move |x| (x, y)))
+            .filter(|&(x, y)| expected.is_outline(x, y, 0))
+            .count(),
+    );
+    // A pass asked for before a newer render never comes: that render
+    // cancels it (or it is stale before it starts).
+    let heavy = Arc::new(mirrors(10_000, 1920, 1080));
+    let old = worker.request(heavy.clone(), RenderRequest::default());
+    let sent = tx.clone();
+    worker.render_pass(
+        heavy.clone(),
+        Default::default(),
+        render::Pass::Final,
+        never.clone(),
+        move |image| {
+            let _ = sent.send(("stale pass", Some(image), None));
+        },
+    );
+    let new = worker.request(s.clone(), RenderRequest::default());
+    assert!(new > old);
+    until_finished(&worker, new, Duration::from_secs(10));
+    // The export: the command line's image, beside the preview.
+    let (done_tx, done_rx) = mpsc::channel();
+    let progress = Arc::new(render::Progress::default());
+    worker.export(
+        worker::ExportJob {
+            scene: (*s).clone(),
+            request: Default::default(),
+            pass: None,
+            progress: progress.clone(),
+            cancel: never,
+        },
+        move |rendered| {
+            let _ = done_tx.send(rendered);
+        },
+    );
+    let exported = done_rx.recv_timeout(Duration::from_secs(30)).unwrap();
+    let Ok(Some(worker::Exported::Picture(picture))) = exported else {
+        panic!("no picture exported");
+    };
+    assert_eq!(
+        picture,
+        render::render(&s, &RenderOptions::default()).unwrap()
+    );
+    assert_eq!(progress.fraction(), 1.0);
+    std::thread::sleep(Duration::from_millis(200));
+    assert!(rx.try_recv().is_err(), "the stale pass was cancelled");
 }
 
 /// Waits for the next watcher event.

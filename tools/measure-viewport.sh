@@ -2,10 +2,14 @@
 # Measures the viewport the way the issue asks, on this machine: pictures
 # per second while orbiting (room.xml and a 4000x4000 scene), UI frames per
 # second during a 4000x4000 render, idle CPU, and the time from releasing
-# the mouse to the full picture. Drives the release build under Xvfb with
-# xdotool and reads the app's RAYOFLIGHT_STATS lines.
+# the mouse to the full picture; then the app's full picture against the
+# command line's -time on the same scene (the mirrors at 2880x2160), with
+# the UI's frames a second while it renders. Drives the release build under
+# Xvfb with xdotool and reads the app's RAYOFLIGHT_STATS lines.
 # Usage: tools/measure-viewport.sh [OUT_DIR [SCENE...]]   (needs xvfb, xdotool)
-# With scenes, measures those instead (a million spheres, say).
+#        tools/measure-viewport.sh OUT_DIR --render [SCENE...]
+# With scenes, measures those instead (a million spheres, say); with
+# --render, only the app against the command line, on those scenes.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 out=${1:-/tmp/measure-viewport}
@@ -79,11 +83,66 @@ run() {
   wait $app 2>/dev/null || true
 }
 
-if (( $# > 1 )); then
+# The mirrors of the bench at 2880x2160 (four times its pixels).
+mirrors="$out/mirrors-2880.xml"
+sed 's/width="1440" height="1080"/width="2880" height="2160"/' scenes/bench/mirrors.xml > "$mirrors"
+
+median() { sort -n | awk '{v[NR] = $1} END {if (NR) print v[int((NR + 1) / 2)]}'; }
+
+# compare SCENE NAME: the app's first full picture, then five rounds of the
+# command line's -time and the app's picture asked again with F5 (render
+# again), one after the other so that both see the same load: the app from
+# its request to the full picture (every pass), with the frames the window
+# drew meanwhile. Medians of the five.
+compare() {
+  local scene=$1 name=$2 log="$out/$2.render.log"
+  RAYOFLIGHT_STATS=1 "$bin" "$scene" 2>"$log" &
+  local app=$!
+  local start=$SECONDS
+  until grep -q "full picture" "$log"; do
+    sleep 0.5
+    if (( SECONDS - start > 300 )); then echo "$name: no full picture in 300 s"; break; fi
+  done
+  local win
+  win=$(xdotool search --name RayOfLight | head -n 1)
+  xdotool windowfocus --sync "$win"
+  xdotool mousemove 1200 860
+  sleep 2
+  local cli=()
+  for k in 1 2 3 4 5; do
+    cli+=("$("$bin" -time "$scene" 2>&1 | sed -n 's/^render: \([0-9]*\) ns.*/\1/p')")
+    local seen
+    seen=$(grep -c "full picture" "$log")
+    xdotool key F5
+    until (( $(grep -c "full picture" "$log") > seen )); do sleep 0.2; done
+    sleep 1
+  done
+  kill $app
+  wait $app 2>/dev/null || true
+  local lines ms fps cli_ms
+  lines=$(grep "full picture" "$log" | tail -n 5)
+  cli_ms=$(printf '%s\n' "${cli[@]}" | median | awk '{printf "%.1f", $1 / 1e6}')
+  ms=$(sed -n 's/.*full picture \([0-9.]*\) ms.*/\1/p' <<<"$lines" | median)
+  fps=$(sed -n 's/.*(\([0-9.]*\) frames\/s).*/\1/p' <<<"$lines" | median)
+  echo "== $name: command line -time $cli_ms ms; app full picture $ms ms (request to full picture, every pass); medians of 5"
+  echo "   ratio app/cli: $(awk -v a="$ms" -v c="$cli_ms" 'BEGIN {printf "%.2f", a / c}'); UI frames/s while the app rendered: median $fps"
+  echo "   command line ns: ${cli[*]}"
+  echo "$lines"
+  echo "   load average: $(cut -d' ' -f1-3 /proc/loadavg)"
+}
+
+if [[ ${2:-} == --render ]]; then
+  if (( $# > 2 )); then
+    for scene in "${@:3}"; do compare "$scene" "$(basename "$scene" .xml)"; done
+  else
+    compare "$mirrors" mirrors-2880
+  fi
+elif (( $# > 1 )); then
   for scene in "${@:2}"; do
     run "$scene" "$(basename "$scene" .xml)"
   done
 else
   run scenes/bench/room.xml room
   run "$big" big-4000
+  compare "$mirrors" mirrors-2880
 fi

@@ -81,7 +81,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     ))?;
 
     out(
-        "\nScenes (same image, same thread count as POV-Ray's +WT; app: the app's render worker, no window)\n",
+        "\nScenes (same image, same thread count as POV-Ray's +WT; app: the app's render worker, coarse to fine, request to full picture, no window)\n",
     )?;
     out(&format!(
         "{:<14} {:>10} {:>10} {:>9} {:>11} {:>7} {:>9} {:>4} {:>10}\n",
@@ -663,34 +663,34 @@ fn time_render(
 }
 
 /// The app's render time for `scene` with `threads` render threads,
-/// median of `runs`: the render worker's path (one full-size pass, as the
-/// preview of a small picture or an export), without a window, from the
-/// request to the pass done. A new worker each run: the first render of a
-/// scene prepares it, as the command line does.
+/// median of `runs`: the render worker's own path, as the window asks for
+/// a picture (coarse to fine, [`rayoflight::render::passes`]), without a
+/// window, from the request to the full picture (every pass, as the user
+/// waits for it). A new worker each run: the first render of a scene
+/// prepares it, as the command line does.
 #[cfg(feature = "gui")]
 fn app_time(scene: &Scene, threads: usize, runs: usize) -> Result<Option<Duration>, String> {
-    use rayoflight::gui::worker::{Event, Worker};
+    use rayoflight::gui::worker::{self, Event, Worker};
     let scene = std::sync::Arc::new(scene.clone());
+    let passes = worker::passes(scene.camera.width, scene.camera.height);
     median_of(runs, || {
         let worker = Worker::spawn(threads, || {});
         let deadline = Instant::now() + Duration::from_secs(600);
-        let generation = worker.request_passes(scene.clone(), RenderRequest::default(), vec![1]);
-        // Events are taken as the window takes them, once a frame (60 a
-        // second), not as each tile lands: a reader woken by every tile
-        // would take a core's share from the render on a small machine.
+        let generation =
+            worker.request_passes(scene.clone(), RenderRequest::default(), passes.clone());
+        // Events are taken as the window takes them, once a frame, not as
+        // each tile lands: a reader woken by every tile would take a
+        // core's share from the render on a small machine.
         while Instant::now() < deadline {
-            std::thread::sleep(Duration::from_millis(16));
+            std::thread::sleep(worker::FRAME);
             while let Some(event) = worker.next_event(Duration::ZERO) {
                 match event {
                     Event::PassFinished {
                         generation: g,
-                        prepare,
-                        elapsed,
+                        scale: 1,
+                        since_start,
                         ..
-                    } if g == generation => {
-                        // The render time the app's status bar shows.
-                        return Ok(prepare + elapsed);
-                    }
+                    } if g == generation => return Ok(since_start),
                     Event::Failed { message, .. } => return Err(message),
                     _ => {}
                 }

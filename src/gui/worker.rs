@@ -1,24 +1,45 @@
-//! The render worker: one background thread that owns all rendering for the
-//! app, so the UI thread never traces a ray.
+//! The render worker: the owner of all rendering for the app — a
+//! background thread and its queue, and a thread for each export, all on
+//! its pools — so that the UI thread never traces a ray or prepares a
+//! scene.
 //!
 //! Every request gets a generation number. A newer request cancels the older
 //! one within a pixel (the [`Cancel`] token is checked before every pixel),
 //! and requests that queued up while a render ran are skipped for the
 //! newest, so dragging a slider never stacks renders behind each other.
-//! Each request is rendered coarse to fine (1/8, 1/4, then full
-//! resolution for large images) and every finished tile is sent to the UI
-//! at once, with a wake-up call so it repaints. The request is resolved
-//! here (`auto` looks at every object) and the scene prepared once for all
-//! its passes; the next request reuses that prepared scene when only the
-//! camera or the anti-aliasing changed, and the app picks objects in it
-//! ([`Worker::prepared`]).
+//! Each request is the core's progressive render
+//! ([`measure::progressive_timed`]: resolved here, as `auto` looks at every
+//! object, prepared once, traced coarse to fine — 1/8, 1/4, then full
+//! resolution for large images — and timed as the command line's render
+//! is); every finished tile is sent to the UI at once, with a wake-up call
+//! at most once a [`FRAME`] so that the window draws only as often as it
+//! can show something new. The next request reuses the prepared scene when
+//! only the camera or the anti-aliasing changed, and the app picks objects
+//! in it ([`Worker::prepared`]).
+//!
+//! A render uses every core ([`Worker::default_threads`]); one asked for
+//! while the user drags ([`Worker::request_while_dragging`]) runs on a pool
+//! of one thread fewer, so that the window keeps a core for the gesture.
 //!
 //! The worker also runs the study of the current scene ([`Worker::study`]):
 //! it is a request like a render, with a generation, cancelled the same way
 //! (by a newer request or [`Worker::cancel`]), reporting each row as it is
 //! measured.
+//!
+//! The app's other renders go through it too, each handing its result to
+//! a callback: the pass shown in place of the picture
+//! ([`Worker::render_pass`]) and the object ids behind the selection's
+//! outline ([`Worker::object_ids`]) are jobs of its queue, done after the
+//! newest render (a newer one of each kind replacing one not yet begun; a
+//! pass is cancelled too by any newer render); an export
+//! ([`Worker::export`]) runs beside the preview on a thread of its own, on
+//! the worker's pool.
 
-use crate::render::{self, Cancel, Prepared, RenderOptions, Tile};
+use crate::measure::{self, PassTime};
+use crate::render::{
+    self, Cancel, LastPrepared, ObjectIds, Pass, PassImage, Prepared, Progress, RenderError,
+    RenderOptions, RenderPool, Tile,
+};
 use crate::request::RenderRequest;
 use crate::scene::Scene;
 use crate::study::{self, Row, StudyError, StudyScene, chart};
@@ -29,8 +50,14 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-/// Below this many pixels the image is rendered in one full-resolution pass.
-const SINGLE_PASS_PIXELS: u64 = 256 * 256;
+/// The shortest time between two wake-up calls for tiles: the window needs
+/// a frame only when tiles arrive, and about 30 a second show a render
+/// coming in as well as more would, for far less of the cores it shares.
+pub const FRAME: Duration = Duration::from_millis(33);
+
+/// The passes of a render of a `width` × `height` image (the core's
+/// [`render::passes`]).
+pub use crate::render::passes;
 
 /// What the worker reports, tagged with the request's generation.
 #[derive(Debug)]
@@ -107,49 +134,123 @@ enum Message {
         request: RenderRequest,
         /// The passes, coarsest first, as 1/scale of each side.
         passes: Vec<u32>,
+        /// Asked for while the user drags: on the smaller pool.
+        dragging: bool,
     },
     Study {
         generation: u64,
         scene: Box<StudyScene>,
         runs: usize,
     },
+    Pass {
+        scene: Arc<Scene>,
+        request: RenderRequest,
+        pass: Pass,
+        /// The caller's token, also cancelled by a newer render.
+        cancel: Cancel,
+        done: Box<dyn FnOnce(PassImage) + Send>,
+    },
+    Ids {
+        scene: Arc<Scene>,
+        scale: u32,
+        done: Box<dyn FnOnce(ObjectIds) + Send>,
+    },
     Quit,
 }
 
-/// The scene the worker prepared last, the options it was prepared with,
-/// and the prepared scene. The next request reuses it when only the camera
-/// or the anti-aliasing changed (orbiting a million spheres prepares them
-/// once), and the app picks objects in it rather than preparing again.
-type Latest = Arc<Mutex<Option<(Arc<Scene>, RenderOptions, Prepared)>>>;
+/// The messages waiting: the newest render or study, object ids and
+/// pass (each replacing an older one of its kind), and whether to quit.
+#[derive(Default)]
+struct Pending {
+    render: Option<Message>,
+    ids: Option<Message>,
+    pass: Option<Message>,
+    quit: bool,
+}
+
+impl Pending {
+    fn add(&mut self, message: Message) {
+        match message {
+            Message::Quit => self.quit = true,
+            Message::Render { .. } | Message::Study { .. } => self.render = Some(message),
+            Message::Ids { .. } => self.ids = Some(message),
+            Message::Pass { .. } => self.pass = Some(message),
+        }
+    }
+
+    fn is_empty(&self) -> bool {
+        !self.quit && self.render.is_none() && self.ids.is_none() && self.pass.is_none()
+    }
+
+    /// What to do next: quit, else the render, the ids, the pass.
+    fn next(&mut self) -> Option<Message> {
+        if self.quit {
+            return Some(Message::Quit);
+        }
+        self.render
+            .take()
+            .or_else(|| self.ids.take())
+            .or_else(|| self.pass.take())
+    }
+}
+
+/// What an export asks the worker to render.
+pub struct ExportJob {
+    pub scene: Scene,
+    /// Resolved on the export's thread (`auto` looks at every object).
+    pub request: RenderRequest,
+    /// The pass shown, when the file takes it ([`crate::output::takes_pass`]);
+    /// `None`: the picture.
+    pub pass: Option<Pass>,
+    pub progress: Arc<Progress>,
+    pub cancel: Cancel,
+}
+
+/// What an export rendered.
+pub enum Exported {
+    Picture(RgbImage),
+    Pass(PassImage),
+}
 
 /// Handle to the worker thread. Dropping it stops the worker promptly.
 pub struct Worker {
     newest: Arc<AtomicU64>,
-    latest: Latest,
+    latest: Arc<LastPrepared>,
+    /// The render threads, shared with exports.
+    pool: Arc<RenderPool>,
     to_worker: Sender<Message>,
     events: Receiver<Event>,
     thread: Option<JoinHandle<()>>,
 }
 
 impl Worker {
-    /// Starts the worker with `threads` render threads; `wake` is called
-    /// whenever an event is ready (the app passes `request_repaint`).
+    /// Starts the worker with `threads` render threads (one fewer while
+    /// the user drags); `wake` is called when an event is ready, for tiles
+    /// at most once a [`FRAME`] (the app passes `request_repaint`).
     pub fn spawn(threads: usize, wake: impl Fn() + Send + Sync + 'static) -> Worker {
         let newest = Arc::new(AtomicU64::new(0));
-        let latest = Latest::default();
+        let latest = Arc::new(LastPrepared::default());
+        let threads = threads.max(1);
+        // A pool that cannot start renders on the global one.
+        let pool = Arc::new(
+            RenderPool::named(threads, "render").unwrap_or_else(|_| RenderPool::current()),
+        );
         let (to_worker, inbox) = mpsc::channel();
         let (events_tx, events) = mpsc::channel();
         let state = WorkerThread {
             newest: newest.clone(),
             latest: latest.clone(),
             inbox,
-            events: events_tx,
-            wake: Arc::new(wake),
-            pool: rayon::ThreadPoolBuilder::new()
-                .num_threads(threads.max(1))
-                .thread_name(|i| format!("render-{i}"))
-                .build()
-                .ok(),
+            outbox: Outbox {
+                events: events_tx,
+                wake: Arc::new(wake),
+                born: Instant::now(),
+                woken: AtomicU64::new(0),
+            },
+            pool: Arc::clone(&pool),
+            dragging_pool: (threads > 1)
+                .then(|| RenderPool::named(threads - 1, "render-drag").ok())
+                .flatten(),
         };
         let thread = std::thread::Builder::new()
             .name("render-worker".into())
@@ -158,19 +259,19 @@ impl Worker {
         Worker {
             newest,
             latest,
+            pool,
             to_worker,
             events,
             thread,
         }
     }
 
-    /// The default thread count for the app: one fewer than the cores, at
-    /// least one, so the UI thread keeps a core.
+    /// The default thread count for the app: every core, as the command
+    /// line uses. The window draws a frame only when something changed
+    /// (tiles at most once a [`FRAME`]), and a render asked for while the
+    /// user drags leaves it a core ([`Worker::request_while_dragging`]).
     pub fn default_threads() -> usize {
-        std::thread::available_parallelism()
-            .map(|n| n.get().saturating_sub(1))
-            .unwrap_or(1)
-            .max(1)
+        render::all_cores()
     }
 
     /// Asks for a render, coarse to fine ([`passes`]); cancels any older
@@ -190,12 +291,36 @@ impl Worker {
         request: RenderRequest,
         passes: Vec<u32>,
     ) -> u64 {
+        self.send_render(scene, request, passes, false)
+    }
+
+    /// Asks for one pass at 1/`scale` of each side, for while the user
+    /// drags: on one thread fewer than the others, so that the window
+    /// keeps a core for the gesture. Cancels any older request; returns
+    /// its generation.
+    pub fn request_while_dragging(
+        &self,
+        scene: Arc<Scene>,
+        request: RenderRequest,
+        scale: u32,
+    ) -> u64 {
+        self.send_render(scene, request, vec![scale], true)
+    }
+
+    fn send_render(
+        &self,
+        scene: Arc<Scene>,
+        request: RenderRequest,
+        passes: Vec<u32>,
+        dragging: bool,
+    ) -> u64 {
         let generation = self.newest.fetch_add(1, Ordering::Relaxed) + 1;
         let _ = self.to_worker.send(Message::Render {
             generation,
             scene,
             request,
             passes,
+            dragging,
         });
         generation
     }
@@ -212,20 +337,83 @@ impl Worker {
         generation
     }
 
+    /// Asks for `pass` of `scene` (a full-size render of it), after the
+    /// newest render; `done` gets it unless `cancel` or a newer render
+    /// request stopped it first (a failed render gives nothing either: the
+    /// picture's render says why).
+    pub fn render_pass(
+        &self,
+        scene: Arc<Scene>,
+        request: RenderRequest,
+        pass: Pass,
+        cancel: Cancel,
+        done: impl FnOnce(PassImage) + Send + 'static,
+    ) {
+        let cancel = cancel.or_when(self.newest.clone(), self.newest());
+        let _ = self.to_worker.send(Message::Pass {
+            scene,
+            request,
+            pass,
+            cancel,
+            done: Box::new(done),
+        });
+    }
+
+    /// Asks for the object seen at each pixel of `scene`'s image at
+    /// 1/`scale` of each side ([`render::object_ids`]), after the newest
+    /// render, in the scene it prepared when it is this one.
+    pub fn object_ids(
+        &self,
+        scene: Arc<Scene>,
+        scale: u32,
+        done: impl FnOnce(ObjectIds) + Send + 'static,
+    ) {
+        let _ = self.to_worker.send(Message::Ids {
+            scene,
+            scale,
+            done: Box::new(done),
+        });
+    }
+
+    /// Renders `job` at full size on a thread of its own, beside the
+    /// preview, on the worker's threads, counting in its progress and
+    /// stopping with its token; `done` gets the image (`Ok(None)`:
+    /// cancelled) on that thread.
+    pub fn export(
+        &self,
+        job: ExportJob,
+        done: impl FnOnce(Result<Option<Exported>, RenderError>) + Send + 'static,
+    ) {
+        type Done = Box<dyn FnOnce(Result<Option<Exported>, RenderError>) + Send>;
+        // `done` is called once: on the thread, or here if none starts.
+        let slot: Arc<Mutex<Option<Done>>> = Arc::new(Mutex::new(Some(Box::new(done))));
+        let take = |slot: &Mutex<Option<Done>>| slot.lock().ok().and_then(|mut d| d.take());
+        let (pool, theirs) = (Arc::clone(&self.pool), Arc::clone(&slot));
+        let spawned = std::thread::Builder::new()
+            .name("export".into())
+            .spawn(move || {
+                if let Some(done) = take(&theirs) {
+                    done(export(&job, &pool));
+                }
+            });
+        if let Err(e) = spawned
+            && let Some(done) = take(&slot)
+        {
+            done(Err(RenderError::Thread(e)));
+        }
+    }
+
     /// Cancels whatever is rendering, without starting anything new.
     pub fn cancel(&self) {
         self.newest.fetch_add(1, Ordering::Relaxed);
     }
 
-    /// `scene` prepared (with the preview's method), if the worker last
-    /// prepared it or the same scene seen from another camera: the app
-    /// picks objects in it, as preparing a million objects takes a second.
+    /// `scene` prepared (with the preview's method, seen as its full-size
+    /// pass is), if the worker last prepared it or the same scene seen from
+    /// another camera: the app picks and explains in it, as preparing a
+    /// million objects takes a second.
     pub fn prepared(&self, scene: &Scene) -> Option<Prepared> {
-        let latest = self.latest.lock().ok()?;
-        let (prepared_scene, _, prepared) = latest.as_ref()?;
-        prepared_scene
-            .same_but_camera(scene)
-            .then(|| prepared.with_view(&scene.camera, 1))
+        self.latest.seen_from(scene)
     }
 
     /// The newest generation requested.
@@ -258,150 +446,202 @@ impl Drop for Worker {
 
 struct WorkerThread {
     newest: Arc<AtomicU64>,
-    latest: Latest,
+    latest: Arc<LastPrepared>,
     inbox: Receiver<Message>,
+    outbox: Outbox,
+    pool: Arc<RenderPool>,
+    /// One thread fewer, for renders asked for while the user drags (none
+    /// with a single thread).
+    dragging_pool: Option<RenderPool>,
+}
+
+/// Where events go, and the wake-up calls (used from the render threads).
+struct Outbox {
     events: Sender<Event>,
     wake: Arc<dyn Fn() + Send + Sync>,
-    pool: Option<rayon::ThreadPool>,
+    /// When the worker started, and the last wake-up call, in
+    /// milliseconds since then.
+    born: Instant,
+    woken: AtomicU64,
 }
 
 impl WorkerThread {
     fn run(self) {
-        while let Ok(mut message) = self.inbox.recv() {
-            // Requests that queued up meanwhile: only the newest counts.
-            while let Ok(newer) = self.inbox.try_recv() {
-                message = newer;
+        let mut pending = Pending::default();
+        loop {
+            if pending.is_empty() {
+                match self.inbox.recv() {
+                    Ok(message) => pending.add(message),
+                    Err(_) => return,
+                }
             }
-            match message {
-                Message::Quit => return,
-                Message::Render {
-                    generation,
-                    scene,
-                    request,
-                    passes,
-                } => {
-                    let cancel = Cancel::new(self.newest.clone(), generation);
-                    if !cancel.is_cancelled() {
-                        // Render time starts with the request resolved, as
-                        // crate::measure defines it.
-                        let start = Instant::now();
-                        let options = request.options(&scene);
-                        self.render(generation, &scene, &options, &passes, &cancel, start);
-                    }
+            // Requests that queued up meanwhile: the newest of each kind.
+            while let Ok(newer) = self.inbox.try_recv() {
+                pending.add(newer);
+            }
+            match pending.next() {
+                None => {}
+                Some(Message::Quit) => return,
+                Some(message) => self.handle(message),
+            }
+        }
+    }
+
+    fn handle(&self, message: Message) {
+        match message {
+            Message::Quit => {}
+            Message::Render {
+                generation,
+                scene,
+                request,
+                passes,
+                dragging,
+            } => {
+                let cancel = Cancel::new(self.newest.clone(), generation);
+                if !cancel.is_cancelled() {
+                    let pool = match &self.dragging_pool {
+                        Some(pool) if dragging => pool,
+                        _ => &*self.pool,
+                    };
+                    self.render(generation, &scene, &request, &passes, pool, &cancel);
                 }
-                Message::Study {
-                    generation,
-                    scene,
-                    runs,
-                } => {
-                    let cancel = Cancel::new(self.newest.clone(), generation);
-                    if !cancel.is_cancelled() {
-                        self.study(generation, &scene, runs, &cancel);
-                    }
+            }
+            Message::Study {
+                generation,
+                scene,
+                runs,
+            } => {
+                let cancel = Cancel::new(self.newest.clone(), generation);
+                if !cancel.is_cancelled() {
+                    self.study(generation, &scene, runs, &cancel);
                 }
+            }
+            Message::Pass {
+                scene,
+                request,
+                pass,
+                cancel,
+                done,
+            } => {
+                if cancel.is_cancelled() {
+                    return;
+                }
+                let options = RenderOptions {
+                    threads: None,
+                    ..request.options(&scene)
+                };
+                let rendered = self.pool.install(|| {
+                    render::render_pass(&scene, &options, pass, &cancel, &Progress::default())
+                });
+                if let Ok(Some((image, _))) = rendered {
+                    done(image);
+                }
+            }
+            Message::Ids { scene, scale, done } => {
+                let prepared = self
+                    .latest
+                    .seen_from(&scene)
+                    .unwrap_or_else(|| render::prepare(&scene, &RenderOptions::default()));
+                done(
+                    self.pool
+                        .install(|| render::object_ids(&prepared, &scene.camera, scale)),
+                );
             }
         }
     }
 
     fn send(&self, event: Event) {
-        let _ = self.events.send(event);
-        (self.wake)();
+        self.outbox.send(event);
     }
 
+    /// Renders `request` progressively on `pool`, sending each pass's
+    /// start, tiles and end (or why it could not run).
     fn render(
         &self,
         generation: u64,
         scene: &Arc<Scene>,
-        options: &RenderOptions,
+        request: &RenderRequest,
         passes: &[u32],
+        pool: &RenderPool,
         cancel: &Cancel,
-        render_start: Instant,
     ) {
-        if let Err(e) = options.validate() {
-            self.send(Event::Failed {
-                generation,
-                message: e.to_string(),
-            });
-            return;
-        }
         let (width, height) = (scene.camera.width, scene.camera.height);
-        // The scene is prepared once (or was, for the last request, if only
-        // the camera or the anti-aliasing changed); each pass is a view.
-        let reused = self.latest.lock().ok().and_then(|latest| {
-            let (last, last_options, prepared) = latest.as_ref()?;
-            let same_options = RenderOptions {
-                aa: options.aa,
-                ..last_options.clone()
-            } == *options;
-            (same_options && last.same_but_camera(scene)).then(|| prepared.clone())
-        });
-        let prepared = reused.unwrap_or_else(|| {
-            // The last one goes first: both may be large.
-            if let Ok(mut latest) = self.latest.lock() {
-                *latest = None;
-            }
-            let prepared = render::prepare(scene, options);
-            if let Ok(mut latest) = self.latest.lock() {
-                *latest = Some((Arc::clone(scene), options.clone(), prepared.clone()));
-            }
-            prepared
-        });
-        let prepare = render_start.elapsed();
-        for &scale in passes {
-            let scale = scale.max(1);
-            if cancel.is_cancelled() {
-                return;
-            }
-            self.send(Event::PassStarted {
-                generation,
-                scale,
-                width,
-                height,
-            });
-            let start = Instant::now();
-            let mut camera = scene.camera.clone();
-            camera.width = width.div_ceil(scale);
-            camera.height = height.div_ceil(scale);
-            // Coarse passes are previews: one ray per pixel.
-            let aa = if scale == 1 { options.aa } else { 1 };
-            let prepared = prepared.with_view(&camera, aa);
-            // Tiles are sent from the render threads as they finish.
-            let (events, wake) = (&self.events, &self.wake);
-            let send_tile = |tile: &Tile, pixels: &[u8]| {
-                let _ = events.send(Event::Tile {
+        let outbox = &self.outbox;
+        let done = measure::progressive_timed(
+            scene,
+            request,
+            passes,
+            &self.latest,
+            pool,
+            cancel,
+            &mut |step| {
+                outbox.send(match step {
+                    PassTime::Started { scale } => Event::PassStarted {
+                        generation,
+                        scale,
+                        width,
+                        height,
+                    },
+                    PassTime::Finished {
+                        scale,
+                        rays,
+                        elapsed,
+                        since_start,
+                        prepare,
+                    } => Event::PassFinished {
+                        generation,
+                        scale,
+                        elapsed,
+                        since_start,
+                        prepare,
+                        rays,
+                    },
+                })
+            },
+            &|scale, tile: &Tile, pixels: &[u8]| {
+                outbox.send_tile(Event::Tile {
                     generation,
                     scale,
                     tile: *tile,
                     pixels: pixels.to_vec(),
-                });
-                wake();
-            };
-            let progress = render::Progress::default();
-            let trace = || {
-                render::trace_tiles(
-                    &prepared,
-                    prepared.frame(),
-                    cancel,
-                    &progress,
-                    None,
-                    send_tile,
-                )
-            };
-            let traced = match &self.pool {
-                Some(pool) => pool.install(trace),
-                None => trace(),
-            };
-            let Some(rays) = traced else {
-                return;
-            };
-            self.send(Event::PassFinished {
+                })
+            },
+        );
+        if let Err(e) = done {
+            self.send(Event::Failed {
                 generation,
-                scale,
-                elapsed: start.elapsed(),
-                since_start: render_start.elapsed(),
-                prepare,
-                rays,
+                message: e.to_string(),
             });
+        }
+    }
+}
+
+impl Outbox {
+    fn send(&self, event: Event) {
+        let _ = self.events.send(event);
+        self.woken.store(self.since_born(), Ordering::Relaxed);
+        (self.wake)();
+    }
+
+    fn since_born(&self) -> u64 {
+        u64::try_from(self.born.elapsed().as_millis()).unwrap_or(u64::MAX)
+    }
+
+    /// Sends a tile (from a render thread), waking the UI if it was not
+    /// woken in the last [`FRAME`]: the tiles between wake-ups are drawn
+    /// by the next frame.
+    fn send_tile(&self, event: Event) {
+        let _ = self.events.send(event);
+        let now = self.since_born();
+        let last = self.woken.load(Ordering::Relaxed);
+        let frame = u64::try_from(FRAME.as_millis()).unwrap_or(u64::MAX);
+        if now.saturating_sub(last) >= frame
+            && self
+                .woken
+                .compare_exchange(last, now, Ordering::Relaxed, Ordering::Relaxed)
+                .is_ok()
+        {
+            (self.wake)();
         }
     }
 }
@@ -416,7 +656,7 @@ impl WorkerThread {
         });
         let start = Instant::now();
         let scenes = std::slice::from_ref(scene);
-        let (events, wake) = (&self.events, &self.wake);
+        let outbox = &self.outbox;
         let run = || {
             study::run(
                 scenes,
@@ -425,19 +665,15 @@ impl WorkerThread {
                 None,
                 cancel,
                 &mut |row, image, reference| {
-                    let _ = events.send(Event::StudyRow {
+                    outbox.send(Event::StudyRow {
                         generation,
                         row: row.clone(),
                         failure: row.failed.then(|| chart::side_by_side(image, reference)),
                     });
-                    wake();
                 },
             )
         };
-        let result = match &self.pool {
-            Some(pool) => pool.install(run),
-            None => run(),
-        };
+        let result = self.pool.install(run);
         match result {
             Ok(_) => self.send(Event::StudyFinished {
                 generation,
@@ -455,15 +691,16 @@ impl WorkerThread {
     }
 }
 
-/// The passes for an image: full resolution only when small, otherwise
-/// 1/8, 1/4 and full. Both previews are coarse enough to be shown at their
-/// own size ([`COARSE`](super::preview::COARSE)): a 1/2 pass painted at
-/// full size uploaded four screen pixels per pixel traced and held a
-/// 4000×4000 render's UI to 20 frames a second while it ran.
-pub fn passes(width: u32, height: u32) -> Vec<u32> {
-    if u64::from(width) * u64::from(height) <= SINGLE_PASS_PIXELS {
-        vec![1]
-    } else {
-        vec![8, 4, 1]
-    }
+/// Renders an export's picture or pass on `pool`.
+fn export(job: &ExportJob, pool: &RenderPool) -> Result<Option<Exported>, RenderError> {
+    let options = RenderOptions {
+        threads: None,
+        ..job.request.options(&job.scene)
+    };
+    pool.install(|| match job.pass {
+        Some(pass) => render::render_pass(&job.scene, &options, pass, &job.cancel, &job.progress)
+            .map(|done| done.map(|(image, _)| Exported::Pass(image))),
+        None => render::render_watched(&job.scene, &options, &job.cancel, &job.progress)
+            .map(|done| done.map(|(image, _)| Exported::Picture(image))),
+    })
 }

@@ -14,6 +14,9 @@
 //! pan, dolly); [`object_ids`] says which object each pixel shows.
 //! [`methods`] are the named ways to render (`auto`, `f32`, `aa4`, …) that
 //! `--method`, the app's preview and the study choose among.
+//! [`RenderPool`] is the one kind of thread pool renders run on, and
+//! [`render_progressive`] the app's render: prepared once, traced coarse
+//! to fine (1/8, 1/4, full) through the same tile loop.
 
 mod auto;
 mod camera;
@@ -23,8 +26,10 @@ mod method;
 pub mod navigate;
 mod observer;
 mod pass;
+mod pool;
 mod prepared;
 mod progress;
+mod progressive;
 mod tile;
 
 pub use auto::{Decision, Plan, auto};
@@ -36,8 +41,10 @@ pub use pass::{
     KeptPass, Pass, PassForm, PassImage, PassPixels, Texel, f32_keeping_level, in_exr, in_f32,
     object_color, render_pass, render_pass_as, shown,
 };
+pub use pool::{RenderPool, all_cores};
 pub use prepared::{Hit, Prepared, prepare};
 pub use progress::{Progress, time_left};
+pub use progressive::{LastPrepared, Step, passes, render_progressive};
 pub use tile::{Cancel, TILE_SIZE, Tile};
 
 use crate::geometry::{Ray, Real, Vector};
@@ -194,6 +201,8 @@ pub enum RenderError {
         what: String,
         source: crate::resources::NotEnoughMemory,
     },
+    #[error("cannot start a thread to render on: {0}")]
+    Thread(std::io::Error),
     #[error("cannot start {threads} render threads: {source}")]
     ThreadPool {
         threads: usize,
@@ -271,23 +280,14 @@ pub fn render_watched(
     })?
 }
 
-/// Checks `options` and runs `work` in their thread pool (rayon's global
+/// Checks `options` and runs `work` in their thread pool (the current
 /// one when they name no thread count).
 fn in_pool<R: Send>(
     options: &RenderOptions,
     work: impl FnOnce() -> R + Send,
 ) -> Result<R, RenderError> {
     options.validate()?;
-    match options.threads {
-        None => Ok(work()),
-        Some(threads) => {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .map_err(|source| RenderError::ThreadPool { threads, source })?;
-            Ok(pool.install(work))
-        }
-    }
+    Ok(RenderPool::new(options.threads)?.install(work))
 }
 
 /// Renders `region` of the scene's image: an image of the region's size.

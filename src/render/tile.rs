@@ -21,6 +21,9 @@ pub struct Tile {
 pub struct Cancel {
     newest: Option<Arc<AtomicU64>>,
     generation: u64,
+    /// Cancelled too when this counter moves off its value
+    /// ([`Cancel::or_when`]).
+    also: Option<(Arc<AtomicU64>, u64)>,
     /// Cancelled too by a signal ([`crate::interrupt::requested`]).
     on_signal: bool,
 }
@@ -31,6 +34,7 @@ impl Cancel {
         Cancel {
             newest: None,
             generation: 0,
+            also: None,
             on_signal: false,
         }
     }
@@ -51,7 +55,18 @@ impl Cancel {
         Cancel {
             newest: Some(newest),
             generation,
+            also: None,
             on_signal: false,
+        }
+    }
+
+    /// This token, cancelled too as soon as `newest` holds another value
+    /// than `generation` (a job of one queue that a newer request of
+    /// another supersedes).
+    pub fn or_when(self, newest: Arc<AtomicU64>, generation: u64) -> Cancel {
+        Cancel {
+            also: Some((newest, generation)),
+            ..self
         }
     }
 
@@ -59,6 +74,10 @@ impl Cancel {
         self.newest
             .as_ref()
             .is_some_and(|n| n.load(Ordering::Relaxed) != self.generation)
+            || self
+                .also
+                .as_ref()
+                .is_some_and(|(n, g)| n.load(Ordering::Relaxed) != *g)
             || (self.on_signal && crate::interrupt::requested())
     }
 }
@@ -75,5 +94,13 @@ mod tests {
         newest.store(4, Ordering::Relaxed);
         assert!(token.is_cancelled());
         assert!(!Cancel::never().is_cancelled());
+        let other = Arc::new(AtomicU64::new(7));
+        let both = Cancel::new(newest.clone(), 4).or_when(other.clone(), 7);
+        assert!(!both.is_cancelled());
+        other.store(8, Ordering::Relaxed);
+        assert!(both.is_cancelled(), "by the other counter");
+        let both = Cancel::new(newest.clone(), 4).or_when(other, 8);
+        newest.store(5, Ordering::Relaxed);
+        assert!(both.is_cancelled(), "by its own");
     }
 }

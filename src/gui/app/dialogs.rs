@@ -223,8 +223,8 @@ impl RayOfLightApp {
         }
     }
 
-    /// Renders at full resolution with the chosen anti-aliasing on a
-    /// background thread and writes the file atomically; the status bar
+    /// Renders at full resolution with the chosen anti-aliasing (by the
+    /// worker, beside the preview) and writes the file atomically; the status bar
     /// shows its progress and can cancel it. The pass shown (View › Pass)
     /// is what is exported; an EXR holds its floats, unclamped.
     pub(super) fn export(&mut self, path: PathBuf) {
@@ -245,33 +245,38 @@ impl RayOfLightApp {
         }
         // Exports are exact whatever the preview uses: auto's options, at
         // the chosen anti-aliasing.
-        let options = crate::request::RenderRequest {
+        let request = crate::request::RenderRequest {
             method: None,
             aa: Some(self.aa),
-            threads: Some(Worker::default_threads()),
+            threads: None,
             region: None,
-        }
-        .options(&scene);
+        };
         let export = Export {
             path: path.clone(),
             progress: Arc::new(render::Progress::default()),
             stop: Arc::new(AtomicU64::new(0)),
             started: Instant::now(),
         };
-        let progress = export.progress.clone();
-        let cancel = render::Cancel::new(export.stop.clone(), 0);
+        let job = crate::gui::worker::ExportJob {
+            pass: crate::output::takes_pass(self.pass, &path).then_some(self.pass),
+            scene,
+            request,
+            progress: export.progress.clone(),
+            cancel: render::Cancel::new(export.stop.clone(), 0),
+        };
         self.export = Some(export);
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
-        let pass = self.pass;
-        std::thread::spawn(move || {
-            let written = if crate::output::takes_pass(pass, &path) {
-                render::render_pass(&scene, &options, pass, &cancel, &progress)
-                    .map(|done| done.map(|(image, _)| crate::output::save_pass(&image, &path)))
-            } else {
-                render::render_watched(&scene, &options, &cancel, &progress)
-                    .map(|done| done.map(|(image, _)| crate::output::save(&image, &path)))
-            };
+        // Rendered by the worker, beside the preview; written here, on the
+        // export's thread.
+        self.worker.export(job, move |rendered| {
+            use crate::gui::worker::Exported;
+            let written = rendered.map(|done| {
+                done.map(|image| match image {
+                    Exported::Pass(image) => crate::output::save_pass(&image, &path),
+                    Exported::Picture(image) => crate::output::save(&image, &path),
+                })
+            });
             let result = match written {
                 Ok(Some(saved)) => saved.map(|()| true).map_err(|e| e.to_string()),
                 Ok(None) => Ok(false),

@@ -10,6 +10,16 @@ use super::*;
 /// that was cancelled never says it is done).
 pub(super) const IN_FLIGHT_PATIENCE: Duration = Duration::from_millis(500);
 
+/// The newest render asked for: its generation, when, and how many frames
+/// the window had drawn by then (for the frames drawn while it renders,
+/// on the `RAYOFLIGHT_STATS` line of its full picture).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Asked {
+    generation: u64,
+    at: Instant,
+    frames: u64,
+}
+
 impl RayOfLightApp {
     /// Asks the worker for the preview of the current scene, with the
     /// while-dragging method when one is set and a button is held.
@@ -34,19 +44,26 @@ impl RayOfLightApp {
         let request = self.methods.request(dragging, self.aa);
         self.rendered_dragging = dragging;
         let camera = &self.doc.scene().camera;
-        let passes = if interacting {
-            let scale = self.pace.interactive_scale(camera.width, camera.height);
+        let (width, height) = (camera.width, camera.height);
+        let scene = Arc::new(self.doc.scene().clone());
+        let generation = if interacting {
+            // One pass, on a thread fewer: the gesture keeps a core.
+            let scale = self.pace.interactive_scale(width, height);
             self.interactive = Some(scale);
-            vec![scale]
-        } else if let Some(scale) = self.interactive.take() {
-            Pace::refine(scale)
+            self.worker.request_while_dragging(scene, request, scale)
         } else {
-            crate::gui::worker::passes(camera.width, camera.height)
+            let passes = match self.interactive.take() {
+                Some(scale) => Pace::refine(scale),
+                None => crate::gui::worker::passes(width, height),
+            };
+            self.worker.request_passes(scene, request, passes)
         };
-        let generation =
-            self.worker
-                .request_passes(Arc::new(self.doc.scene().clone()), request, passes);
         self.preview.requested();
+        self.asked = Some(Asked {
+            generation,
+            at: Instant::now(),
+            frames: self.frames_drawn,
+        });
         self.in_flight = interacting.then(|| (generation, Instant::now()));
         self.study.superseded(generation);
         if self.study.open {
@@ -81,8 +98,17 @@ impl RayOfLightApp {
                         } => {
                             self.pace.measured(*rays, *elapsed);
                             if self.stats && *scale == 1 {
+                                // The frames drawn while it rendered.
+                                let (frames, per_second) = match self.asked {
+                                    Some(asked) if asked.generation == event.generation() => {
+                                        let frames = self.frames_drawn - asked.frames;
+                                        let secs = asked.at.elapsed().as_secs_f64().max(1e-9);
+                                        (frames, frames as f64 / secs)
+                                    }
+                                    _ => (0, 0.0),
+                                };
                                 eprintln!(
-                                    "stats: full picture {:.1} ms after its request",
+                                    "stats: full picture {:.1} ms after its request, {frames} frames meanwhile ({per_second:.1} frames/s)",
                                     since_start.as_secs_f64() * 1e3
                                 );
                             }

@@ -39,12 +39,12 @@ impl RayOfLightApp {
     pub fn explain_pixel(&mut self, x: u32, y: u32) {
         self.explain_armed = false;
         let scene = self.doc.scene();
-        let options = self.methods.request(false, self.aa).options(scene);
-        // The worker's prepared scene when it has this one (the method of
-        // the picture), seen with the picture's rays per pixel.
-        let prepared = match self.worker.prepared(scene) {
-            Some(p) => p.with_view(&scene.camera, options.aa),
-            None => render::prepare(scene, &options),
+        // The worker's prepared scene (the method of the picture, its
+        // rays per pixel); until it has prepared this scene (it is
+        // rendering it), the explain waits for it.
+        let Some(prepared) = self.worker.prepared(scene) else {
+            self.waiting = Some(picture::Waiting::Explain(x, y));
+            return;
         };
         let Some(explanation) = prepared.explain(x, y) else {
             // Outside the picture (it shrank).

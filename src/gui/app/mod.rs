@@ -37,7 +37,7 @@ mod status;
 
 pub use command::Command;
 use dialogs::{Confirm, DialogKind, PathPrompt};
-use picture::View;
+use picture::{View, Waiting};
 
 use super::document::{Document, FileState, Reload, SaveError, SaveJob, SaveOutcome, SaveStep};
 use super::pace::Pace;
@@ -47,7 +47,7 @@ use super::settings::{Persisted, Recent, Settings};
 use super::study::{self, PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
 use super::worker::{Event, Worker};
-use crate::render::{self, RenderOptions};
+use crate::render;
 use crate::scene::merge::Choice;
 use egui::{Color32, Key, Pos2, Rect, Sense, TextureOptions, Vec2};
 use std::collections::VecDeque;
@@ -122,6 +122,9 @@ pub struct RayOfLightApp {
     pictures: VecDeque<Instant>,
     /// Frame times of the last second, for the frames-per-second readout.
     frames: VecDeque<Instant>,
+    /// Frames drawn since the start, and the newest render asked for.
+    frames_drawn: u64,
+    asked: Option<events::Asked>,
     /// The pixel under the cursor and its colour.
     hovered: Option<(u32, u32, [u8; 3])>,
     /// A drag of the camera under way.
@@ -145,6 +148,8 @@ pub struct RayOfLightApp {
     explain_armed: bool,
     /// The explained pixel, in its window.
     explained: Option<explain::Shown>,
+    /// A pick or explain waiting for the worker to prepare the scene.
+    waiting: Option<Waiting>,
     /// The pass shown (View › Pass), and its picture once rendered.
     pass: render::Pass,
     pass_view: Option<passes::PassView>,
@@ -229,6 +234,8 @@ impl RayOfLightApp {
             settings,
             watch_generation: 0,
             frames: VecDeque::new(),
+            frames_drawn: 0,
+            asked: None,
             pictures: VecDeque::new(),
             hovered: None,
             navigation: None,
@@ -242,6 +249,7 @@ impl RayOfLightApp {
             overlays: true,
             explain_armed: false,
             explained: None,
+            waiting: None,
             pass: render::Pass::Final,
             pass_view: None,
             pass_requests: Default::default(),
@@ -435,6 +443,7 @@ impl RayOfLightApp {
         self.picture(ui);
         self.modals(ui);
         self.help_window(&ctx);
+        self.retry_waiting(&ctx);
         self.refresh_explained();
         self.explain_window(&ctx);
         self.refresh_outline();
@@ -459,8 +468,10 @@ impl RayOfLightApp {
             ctx.request_repaint_after(Duration::from_millis(100));
         }
         if matches!(self.preview.state(), RenderState::Rendering { .. }) {
-            // Keep the progress bar moving between tiles.
-            ctx.request_repaint_after(Duration::from_millis(16));
+            // Tiles wake the window (at most once a worker::FRAME); this
+            // keeps the progress bar and its time left moving when they
+            // are slow to come.
+            ctx.request_repaint_after(Duration::from_millis(250));
         }
     }
 }

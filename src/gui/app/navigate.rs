@@ -147,14 +147,16 @@ impl RayOfLightApp {
     }
 
     /// The point seen at image position `at` and its distance from the
-    /// eye; where the ray hits nothing, the centre of the spheres (or a
-    /// point ahead) at its own distance.
+    /// eye (in the scene the worker prepared); where the ray hits nothing,
+    /// or the worker has not prepared this scene yet, the centre of the
+    /// spheres (or a point ahead) at its own distance.
     fn pivot_at(&self, pose: &Pose, at: (f64, f64)) -> (DVec3, f64) {
         let scene = self.doc.scene();
         let eye = pose.eye(scene.camera.eye_distance);
-        let prepared = self.prepared();
         let ray = render::CameraRays::new(&scene.camera).ray(at.0, at.1);
-        if let Some(hit) = prepared.nearest_hit(&ray) {
+        if let Some(prepared) = self.worker.prepared(scene)
+            && let Some(hit) = prepared.nearest_hit(&ray)
+        {
             return (ray.at(hit.t), hit.t);
         }
         let centres: Vec<DVec3> = scene

@@ -1,6 +1,6 @@
 //! What is drawn over the picture: the selected object's outline (from the
-//! core's object-id buffer, computed on a background thread whenever the
-//! selection or the scene changes and the mouse is still), and a marker at
+//! core's object-id buffer, computed by the worker whenever the selection
+//! or the scene changes and the mouse is still), and a marker at
 //! each light's projected position, which a drag moves in the view plane
 //! (an undoable edit of the light's x, y, z, one step per drag).
 
@@ -55,14 +55,12 @@ impl RayOfLightApp {
             return;
         }
         self.outline_wanted = Some(key);
-        let prepared = self.prepared();
-        let camera = self.doc.scene().camera.clone();
-        let longest = camera.width.max(camera.height);
+        let scene = Arc::new(self.doc.scene().clone());
+        let longest = scene.camera.width.max(scene.camera.height);
         let scale = longest.div_ceil(OUTLINE_SIDE).max(1);
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
-        std::thread::spawn(move || {
-            let ids = render::object_ids(&prepared, &camera, scale);
+        self.worker.object_ids(scene, scale, move |ids| {
             let _ = tx.send(Background::Ids(key, ids));
             ctx.request_repaint();
         });

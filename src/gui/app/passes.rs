@@ -1,12 +1,12 @@
 //! View › Pass: one render pass (a term of the formula, or the normal,
 //! depth or object of the camera ray's hit) shown in place of the
-//! picture. The pass is rendered on a thread of its own by the library
-//! ([`render::render_pass`], the image's tile loop) once the picture's
-//! scene and camera settle, the newest request cancelling the older; the
-//! pixel inspector shows its values.
+//! picture. The pass is rendered by the worker ([`Worker::render_pass`]:
+//! the library's [`render::render_pass`], the image's tile loop) once the
+//! picture's scene and camera settle, the newest request cancelling the
+//! older; the pixel inspector shows its values.
 
 use super::*;
-use crate::render::{Cancel, Pass, PassImage, Progress};
+use crate::render::{Cancel, Pass, PassImage};
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A pass on screen.
@@ -61,17 +61,15 @@ impl RayOfLightApp {
         self.pass_requests.wanted = Some(key);
         let generation = self.pass_requests.newest.fetch_add(1, Ordering::Relaxed) + 1;
         let cancel = Cancel::new(Arc::clone(&self.pass_requests.newest), generation);
-        let scene = self.doc.scene().clone();
-        let options = self.methods.request(false, self.aa).options(&scene);
+        let scene = Arc::new(self.doc.scene().clone());
+        let request = self.methods.request(false, self.aa);
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
-        std::thread::spawn(move || {
-            let done = render::render_pass(&scene, &options, key.0, &cancel, &Progress::default());
-            if let Ok(Some((image, _))) = done {
+        self.worker
+            .render_pass(scene, request, key.0, cancel, move |image| {
                 let _ = tx.send(Background::Pass(key, Box::new(image)));
                 ctx.request_repaint();
-            }
-        });
+            });
     }
 
     /// A pass arrived: on screen if it is still the one wanted.

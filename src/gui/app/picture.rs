@@ -239,23 +239,43 @@ impl RayOfLightApp {
         }
     }
 
-    /// The scene on screen prepared for picking: the worker's when it
-    /// prepared this scene last, else prepared here.
-    pub(super) fn prepared(&self) -> render::Prepared {
-        let scene = self.doc.scene();
-        self.worker
-            .prepared(scene)
-            .unwrap_or_else(|| render::prepare(scene, &RenderOptions::default()))
+    /// Selects the object seen at image position (`x`, `y`) and opens it
+    /// in the panel, once (a click in the picture). The pick is made in
+    /// the scene the worker prepared for the picture; until it has
+    /// prepared this one (it is rendering it), the pick waits for it.
+    pub fn pick(&mut self, x: f64, y: f64) {
+        match self.worker.prepared(self.doc.scene()) {
+            Some(prepared) => {
+                self.selection = Selection {
+                    object: prepared.pick(x, y),
+                    reveal: true,
+                    field: None,
+                };
+            }
+            None => self.waiting = Some(Waiting::Pick(x, y)),
+        }
     }
 
-    /// Selects the object seen at image position (`x`, `y`) and opens it
-    /// in the panel, once (a click in the picture).
-    pub fn pick(&mut self, x: f64, y: f64) {
-        let prepared = self.prepared();
-        self.selection = Selection {
-            object: prepared.pick(x, y),
-            reveal: true,
-            field: None,
-        };
+    /// A pick or an explain that waited for the worker to prepare the
+    /// scene: made once it has (else it waits a frame more).
+    pub(super) fn retry_waiting(&mut self, ctx: &egui::Context) {
+        match self.waiting.take() {
+            Some(Waiting::Pick(x, y)) => self.pick(x, y),
+            Some(Waiting::Explain(x, y)) => self.explain_pixel(x, y),
+            None => return,
+        }
+        if self.waiting.is_some() {
+            ctx.request_repaint_after(crate::gui::worker::FRAME);
+        }
     }
+}
+
+/// What waits for the worker to prepare the scene on screen: the UI
+/// thread never prepares one (a million objects take a second).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Waiting {
+    /// A pick at this image position.
+    Pick(f64, f64),
+    /// Explaining this pixel.
+    Explain(u32, u32),
 }

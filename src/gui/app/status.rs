@@ -216,6 +216,7 @@ impl RayOfLightApp {
             self.pictures.pop_front();
         }
         self.frames.push_back(now);
+        self.frames_drawn += 1;
         while self
             .frames
             .front()
