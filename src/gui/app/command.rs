@@ -3,9 +3,9 @@
 //! ([`RayOfLightApp::run`]), asking first when a command would drop unsaved
 //! edits.
 
-use super::RayOfLightApp;
 use super::dialogs::{Confirm, DialogKind, PathPrompt};
 use super::picture::View;
+use super::{Interaction, RayOfLightApp};
 use crate::gui::document::Document;
 use egui::{Key, KeyboardShortcut, Modifiers};
 use std::path::{Path, PathBuf};
@@ -408,10 +408,10 @@ impl RayOfLightApp {
                 // Esc puts back an object being moved, else disarms the
                 // explain click, closes the help, stops opening a file or
                 // stops the render, the first that applies.
-                if self.grab.is_some() {
+                if self.interaction.is_grabbing() {
                     self.grab_end(false);
-                } else if self.explain_armed {
-                    self.explain_armed = false;
+                } else if self.interaction.is_explain_armed() {
+                    self.interaction = Interaction::Idle;
                 } else if self.help_open {
                     self.help_open = false;
                 } else if !self.cancel_loading() {
@@ -426,7 +426,12 @@ impl RayOfLightApp {
                 self.grab_start(pointer);
             }
             Command::CameraFromFile => self.camera_from_file(),
-            Command::Explain => self.explain_armed = !self.explain_armed,
+            // E arms the explain click, or disarms it; not during a drag.
+            Command::Explain => match self.interaction {
+                Interaction::Idle => self.interaction = Interaction::ExplainArmed,
+                Interaction::ExplainArmed => self.interaction = Interaction::Idle,
+                _ => {}
+            },
             Command::ShowPass(pass) => self.show_pass(pass),
             Command::Help => self.help_open = !self.help_open,
             Command::Study => {

@@ -3,8 +3,16 @@
 //! questions — unsaved edits, replacing a file, conflicts with the file on
 //! disk.
 
-use super::*;
+use super::command::Command;
+use super::{Background, RayOfLightApp};
+use crate::gui::document::{Document, Reload, SaveError, SaveJob, SaveOutcome, SaveStep};
+use crate::render;
+use crate::scene::merge::Choice;
+use egui::Key;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
+use std::time::{Duration, Instant};
 
 /// A question the app is waiting on.
 #[derive(Debug, Clone, PartialEq)]

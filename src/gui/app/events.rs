@@ -4,7 +4,16 @@
 //! passes, the watcher's file events, dialogs' answers, the Study window's
 //! runs.
 
-use super::*;
+use super::{Background, RayOfLightApp};
+use crate::gui::document::Reload;
+use crate::gui::pace::Pace;
+use crate::gui::preview::RenderState;
+use crate::gui::study;
+use crate::gui::watcher::FileEvent;
+use crate::gui::worker::Event;
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
 
 /// How long an interactive picture may keep the next one waiting (one
 /// that was cancelled never says it is done).
@@ -73,7 +82,9 @@ impl RayOfLightApp {
 
     /// A drag of the camera or of a value is under way.
     pub(super) fn interacting(&self) -> bool {
-        self.navigation.is_some() || self.grab.is_some() || self.ctx.dragged_id().is_some()
+        self.interaction.is_navigating()
+            || self.interaction.is_grabbing()
+            || self.ctx.dragged_id().is_some()
     }
 
     /// Handles what the watcher, the worker and the dialogs sent.

@@ -4,10 +4,13 @@
 //! draws the path over the picture. Clicking a term selects the object
 //! and the coefficient it comes from in the panel.
 
-use super::*;
+use super::{Interaction, RayOfLightApp, picture};
+use crate::gui::panel::Selection;
+use crate::gui::preview::RenderState;
 use crate::render::explain::{Bounce, Sample, describe_ray, number, vector};
 use crate::render::{Explanation, navigate};
 use crate::scene::edit::{Coef, Field};
+use egui::{Color32, Pos2, Vec2};
 use glam::DVec3;
 use std::collections::BTreeMap;
 
@@ -37,7 +40,9 @@ impl RayOfLightApp {
     /// Explains pixel (x, y) of the picture: its tree in the window, its
     /// path over the picture.
     pub fn explain_pixel(&mut self, x: u32, y: u32) {
-        self.explain_armed = false;
+        if self.interaction.is_explain_armed() {
+            self.interaction = Interaction::Idle;
+        }
         let scene = self.doc.scene();
         // The worker's prepared scene (the method of the picture, its
         // rays per pixel); until it has prepared this scene (it is
@@ -78,9 +83,11 @@ impl RayOfLightApp {
             && self.preview.generation() == newest;
         if shown.generation != newest && done && !self.interacting() {
             let (x, y) = (shown.explanation.x, shown.explanation.y);
-            let armed = self.explain_armed;
+            let armed = self.interaction.is_explain_armed();
             self.explain_pixel(x, y);
-            self.explain_armed = armed;
+            if armed {
+                self.interaction = Interaction::ExplainArmed;
+            }
         }
     }
 

@@ -39,17 +39,17 @@ pub use command::Command;
 use dialogs::{Confirm, DialogKind, PathPrompt};
 use picture::{View, Waiting};
 
-use super::document::{Document, FileState, Reload, SaveError, SaveJob, SaveOutcome, SaveStep};
+use super::document::{Document, SaveJob, SaveOutcome};
 use super::pace::Pace;
 use super::panel::{self, Selection};
 use super::preview::{Preview, RenderState};
 use super::settings::{Persisted, Recent, Settings};
-use super::study::{self, PreviewMethods, StudyWindow};
+use super::study::{PreviewMethods, StudyWindow};
 use super::watcher::{FileEvent, SceneWatcher};
-use super::worker::{Event, Worker};
+use super::worker::Worker;
 use crate::render;
 use crate::scene::merge::Choice;
-use egui::{Color32, Key, Pos2, Rect, Sense, TextureOptions, Vec2};
+use egui::Pos2;
 use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -72,6 +72,42 @@ enum Background {
     Pass((render::Pass, u64), Box<render::PassImage>),
     /// A file opened in the background (the load's number, the document).
     Opened(u64, Box<Result<Document, crate::scene::LoadError>>),
+}
+
+/// What the mouse is doing on the picture, or will do at the next click:
+/// one thing at a time.
+#[derive(Debug, Clone, Default)]
+enum Interaction {
+    #[default]
+    Idle,
+    /// A drag of the camera (orbit or pan) under way.
+    Navigating(navigate::Navigation),
+    /// The selected object follows the pointer (G, Alt+drag).
+    Grabbing(navigate::Grab),
+    /// A light's marker is being dragged.
+    DraggingLight(overlay::LightDrag),
+    /// The next click on the picture explains its pixel (E).
+    ExplainArmed,
+}
+
+impl Interaction {
+    fn is_grabbing(&self) -> bool {
+        matches!(self, Interaction::Grabbing(_))
+    }
+
+    fn is_navigating(&self) -> bool {
+        matches!(self, Interaction::Navigating(_))
+    }
+
+    fn is_explain_armed(&self) -> bool {
+        matches!(self, Interaction::ExplainArmed)
+    }
+
+    /// Nothing under way: a new drag or move may start (an armed explain
+    /// gives way to it).
+    fn is_free(&self) -> bool {
+        matches!(self, Interaction::Idle | Interaction::ExplainArmed)
+    }
 }
 
 pub struct RayOfLightApp {
@@ -127,12 +163,8 @@ pub struct RayOfLightApp {
     asked: Option<events::Asked>,
     /// The pixel under the cursor and its colour.
     hovered: Option<(u32, u32, [u8; 3])>,
-    /// A drag of the camera under way.
-    navigation: Option<navigate::Navigation>,
-    /// The selected object being moved (G).
-    grab: Option<navigate::Grab>,
-    /// A light's marker being dragged.
-    light_drag: Option<overlay::LightDrag>,
+    /// What the mouse is doing on the picture: one thing at a time.
+    interaction: Interaction,
     /// The light markers drawn in the last frame: light and position.
     markers: Vec<(usize, Pos2)>,
     /// The selected object's outline, and what the newest one asked for is.
@@ -144,8 +176,6 @@ pub struct RayOfLightApp {
     help_open: bool,
     /// Light markers, the outline and the explained path are drawn (O).
     overlays: bool,
-    /// The next click on the picture explains its pixel (E).
-    explain_armed: bool,
     /// The explained pixel, in its window.
     explained: Option<explain::Shown>,
     /// A pick or explain waiting for the worker to prepare the scene.
@@ -238,16 +268,13 @@ impl RayOfLightApp {
             asked: None,
             pictures: VecDeque::new(),
             hovered: None,
-            navigation: None,
-            light_drag: None,
-            grab: None,
+            interaction: Interaction::Idle,
             markers: Vec::new(),
             outline: None,
             outline_wanted: None,
             wheel_at: None,
             help_open: false,
             overlays: true,
-            explain_armed: false,
             explained: None,
             waiting: None,
             pass: render::Pass::Final,

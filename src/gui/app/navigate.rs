@@ -6,13 +6,16 @@
 //! is one step, and so is a burst of wheel steps with no pause over
 //! [`WHEEL_PAUSE`].
 
-use super::*;
+use super::{Interaction, RayOfLightApp};
 use crate::math::TransformStep;
+use crate::render;
 use crate::render::navigate::{
     GESTURE_PRECISION, Pose, moved_on_screen, pixel_angle, pixel_at, pixel_size, settle_steps,
 };
 use crate::scene::edit::{Edit, Owner};
+use egui::{Pos2, Vec2};
 use glam::DVec3;
+use std::time::{Duration, Instant};
 
 /// Radians the camera turns per screen point dragged.
 const ORBIT_PER_POINT: f64 = 0.01;
@@ -65,6 +68,9 @@ impl RayOfLightApp {
     /// Starts moving the selected object; `pointer` is where the mouse is,
     /// if over the picture.
     pub(super) fn grab_start(&mut self, pointer: Option<Pos2>) {
+        if !self.interaction.is_free() {
+            return;
+        }
         let Some(object) = self.selection.object else {
             return self.notify("select an object first (click it), then G moves it".into());
         };
@@ -77,7 +83,7 @@ impl RayOfLightApp {
         let Some(pixel) = pixel_at(&scene.camera, centre) else {
             return self.notify("the object is behind the eye: it cannot follow the mouse".into());
         };
-        self.grab = Some(Grab {
+        self.interaction = Interaction::Grabbing(Grab {
             object,
             start: o.transform.steps().to_vec(),
             pointer,
@@ -90,7 +96,9 @@ impl RayOfLightApp {
     /// The pointer is at `pointer`: the object follows it. An image pixel
     /// is `image_per_point` screen points.
     pub(super) fn grab_move(&mut self, pointer: Pos2, image_per_point: f64) {
-        let Some(grab) = &mut self.grab else { return };
+        let Interaction::Grabbing(grab) = &mut self.interaction else {
+            return;
+        };
         let start = *grab.pointer.get_or_insert(pointer);
         let total = pointer - start;
         let camera = &self.doc.scene().camera;
@@ -130,7 +138,10 @@ impl RayOfLightApp {
 
     /// Ends the move: kept, or put back as it was.
     pub(super) fn grab_end(&mut self, keep: bool) {
-        let Some(grab) = self.grab.take() else { return };
+        let grab = match std::mem::take(&mut self.interaction) {
+            Interaction::Grabbing(grab) => grab,
+            other => return self.interaction = other,
+        };
         let moved = self
             .doc
             .scene()
@@ -181,7 +192,7 @@ impl RayOfLightApp {
             Ok(start) => {
                 let (pivot, distance) = self.pivot_at(&start, at);
                 let pixel = pixel_size(camera, distance);
-                self.navigation = Some(Navigation {
+                self.interaction = Interaction::Navigating(Navigation {
                     gesture,
                     start,
                     start_steps: camera.transform.steps().to_vec(),
@@ -196,7 +207,7 @@ impl RayOfLightApp {
     /// The drag has moved `total` screen points since it started; an image
     /// pixel is `image_per_point` of them.
     pub(super) fn navigation_drag(&mut self, total: Vec2, image_per_point: f64) {
-        let Some(nav) = self.navigation.clone() else {
+        let Interaction::Navigating(nav) = self.interaction.clone() else {
             return;
         };
         let (dx, dy) = (f64::from(total.x), f64::from(total.y));
@@ -217,7 +228,8 @@ impl RayOfLightApp {
     }
 
     pub(super) fn navigation_end(&mut self) {
-        if self.navigation.take().is_some() {
+        if self.interaction.is_navigating() {
+            self.interaction = Interaction::Idle;
             self.doc.end_drag();
         }
     }

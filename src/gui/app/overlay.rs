@@ -4,10 +4,13 @@
 //! each light's projected position, which a drag moves in the view plane
 //! (an undoable edit of the light's x, y, z, one step per drag).
 
-use super::*;
+use super::{Background, Interaction, RayOfLightApp};
+use crate::render;
 use crate::render::navigate::{GESTURE_PRECISION, moved_on_screen, pixel_at, project, settle_vec};
 use crate::scene::edit::{Axis, Edit, Field, Value};
+use egui::{Color32, Pos2, Rect, Sense, TextureOptions, Vec2};
 use glam::DVec3;
+use std::sync::Arc;
 
 /// Radius of a light's marker, in points.
 const MARKER: f32 = 7.0;
@@ -163,8 +166,8 @@ impl RayOfLightApp {
                 egui::FontId::proportional(12.0),
                 Color32::WHITE,
             );
-            if response.drag_started() {
-                self.light_drag = Some(LightDrag {
+            if response.drag_started() && self.interaction.is_free() {
+                self.interaction = Interaction::DraggingLight(LightDrag {
                     light: n,
                     start: position,
                     pixel: pixel_at(&camera, position).unwrap_or(0.0),
@@ -173,7 +176,8 @@ impl RayOfLightApp {
             // The light follows the pointer across the view, at its depth
             // (through the camera's projection: any camera, sheared too).
             if response.dragged()
-                && let Some(drag) = self.light_drag.filter(|d| d.light == n)
+                && let Interaction::DraggingLight(drag) = self.interaction
+                && drag.light == n
                 && let Some(moved) = {
                     let total = response.total_drag_delta().unwrap_or_default();
                     moved_on_screen(
@@ -207,7 +211,9 @@ impl RayOfLightApp {
                 }
             }
             if response.drag_stopped() {
-                self.light_drag = None;
+                if matches!(self.interaction, Interaction::DraggingLight(_)) {
+                    self.interaction = Interaction::Idle;
+                }
                 self.doc.end_drag();
             }
         }

@@ -5,8 +5,10 @@
 //! picture's scene and camera settle, the newest request cancelling the
 //! older; the pixel inspector shows its values.
 
-use super::*;
+use super::{Background, RayOfLightApp};
 use crate::render::{Cancel, Pass, PassImage};
+use egui::TextureOptions;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 /// A pass on screen.

@@ -1,7 +1,9 @@
 //! The picture: the render shown 1:1 or fitted, zoom and pan, the pixel
 //! under the cursor and the pick of an object by a click.
 
-use super::*;
+use super::{RayOfLightApp, navigate};
+use crate::gui::panel::Selection;
+use egui::{Color32, Pos2, Rect, Sense, TextureOptions, Vec2};
 
 /// How the picture is placed in the central area.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -112,7 +114,7 @@ impl RayOfLightApp {
             };
             let image_per_point = f64::from(image_size.x / size.x);
             // A click that places a moved object selects nothing.
-            let grabbing = self.grab.is_some();
+            let grabbing = self.interaction.is_grabbing();
             self.gestures(ui, &response, to_image, image_per_point);
             let painter = ui.painter_at(area);
             painter.image(
@@ -134,11 +136,11 @@ impl RayOfLightApp {
                     let (x, y) = (rel.x as u32, rel.y as u32);
                     let rgb = self.preview.image().get_pixel(x, y).0;
                     self.hovered = Some((x, y, rgb));
-                    if self.explain_armed {
+                    if self.interaction.is_explain_armed() {
                         ui.ctx().set_cursor_icon(egui::CursorIcon::Crosshair);
                     }
                     if response.clicked() && !grabbing {
-                        if self.explain_armed || alt {
+                        if self.interaction.is_explain_armed() || alt {
                             self.explain_pixel(x, y);
                         } else {
                             self.pick(f64::from(rel.x), f64::from(rel.y));
@@ -196,7 +198,7 @@ impl RayOfLightApp {
         }
         // An object being moved follows the pointer; a click places it, a
         // right click puts it back.
-        if self.grab.is_some() {
+        if self.interaction.is_grabbing() {
             if let Some(pos) = response.hover_pos().or(response.interact_pointer_pos()) {
                 self.grab_move(pos, image_per_point);
             }
@@ -223,7 +225,7 @@ impl RayOfLightApp {
             }
         }
         if response.dragged() {
-            if self.navigation.is_some() {
+            if self.interaction.is_navigating() {
                 let total = response
                     .interact_pointer_pos()
                     .zip(press)

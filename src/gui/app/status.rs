@@ -1,7 +1,12 @@
 //! The status bar, the error banner, transient notices and the frame
 //! counter (`RAYOFLIGHT_STATS`).
 
-use super::*;
+use super::RayOfLightApp;
+use crate::gui::document::FileState;
+use crate::gui::preview::RenderState;
+use crate::render;
+use egui::Color32;
+use std::time::{Duration, Instant};
 
 impl RayOfLightApp {
     pub(super) fn error_banner(&mut self, ui: &mut egui::Ui) {
@@ -114,7 +119,7 @@ impl RayOfLightApp {
                         (Some(_), None) => format!("{} pass", self.pass.name()),
                     });
                 }
-                if self.explain_armed {
+                if self.interaction.is_explain_armed() {
                     ui.separator();
                     ui.label("click a pixel to explain it (Esc: cancel)");
                 }
