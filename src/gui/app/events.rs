@@ -29,6 +29,26 @@ pub(super) struct Asked {
     frames: u64,
 }
 
+/// When the preview renders, how coarse, and what is in flight: the
+/// schedule of the renders the app asks the worker for.
+#[derive(Debug, Default)]
+pub(super) struct RenderSchedule {
+    /// The measured cost of rendering, for the interactive scale.
+    pub(super) pace: Pace,
+    /// The newest request was one interactive pass at this scale: refine
+    /// once the mouse stops.
+    pub(super) interactive: Option<u32>,
+    /// The interactive pass being rendered (generation, asked when), and
+    /// whether the scene changed since: render again when it is done.
+    pub(super) in_flight: Option<(u64, Instant)>,
+    pub(super) render_pending: bool,
+    /// The newest render used the while-dragging method: render again
+    /// with the exact one on release.
+    pub(super) rendered_dragging: bool,
+    /// The newest render asked for, and when.
+    pub(super) asked: Option<Asked>,
+}
+
 impl RayOfLightApp {
     /// Asks the worker for the preview of the current scene, with the
     /// while-dragging method when one is set and a button is held.
@@ -42,38 +62,38 @@ impl RayOfLightApp {
         // While the mouse moves, a new picture waits for the one being
         // rendered: cancelling it at every move would starve the screen.
         if interacting
-            && let Some((_, since)) = self.in_flight
+            && let Some((_, since)) = self.schedule.in_flight
             && since.elapsed() < IN_FLIGHT_PATIENCE
         {
-            self.render_pending = true;
+            self.schedule.render_pending = true;
             return;
         }
-        self.render_pending = false;
+        self.schedule.render_pending = false;
         let dragging = self.methods.dragging.is_some() && interacting;
         let request = self.methods.request(dragging, self.aa);
-        self.rendered_dragging = dragging;
+        self.schedule.rendered_dragging = dragging;
         let camera = &self.doc.scene().camera;
         let (width, height) = (camera.width, camera.height);
         let scene = Arc::new(self.doc.scene().clone());
         let generation = if interacting {
             // One pass, on a thread fewer: the gesture keeps a core.
-            let scale = self.pace.interactive_scale(width, height);
-            self.interactive = Some(scale);
+            let scale = self.schedule.pace.interactive_scale(width, height);
+            self.schedule.interactive = Some(scale);
             self.worker.request_while_dragging(scene, request, scale)
         } else {
-            let passes = match self.interactive.take() {
+            let passes = match self.schedule.interactive.take() {
                 Some(scale) => Pace::refine(scale),
                 None => crate::gui::worker::passes(width, height),
             };
             self.worker.request_passes(scene, request, passes)
         };
         self.preview.requested();
-        self.asked = Some(Asked {
+        self.schedule.asked = Some(Asked {
             generation,
             at: Instant::now(),
-            frames: self.frames_drawn,
+            frames: self.frame_stats.frames_drawn,
         });
-        self.in_flight = interacting.then(|| (generation, Instant::now()));
+        self.schedule.in_flight = interacting.then(|| (generation, Instant::now()));
         self.study.superseded(generation);
         if self.study.open {
             self.study.set_plan(self.doc.scene());
@@ -107,12 +127,12 @@ impl RayOfLightApp {
                             since_start,
                             ..
                         } => {
-                            self.pace.measured(*rays, *elapsed);
-                            if self.stats && *scale == 1 {
+                            self.schedule.pace.measured(*rays, *elapsed);
+                            if self.frame_stats.stats && *scale == 1 {
                                 // The frames drawn while it rendered.
-                                let (frames, per_second) = match self.asked {
+                                let (frames, per_second) = match self.schedule.asked {
                                     Some(asked) if asked.generation == event.generation() => {
-                                        let frames = self.frames_drawn - asked.frames;
+                                        let frames = self.frame_stats.frames_drawn - asked.frames;
                                         let secs = asked.at.elapsed().as_secs_f64().max(1e-9);
                                         (frames, frames as f64 / secs)
                                     }
@@ -129,11 +149,15 @@ impl RayOfLightApp {
                     };
                     let generation = event.generation();
                     if self.preview.apply(newest, event) && finished {
-                        self.pictures.push_back(Instant::now());
+                        self.frame_stats.pictures.push_back(Instant::now());
                         // The interactive picture is done: the next one.
-                        if self.in_flight.is_some_and(|(g, _)| g == generation) {
-                            self.in_flight = None;
-                            if self.render_pending {
+                        if self
+                            .schedule
+                            .in_flight
+                            .is_some_and(|(g, _)| g == generation)
+                        {
+                            self.schedule.in_flight = None;
+                            if self.schedule.render_pending {
                                 self.request_render();
                             }
                         }

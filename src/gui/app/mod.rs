@@ -12,8 +12,8 @@
 //!   thread of its own), export, and the modal questions;
 //! - `hot_exit`: the journal of unsaved edits kept as they are made,
 //!   restored when a scene opens; the clean end on SIGTERM, SIGINT, SIGHUP;
-//! - `events`: render requests and what the worker, the watcher and the
-//!   dialogs send back;
+//! - `events`: render requests and their schedule (`RenderSchedule`),
+//!   and what the worker, the watcher and the dialogs send back;
 //! - `picture`: the picture, its zoom and pan, the pick;
 //! - `navigate`: orbit, pan and dolly the camera, move the selected object
 //!   (G) with the mouse;
@@ -22,7 +22,11 @@
 //! - `explain`: the explained pixel's window and its path over the
 //!   picture (E, Alt+click);
 //! - `passes`: View › Pass, a render pass shown in place of the picture;
-//! - `status`: the status bar, the error banner, notices, frame counts.
+//! - `status`: the status bar, the error banner, notices, frame counts
+//!   (`FrameStats`).
+//!
+//! What the mouse is doing on the picture is one `Interaction` at a
+//! time.
 
 pub mod command;
 mod dialogs;
@@ -40,7 +44,6 @@ use dialogs::{Confirm, DialogKind, PathPrompt};
 use picture::{View, Waiting};
 
 use super::document::{Document, SaveJob, SaveOutcome};
-use super::pace::Pace;
 use super::panel::{self, Selection};
 use super::preview::{Preview, RenderState};
 use super::settings::{Persisted, Recent, Settings};
@@ -50,7 +53,6 @@ use super::worker::Worker;
 use crate::render;
 use crate::scene::merge::Choice;
 use egui::Pos2;
-use std::collections::VecDeque;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicBool;
@@ -134,9 +136,6 @@ pub struct RayOfLightApp {
     /// The live preview's method (auto unless chosen in the Study window)
     /// and the one while a value is dragged.
     methods: PreviewMethods,
-    /// The newest render used the while-dragging method: render again
-    /// with the exact one on release.
-    rendered_dragging: bool,
     study: StudyWindow,
     /// A transient message for the status bar (export done, save failed).
     notice: Option<(String, Instant)>,
@@ -153,18 +152,15 @@ pub struct RayOfLightApp {
     /// Which watcher is the current one: events of an older one (for a
     /// file no longer open) still in the channel are dropped.
     watch_generation: u64,
-    /// When the pictures (finished passes) of the last second were done:
-    /// pictures a second while the mouse moves.
-    pictures: VecDeque<Instant>,
-    /// Frame times of the last second, for the frames-per-second readout.
-    frames: VecDeque<Instant>,
-    /// Frames drawn since the start, and the newest render asked for.
-    frames_drawn: u64,
-    asked: Option<events::Asked>,
     /// The pixel under the cursor and its colour.
     hovered: Option<(u32, u32, [u8; 3])>,
     /// What the mouse is doing on the picture: one thing at a time.
     interaction: Interaction,
+    /// When to render, how coarse, and what is in flight.
+    schedule: events::RenderSchedule,
+    /// Frames and pictures a second, for the status bar and
+    /// `RAYOFLIGHT_STATS`.
+    frame_stats: status::FrameStats,
     /// The light markers drawn in the last frame: light and position.
     markers: Vec<(usize, Pos2)>,
     /// The selected object's outline, and what the newest one asked for is.
@@ -184,15 +180,6 @@ pub struct RayOfLightApp {
     pass: render::Pass,
     pass_view: Option<passes::PassView>,
     pass_requests: passes::PassRequests,
-    /// The measured cost of rendering, for the interactive scale.
-    pace: Pace,
-    /// The newest request was one interactive pass at this scale: refine
-    /// once the mouse stops.
-    interactive: Option<u32>,
-    /// The interactive pass being rendered (generation, asked when), and
-    /// whether the scene changed since: render again when it is done.
-    in_flight: Option<(u64, Instant)>,
-    render_pending: bool,
     /// The window title last sent.
     title: String,
     /// The user chose to quit without saving.
@@ -205,12 +192,6 @@ pub struct RayOfLightApp {
     hot_exit: Option<hot_exit::HotExit>,
     /// A signal asked the app to end (see [`RayOfLightApp::end_on_signals`]).
     signalled: Arc<AtomicBool>,
-    /// Print the status figures to stderr once a second
-    /// (`RAYOFLIGHT_STATS`, see [`stats_wanted`]).
-    stats: bool,
-    last_stats: Instant,
-    /// The longest time `draw` took since the last stats line.
-    slowest_frame: Duration,
     ctx: egui::Context,
 }
 
@@ -244,9 +225,6 @@ impl RayOfLightApp {
             loading: None,
             reading: false,
             signalled: Arc::new(AtomicBool::new(false)),
-            stats: stats_wanted(std::env::var_os("RAYOFLIGHT_STATS").as_deref()),
-            last_stats: Instant::now(),
-            slowest_frame: Duration::ZERO,
             path_prompt: None,
             view: View::default(),
             selection: Selection::default(),
@@ -254,7 +232,6 @@ impl RayOfLightApp {
             conflict_choices: Vec::new(),
             aa: settings.aa,
             methods: PreviewMethods::default(),
-            rendered_dragging: false,
             study: StudyWindow::with_runs(settings.study_runs),
             notice: None,
             export: None,
@@ -263,12 +240,12 @@ impl RayOfLightApp {
             recent,
             settings,
             watch_generation: 0,
-            frames: VecDeque::new(),
-            frames_drawn: 0,
-            asked: None,
-            pictures: VecDeque::new(),
             hovered: None,
             interaction: Interaction::Idle,
+            schedule: events::RenderSchedule::default(),
+            frame_stats: status::FrameStats::new(stats_wanted(
+                std::env::var_os("RAYOFLIGHT_STATS").as_deref(),
+            )),
             markers: Vec::new(),
             outline: None,
             outline_wanted: None,
@@ -280,10 +257,6 @@ impl RayOfLightApp {
             pass: render::Pass::Final,
             pass_view: None,
             pass_requests: Default::default(),
-            pace: Pace::default(),
-            interactive: None,
-            in_flight: None,
-            render_pending: false,
             ctx: ctx.clone(),
         };
         app.restore_journal();
@@ -430,7 +403,7 @@ impl eframe::App for RayOfLightApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let start = Instant::now();
         self.draw(ui);
-        self.slowest_frame = self.slowest_frame.max(start.elapsed());
+        self.frame_stats.slowest_frame = self.frame_stats.slowest_frame.max(start.elapsed());
     }
 
     fn on_exit(&mut self, _gl: Option<&eframe::glow::Context>) {
@@ -486,7 +459,9 @@ impl RayOfLightApp {
         }
         // The mouse stopped: refine the coarse picture, exact again if a
         // value was dragged with a cheaper method.
-        if (self.rendered_dragging || self.interactive.is_some() || self.render_pending)
+        if (self.schedule.rendered_dragging
+            || self.schedule.interactive.is_some()
+            || self.schedule.render_pending)
             && !self.interacting()
         {
             self.request_render();

@@ -6,7 +6,40 @@ use crate::gui::document::FileState;
 use crate::gui::preview::RenderState;
 use crate::render;
 use egui::Color32;
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
+
+/// Frames and pictures a second: the status bar's figures, printed once a
+/// second with `RAYOFLIGHT_STATS`.
+#[derive(Debug)]
+pub(super) struct FrameStats {
+    /// When the pictures (finished passes) of the last second were done:
+    /// pictures a second while the mouse moves.
+    pub(super) pictures: VecDeque<Instant>,
+    /// Frame times of the last second, for the frames-per-second readout.
+    pub(super) frames: VecDeque<Instant>,
+    /// Frames drawn since the start.
+    pub(super) frames_drawn: u64,
+    /// Print the figures to stderr once a second (`RAYOFLIGHT_STATS`, see
+    /// [`super::stats_wanted`]).
+    pub(super) stats: bool,
+    pub(super) last_stats: Instant,
+    /// The longest time `draw` took since the last stats line.
+    pub(super) slowest_frame: Duration,
+}
+
+impl FrameStats {
+    pub(super) fn new(stats: bool) -> FrameStats {
+        FrameStats {
+            pictures: VecDeque::new(),
+            frames: VecDeque::new(),
+            frames_drawn: 0,
+            stats,
+            last_stats: Instant::now(),
+            slowest_frame: Duration::ZERO,
+        }
+    }
+}
 
 impl RayOfLightApp {
     pub(super) fn error_banner(&mut self, ui: &mut egui::Ui) {
@@ -64,7 +97,7 @@ impl RayOfLightApp {
                         "cancelled (Esc): the picture may be of an older scene — F5 renders again",
                     ),
                 };
-                ui.label(if self.rendered_dragging {
+                ui.label(if self.schedule.rendered_dragging {
                     self.methods.dragging.as_ref().map_or("", |m| m.name)
                 } else {
                     self.methods.preview.name
@@ -126,10 +159,10 @@ impl RayOfLightApp {
                 ui.separator();
                 // The frames of the last second, this one included; with
                 // no other, the window is idle (and draws nothing more).
-                if self.frames.len() <= 1 {
+                if self.frame_stats.frames.len() <= 1 {
                     ui.label("idle");
                 } else {
-                    ui.label(format!("{} fps", self.frames.len()));
+                    ui.label(format!("{} fps", self.frame_stats.frames.len()));
                     // One more frame once this second is over, to say so.
                     ui.ctx().request_repaint_after(Duration::from_millis(1100));
                 }
@@ -199,13 +232,15 @@ impl RayOfLightApp {
         let now = Instant::now();
         // Once a second, with RAYOFLIGHT_STATS set: the figures the status
         // bar shows, on stderr, for measuring the app from outside.
-        if self.stats && now.duration_since(self.last_stats) >= Duration::from_secs(1) {
-            self.last_stats = now;
+        if self.frame_stats.stats
+            && now.duration_since(self.frame_stats.last_stats) >= Duration::from_secs(1)
+        {
+            self.frame_stats.last_stats = now;
             eprintln!(
                 "stats: fps={} slowest_frame_ms={:.1} pictures={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
-                self.frames.len(),
-                std::mem::take(&mut self.slowest_frame).as_secs_f64() * 1e3,
-                self.pictures.len(),
+                self.frame_stats.frames.len(),
+                std::mem::take(&mut self.frame_stats.slowest_frame).as_secs_f64() * 1e3,
+                self.frame_stats.pictures.len(),
                 self.preview.state(),
                 self.preview.first_pass().map(|d| d.as_secs_f64() * 1e3),
                 self.preview
@@ -214,20 +249,22 @@ impl RayOfLightApp {
             );
         }
         while self
+            .frame_stats
             .pictures
             .front()
             .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
         {
-            self.pictures.pop_front();
+            self.frame_stats.pictures.pop_front();
         }
-        self.frames.push_back(now);
-        self.frames_drawn += 1;
+        self.frame_stats.frames.push_back(now);
+        self.frame_stats.frames_drawn += 1;
         while self
+            .frame_stats
             .frames
             .front()
             .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
         {
-            self.frames.pop_front();
+            self.frame_stats.frames.pop_front();
         }
         if self
             .notice
