@@ -684,9 +684,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             })
         }
         Some(Sub::Bench(b)) => Command::Bench(super::bench::BenchArgs {
-            threads: b
-                .threads
-                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+            threads: b.threads.unwrap_or_else(rayoflight::render::all_cores),
             runs: b.runs,
             csv: b.csv,
             pov: !b.no_pov,

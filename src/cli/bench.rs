@@ -74,7 +74,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         "RayOfLight bench: median of {} runs, {} threads ({} cores here); POV-Ray: {}\n",
         args.runs,
         args.threads,
-        std::thread::available_parallelism().map_or(1, |n| n.get()),
+        rayoflight::render::all_cores(),
         pov_version
             .as_deref()
             .unwrap_or(if args.pov { "not found" } else { "skipped" }),

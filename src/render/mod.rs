@@ -58,8 +58,7 @@ use rayon::prelude::*;
 /// 1024. More cannot go faster, and asking the system for a billion
 /// threads would only spend minutes failing to start them.
 pub fn max_threads() -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    (4 * cores).min(1024)
+    (4 * all_cores()).min(1024)
 }
 
 /// Largest `--aa` factor (N×N samples per pixel).
