@@ -837,6 +837,34 @@ fn item_8_esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
 }
 
 #[test]
+fn a_pick_waiting_for_a_cancelled_render_is_dropped_with_a_notice() {
+    let (_dir, path) = file_with(&many_spheres(200_000));
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    until_done(&mut harness, Duration::from_secs(60));
+    // An edit, a pick while the scene is prepared again (it waits for
+    // the worker), then Esc before the worker has prepared it: no render
+    // will, so the pick must not wait (and repaint) for ever.
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    assert_eq!(harness.state().preview().state(), &RenderState::Waiting);
+    harness.state_mut().pick(32.0, 24.0);
+    harness.run_steps(1);
+    assert!(harness.state().waits_for_the_worker());
+    harness.key_press(egui::Key::Escape);
+    harness.run_steps(2);
+    assert_eq!(harness.state().preview().state(), &RenderState::Cancelled);
+    assert!(!harness.state().waits_for_the_worker(), "dropped");
+    assert!(status_says(&harness, "nothing picked"));
+    // F5 renders again, and a pick is made in the new picture.
+    harness.key_press(egui::Key::F5);
+    harness.run_steps(1);
+    until_done(&mut harness, Duration::from_secs(60));
+    harness.state_mut().pick(32.0, 24.0);
+    harness.run_steps(1);
+    assert!(!harness.state().waits_for_the_worker());
+}
+
+#[test]
 fn item_10_esc_closes_the_help_and_o_hides_the_overlays() {
     let (_dir, path) = file_with(EXAMPLE);
     let mut harness = app_on(Document::open(&path).unwrap(), None);

@@ -39,22 +39,29 @@ trap 'kill $xvfb 2>/dev/null || true' EXIT
 sleep 1
 export DISPLAY=$display LIBGL_ALWAYS_SOFTWARE=1 XDG_CONFIG_HOME=$out
 
-# run SCENE NAME: start the app, wait for its first full picture, orbit for
-# 4 s, release, then stay idle for 6 s.
-run() {
-  local scene=$1 name=$2 log="$out/$2.log"
+# start_app SCENE LOG: starts the app on SCENE with its stats going to LOG,
+# waits (at most 300 s) for its first full picture and focuses its window.
+# Sets app (its pid) and waited (the seconds it took).
+start_app() {
+  local scene=$1 log=$2
   RAYOFLIGHT_STATS=1 "$bin" "$scene" 2>"$log" &
-  local app=$!
+  app=$!
   local start=$SECONDS
   until grep -q "full picture" "$log"; do
     sleep 0.5
-    if (( SECONDS - start > 300 )); then echo "$name: no full picture in 300 s"; break; fi
+    if (( SECONDS - start > 300 )); then echo "$scene: no full picture in 300 s"; break; fi
   done
-  echo "== $name: first full picture after $((SECONDS - start)) s (render stats before the drag:)"
+  waited=$((SECONDS - start))
+  xdotool windowfocus --sync "$(xdotool search --name RayOfLight | head -n 1)"
+}
+
+# run SCENE NAME: start the app, wait for its first full picture, orbit for
+# 4 s, release, then stay idle for 6 s.
+run() {
+  local name=$2 log="$out/$2.log"
+  start_app "$1" "$log"
+  echo "== $name: first full picture after $waited s (render stats before the drag:)"
   grep "stats: fps" "$log" | tail -n 3 || true
-  local win
-  win=$(xdotool search --name RayOfLight | head -n 1)
-  xdotool windowfocus --sync "$win"
   local cx=780 cy=450
   : > "$out/$name.drag-start"
   local mark
@@ -73,11 +80,10 @@ run() {
   echo "$during"
   echo "-- after the release:"
   tail -n +"$mark" "$log" | grep "full picture" | head -n 1 || true
-  local pid=$app
   local t0 t1
-  t0=$(awk '{print $14 + $15}' /proc/$pid/stat)
+  t0=$(awk '{print $14 + $15}' /proc/$app/stat)
   sleep 5
-  t1=$(awk '{print $14 + $15}' /proc/$pid/stat)
+  t1=$(awk '{print $14 + $15}' /proc/$app/stat)
   echo "-- idle CPU over 5 s: $(( (t1 - t0) * 100 / 500 )) % (ticks $t0 -> $t1)"
   kill $app
   wait $app 2>/dev/null || true
@@ -96,16 +102,7 @@ median() { sort -n | awk '{v[NR] = $1} END {if (NR) print v[int((NR + 1) / 2)]}'
 # drew meanwhile. Medians of the five.
 compare() {
   local scene=$1 name=$2 log="$out/$2.render.log"
-  RAYOFLIGHT_STATS=1 "$bin" "$scene" 2>"$log" &
-  local app=$!
-  local start=$SECONDS
-  until grep -q "full picture" "$log"; do
-    sleep 0.5
-    if (( SECONDS - start > 300 )); then echo "$name: no full picture in 300 s"; break; fi
-  done
-  local win
-  win=$(xdotool search --name RayOfLight | head -n 1)
-  xdotool windowfocus --sync "$win"
+  start_app "$scene" "$log"
   xdotool mousemove 1200 860
   sleep 2
   local cli=()

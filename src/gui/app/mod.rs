@@ -6,8 +6,10 @@
 //! edits and their undo, [`Preview`] assembles tiles. This module holds the
 //! state and the frame ([`RayOfLightApp::draw`]); its children hold the
 //! rest:
-//! - [`command`]: the [`Command`] enum of menus and keys, and the one place
-//!   that carries it out;
+//! - [`command`]: the [`Command`] enum of menus and keys, and the one
+//!   binding table that gives each its label, keys and help line;
+//! - `menus`: the menu bar, the keys and the help window read from that
+//!   table, and the one place that carries a command out (`run`);
 //! - `dialogs`: open (a large file on a thread of its own), save (on a
 //!   thread of its own), export, and the modal questions;
 //! - `hot_exit`: the journal of unsaved edits kept as they are made,
@@ -33,6 +35,7 @@ mod dialogs;
 mod events;
 mod explain;
 mod hot_exit;
+mod menus;
 mod navigate;
 mod overlay;
 mod passes;

@@ -3,6 +3,7 @@
 
 use super::{RayOfLightApp, navigate};
 use crate::gui::panel::Selection;
+use crate::gui::preview::RenderState;
 use egui::{Color32, Pos2, Rect, Sense, TextureOptions, Vec2};
 
 /// How the picture is placed in the central area.
@@ -259,16 +260,40 @@ impl RayOfLightApp {
     }
 
     /// A pick or an explain that waited for the worker to prepare the
-    /// scene: made once it has (else it waits a frame more).
+    /// scene: made once it has, else it waits a frame more, unless no
+    /// render will prepare it (the newest was cancelled or failed): then
+    /// it is dropped, and a notice says why.
     pub(super) fn retry_waiting(&mut self, ctx: &egui::Context) {
-        match self.waiting.take() {
-            Some(Waiting::Pick(x, y)) => self.pick(x, y),
-            Some(Waiting::Explain(x, y)) => self.explain_pixel(x, y),
-            None => return,
+        let Some(waiting) = self.waiting.take() else {
+            return;
+        };
+        match waiting {
+            Waiting::Pick(x, y) => self.pick(x, y),
+            Waiting::Explain(x, y) => self.explain_pixel(x, y),
         }
-        if self.waiting.is_some() {
-            ctx.request_repaint_after(crate::gui::worker::FRAME);
+        if self.waiting.is_none() {
+            return;
         }
+        let why = match self.preview.state() {
+            RenderState::Cancelled => "the render was cancelled (Esc); F5 renders again",
+            RenderState::Failed(_) => "the render failed",
+            _ => {
+                ctx.request_repaint_after(crate::gui::worker::FRAME);
+                return;
+            }
+        };
+        self.waiting = None;
+        let what = match waiting {
+            Waiting::Pick(..) => "nothing picked",
+            Waiting::Explain(..) => "nothing explained",
+        };
+        self.notify(format!("{what}: {why}"));
+    }
+
+    /// Whether a pick or an explain waits for the worker to prepare the
+    /// scene on screen (for tests and tools driving the app).
+    pub fn waits_for_the_worker(&self) -> bool {
+        self.waiting.is_some()
     }
 }
 
