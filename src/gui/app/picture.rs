@@ -52,8 +52,15 @@ impl RayOfLightApp {
     pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
         egui::CentralPanel::default().show(ui, |ui| {
             let (cleared, dirty) = self.preview.take_dirty();
-            self.texture
-                .update(ui.ctx(), self.preview.image(), cleared, dirty);
+            // At the zoom of the last frame (one frame late when it
+            // changes).
+            self.texture.update(
+                ui.ctx(),
+                self.preview.image(),
+                cleared,
+                dirty,
+                self.view.zoom,
+            );
             // A coarse pass shows at its own size, stretched, and stays on
             // screen until the finer picture is wholly uploaded.
             let coarse_dirty = self.preview.take_coarse_dirty();
@@ -80,11 +87,12 @@ impl RayOfLightApp {
             let (w, h) = self.preview.image().dimensions();
             // A render pass (View › Pass) in place of the picture, once
             // rendered at the picture's size.
-            let texture = match (&self.coarse_texture, self.pass_texture(w, h)) {
-                (_, Some(pass)) => pass,
-                (Some(t), None) if self.showing_coarse => t.id(),
-                _ => match self.texture.id() {
-                    Some(id) => id,
+            let whole = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
+            let (texture, uv) = match (&self.coarse_texture, self.pass_texture(w, h)) {
+                (_, Some(pass)) => (pass, whole),
+                (Some(t), None) if self.showing_coarse => (t.id(), whole),
+                _ => match self.texture.shown() {
+                    Some(shown) => shown,
                     None => return,
                 },
             };
@@ -118,12 +126,7 @@ impl RayOfLightApp {
             let grabbing = self.interaction.is_grabbing();
             self.gestures(ui, &response, to_image, image_per_point);
             let painter = ui.painter_at(area);
-            painter.image(
-                texture,
-                rect,
-                Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
-                Color32::WHITE,
-            );
+            painter.image(texture, rect, uv, Color32::WHITE);
             if self.overlays {
                 self.draw_outline(&painter, rect);
             }
