@@ -101,9 +101,14 @@ impl Dirty {
 /// band by band: a few milliseconds of work on the development machine.
 pub const BAND_PIXELS: usize = 1 << 20;
 
+/// All of a texture, as texture coordinates.
+pub const WHOLE: Rect = Rect {
+    min: Pos2::ZERO,
+    max: Pos2::new(1.0, 1.0),
+};
+
 /// The texture of the picture: at full size, and reduced while it is
 /// shown smaller.
-#[derive(Default)]
 pub struct PictureTexture {
     full: Level,
     /// The picture averaged over blocks, while it is shown at most half
@@ -111,8 +116,16 @@ pub struct PictureTexture {
     reduced: Option<Level>,
 }
 
+impl Default for PictureTexture {
+    fn default() -> Self {
+        PictureTexture {
+            full: Level::new(1),
+            reduced: None,
+        }
+    }
+}
+
 /// One texture of the picture, `factor` image pixels a side to a texel.
-#[derive(Default)]
 struct Level {
     handle: Option<TextureHandle>,
     factor: u32,
@@ -132,7 +145,6 @@ impl PictureTexture {
     /// The texture to paint and the part of it that is the picture: the
     /// reduced one once it is wholly up, else the full-size one.
     pub fn shown(&self) -> Option<(TextureId, Rect)> {
-        let whole = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
         match &self.reduced {
             Some(reduced) if reduced.complete() => reduced.handle.as_ref().map(|t| {
                 // The last column and row of blocks may be partial: the
@@ -145,7 +157,7 @@ impl PictureTexture {
                 );
                 (t.id(), Rect::from_min_max(Pos2::ZERO, uv))
             }),
-            _ => self.id().map(|id| (id, whole)),
+            _ => self.id().map(|id| (id, WHOLE)),
         }
     }
 
@@ -172,18 +184,14 @@ impl PictureTexture {
         if factor == 1 {
             self.reduced = None;
         } else {
-            let reduced = self.reduced.get_or_insert_with(Level::default);
-            if reduced.factor != factor {
-                // Built band by band; the full-size texture is painted
-                // meanwhile.
-                *reduced = Level {
-                    factor,
-                    ..Level::default()
-                };
-            }
+            // Built band by band when the factor changes; the full-size
+            // texture is painted meanwhile.
+            let reduced = match &mut self.reduced {
+                Some(reduced) if reduced.factor == factor => reduced,
+                _ => self.reduced.insert(Level::new(factor)),
+            };
             reduced.update(ctx, image, cleared, &dirty);
         }
-        self.full.factor = 1;
         self.full.update(ctx, image, cleared, &dirty);
     }
 }
@@ -200,6 +208,16 @@ pub fn reduction(zoom: f32) -> u32 {
 }
 
 impl Level {
+    /// A level with no texture yet.
+    fn new(factor: u32) -> Level {
+        Level {
+            handle: None,
+            factor,
+            image_size: (0, 0),
+            next_band: None,
+        }
+    }
+
     fn complete(&self) -> bool {
         self.handle.is_some() && self.next_band.is_none()
     }
@@ -329,13 +347,17 @@ fn reduce(image: &RgbImage, r: Region, factor: u32) -> ([usize; 2], [usize; 2], 
 mod tests {
     use super::*;
 
-    fn tile(x: u32, y: u32) -> Region {
+    fn region(x: u32, y: u32, width: u32, height: u32) -> Region {
         Region {
             x,
             y,
-            width: 32,
-            height: 32,
+            width,
+            height,
         }
+    }
+
+    fn tile(x: u32, y: u32) -> Region {
+        region(x, y, 32, 32)
     }
 
     #[test]
@@ -399,12 +421,7 @@ mod tests {
         // 5 × 3 pixels by blocks of 2: texels of 2×2, 2×1, 1×2 and 1×1
         // pixels.
         let image = RgbImage::from_fn(5, 3, |x, y| image::Rgb([(10 * x + y) as u8, 200, x as u8]));
-        let all = Region {
-            x: 0,
-            y: 0,
-            width: 5,
-            height: 3,
-        };
+        let all = region(0, 0, 5, 3);
         let (origin, size, rgb) = reduce(&image, all, 2);
         assert_eq!((origin, size), ([0, 0], [3, 2]));
         let texel = |tx: usize, ty: usize| &rgb[(ty * 3 + tx) * 3..(ty * 3 + tx) * 3 + 3];
@@ -417,12 +434,7 @@ mod tests {
         // (4, 2) alone.
         assert_eq!(texel(2, 1), [42, 200, 4]);
         // A region inside one block updates that block, read whole.
-        let one = Region {
-            x: 3,
-            y: 1,
-            width: 1,
-            height: 1,
-        };
+        let one = region(3, 1, 1, 1);
         let (origin, size, part) = reduce(&image, one, 2);
         assert_eq!((origin, size), ([1, 0], [1, 1]));
         assert_eq!(part, rgb[3..6]);

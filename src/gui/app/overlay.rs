@@ -5,6 +5,7 @@
 //! (an undoable edit of the light's x, y, z, one step per drag).
 
 use super::{Background, Interaction, RayOfLightApp};
+use crate::gui::texture::WHOLE;
 use crate::render;
 use crate::render::navigate::{GESTURE_PRECISION, moved_on_screen, pixel_at, project, settle_vec};
 use crate::scene::edit::{Axis, Edit, Field, Value};
@@ -104,12 +105,7 @@ impl RayOfLightApp {
         if let Some(outline) = &self.outline
             && self.selection.object.map(|o| o as u32) == Some(outline.key.0)
         {
-            painter.image(
-                outline.texture.id(),
-                rect,
-                Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0)),
-                Color32::WHITE,
-            );
+            painter.image(outline.texture.id(), rect, WHOLE, Color32::WHITE);
         }
     }
 

@@ -4,6 +4,7 @@
 use super::{RayOfLightApp, navigate};
 use crate::gui::panel::Selection;
 use crate::gui::preview::RenderState;
+use crate::gui::texture::WHOLE;
 use egui::{Color32, Pos2, Rect, Sense, TextureOptions, Vec2};
 
 /// How the picture is placed in the central area.
@@ -87,10 +88,9 @@ impl RayOfLightApp {
             let (w, h) = self.preview.image().dimensions();
             // A render pass (View › Pass) in place of the picture, once
             // rendered at the picture's size.
-            let whole = Rect::from_min_max(Pos2::ZERO, Pos2::new(1.0, 1.0));
             let (texture, uv) = match (&self.coarse_texture, self.pass_texture(w, h)) {
-                (_, Some(pass)) => (pass, whole),
-                (Some(t), None) if self.showing_coarse => (t.id(), whole),
+                (_, Some(pass)) => (pass, WHOLE),
+                (Some(t), None) if self.showing_coarse => (t.id(), WHOLE),
                 _ => match self.texture.shown() {
                     Some(shown) => shown,
                     None => return,
