@@ -797,7 +797,10 @@ fn a_light_and_an_object_follow_the_mouse_under_a_stretched_camera() {
         "{now:?}"
     );
 
+    // The light's drag changed the scene: the pick waits for the worker
+    // to prepare it again, and G needs the selection.
     harness.state_mut().pick(16.0, 12.0);
+    until(&mut harness, "the pick", |app| !app.waits_for_the_worker());
     harness.event(Event::PointerMoved(MIDDLE));
     harness.run_steps(1);
     harness.key_press(egui::Key::G);
