@@ -21,6 +21,8 @@
 //! - [`split`], [`assemble`]: past one machine: regions of even cost for
 //!   many tasks, and their parts put back together, checked; [`sheet`]:
 //!   the renders of a sweep side by side.
+//! - [`desktop`]: the app's desktop entry, icons and scene MIME type,
+//!   installed for the user and removed again.
 //! - [`files`]: special files, symbolic links, permissions and locks, for
 //!   reading and writing.
 //! - [`interrupt`]: SIGINT, SIGTERM and SIGHUP stop a write or a render
@@ -44,6 +46,7 @@
 
 pub mod assemble;
 pub mod bench;
+pub mod desktop;
 pub mod files;
 pub mod geometry;
 #[cfg(feature = "gui")]

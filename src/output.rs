@@ -83,6 +83,8 @@ pub enum OutputError {
     },
     #[error("{}: interrupted: nothing was written", path.display())]
     Interrupted { path: PathBuf },
+    #[error("{}: already exists; nothing was written", path.display())]
+    Exists { path: PathBuf },
     #[error(
         "{}: {format} cannot hold a {width}×{height} image ({})",
         path.display(),
@@ -615,6 +617,39 @@ fn existing(path: &Path, target: &Path) -> Result<Option<std::fs::Metadata>, Out
 /// device or pipe itself.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     write_atomic_with(path, |w| w.write_all(bytes), |_| Ok(()))
+}
+
+/// Writes `bytes` to a new file at `path`, never over anything there (a
+/// file, a link, even a dangling one): [`OutputError::Exists`]. The file
+/// is created empty, filled and synced; on a failure it is removed.
+pub fn write_new(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
+    let io_error = |source: std::io::Error| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    if path.as_os_str().is_empty() {
+        return Err(OutputError::EmptyName);
+    }
+    let mut file = match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(path)
+    {
+        Ok(file) => file,
+        Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+            return Err(OutputError::Exists {
+                path: path.to_owned(),
+            });
+        }
+        Err(e) => return Err(io_error(e)),
+    };
+    match file.write_all(bytes).and_then(|()| file.sync_all()) {
+        Ok(()) => Ok(()),
+        Err(e) => {
+            let _ = std::fs::remove_file(path);
+            Err(io_error(e))
+        }
+    }
 }
 
 /// [`write_atomic`] of what `write` streams, without the bytes in memory

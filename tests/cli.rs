@@ -8,6 +8,7 @@ mod common;
 use common::{TINY, files_in, rayoflight, stderr, stdout};
 use std::fs;
 use std::path::PathBuf;
+use std::process::Command;
 
 /// A temporary directory holding `tiny.xml`.
 fn workdir() -> (tempfile::TempDir, PathBuf) {
@@ -561,4 +562,22 @@ fn negative_numbers_are_values_and_single_dash_words_are_named_whole() {
         assert!(stderr(&o).contains(message), "{args:?}: {}", stderr(&o));
     }
     assert_eq!(files_in(dir.path()), ["tiny.xml"]);
+}
+
+/// Every flag but the scene is the command line's: `-q` alone renders
+/// without a window, even where a display is said to be (issue 28).
+#[cfg(feature = "gui")]
+#[test]
+fn quiet_alone_renders_without_opening_the_app() {
+    let (dir, _) = workdir();
+    let o = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(["-q", "tiny.xml"])
+        .current_dir(dir.path())
+        // A display that is not there: opening a window would fail.
+        .env("DISPLAY", ":4242")
+        .env_remove("WAYLAND_DISPLAY")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(files_in(dir.path()), ["tiny.png", "tiny.xml"]);
 }

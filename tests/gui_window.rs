@@ -88,6 +88,11 @@ struct Window {
 impl Window {
     /// Writes `text` to `name` in a new folder and opens the app on it.
     fn open(name: &str, text: &str) -> Window {
+        Window::open_with(name, text, &[])
+    }
+
+    /// [`Window::open`] with these variables in the app's environment.
+    fn open_with(name: &str, text: &str, vars: &[(&str, &str)]) -> Window {
         let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
         std::fs::create_dir_all(&shots).unwrap();
         let one = ONE_AT_A_TIME
@@ -97,7 +102,7 @@ impl Window {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join(name);
         std::fs::write(&path, text).unwrap();
-        let app = start_app(&path, &display, dir.path());
+        let app = start_app_with(&path, &display, dir.path(), vars);
         Window {
             shots,
             display,
@@ -112,8 +117,13 @@ impl Window {
 
 /// The app on `path` on `display`, its settings and its journal in `home`.
 fn start_app(path: &Path, display: &str, home: &Path) -> Killed {
+    start_app_with(path, display, home, &[])
+}
+
+fn start_app_with(path: &Path, display: &str, home: &Path, vars: &[(&str, &str)]) -> Killed {
     let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
         .arg(path)
+        .envs(vars.iter().copied())
         .env("DISPLAY", display)
         .env_remove("WAYLAND_DISPLAY")
         .env("XDG_CONFIG_HOME", home)
@@ -661,4 +671,89 @@ fn unsaved_edits_survive_kill_9_and_sigterm_and_come_back_on_screen() {
     let again = std::fs::read_to_string(&path).unwrap();
     assert_ne!(again, saved, "the edit made before SIGTERM is saved");
     assert!(journal_entries(&home).is_empty());
+}
+
+/// Edit › Open in editor (Ctrl+Shift+O) starts the user's editor, here a
+/// script that records its arguments, at the selected object's element:
+/// the line and column of its `<sphere>` in the file; the top of the file
+/// with nothing selected.
+#[test]
+fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
+    let record_dir = tempfile::tempdir().unwrap();
+    let script = record_dir.path().join("editor.sh");
+    let record = record_dir.path().join("args.txt");
+    std::fs::write(
+        &script,
+        format!(
+            "#!/bin/sh\nprintf '%s\\n' \"$@\" > '{}.part'\nmv '{0}.part' '{0}'\n",
+            record.display()
+        ),
+    )
+    .unwrap();
+    use std::os::unix::fs::PermissionsExt;
+    std::fs::set_permissions(&script, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let template = format!("'{}' {{file}} {{line}} {{column}}", script.display());
+    let opened = Window::open_with("two.xml", TWO_SPHERES, &[("RAYOFLIGHT_EDITOR", &template)]);
+    let (shots, display, path) = (&opened.shots, &opened.display, &opened.path);
+    let xdotool = |args: &[&str]| {
+        let out = Command::new("xdotool")
+            .args(args)
+            .env("DISPLAY", display)
+            .output()
+            .expect("xdotool runs (apt-get install xdotool)");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let first = shots.join("editor-0.png");
+    wait_for(
+        display,
+        &first,
+        Duration::from_secs(60),
+        "the first render",
+        |s| centroid(s, GREEN).1 > 500,
+    );
+    let window = app_window(&xdotool);
+    xdotool(&["windowfocus", "--sync", &window]);
+    let recorded = |what: &str| -> Vec<String> {
+        let start = Instant::now();
+        loop {
+            if let Ok(text) = std::fs::read_to_string(&record) {
+                let _ = std::fs::remove_file(&record);
+                return text.lines().map(str::to_owned).collect();
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(10),
+                "{what}: the editor was not started"
+            );
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    };
+    let file = path.display().to_string();
+
+    // Nothing selected: the top of the file.
+    xdotool(&["key", "--window", &window, "ctrl+shift+o"]);
+    assert_eq!(recorded("nothing selected"), [file.as_str(), "1", "1"]);
+
+    // Click the green sphere: its element's line and column.
+    let shot = screenshot(display, &shots.join("editor-1.png"));
+    let green_x = centroid(&shot, GREEN).0.round() as i64;
+    let green_y = {
+        let ys: Vec<u32> = shot
+            .enumerate_pixels()
+            .filter(|(_, _, p)| p.0 == GREEN)
+            .map(|(_, y, _)| y)
+            .collect();
+        (ys.iter().map(|&y| f64::from(y)).sum::<f64>() / ys.len() as f64).round() as i64
+    };
+    xdotool(&["mousemove", &green_x.to_string(), &green_y.to_string()]);
+    xdotool(&["click", "1"]);
+    std::thread::sleep(Duration::from_millis(800));
+    xdotool(&["key", "--window", &window, "ctrl+shift+o"]);
+    let at = TWO_SPHERES.match_indices("<sphere>").nth(1).unwrap().0;
+    let line = TWO_SPHERES[..at].matches('\n').count() + 1;
+    let column = at - TWO_SPHERES[..at].rfind('\n').unwrap();
+    assert_eq!(
+        recorded("the green sphere selected"),
+        [file, line.to_string(), column.to_string()]
+    );
+    screenshot(display, &shots.join("editor-2.png"));
 }

@@ -14,12 +14,13 @@
 //! so that their range check says what is allowed.
 
 use super::edit::{self, EditArg};
+use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
-use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand};
+use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueHint};
 use rayoflight::region::Region;
 use rayoflight::render::{self, Method, Pass};
 use rayoflight::request::RenderRequest;
-use rayoflight::scene::edit::EditError;
+use rayoflight::scene::edit::{EditError, NewElement};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 
@@ -37,6 +38,9 @@ Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
        rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--split-size PIXELS]
                         [--quiet]
        rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]
+       rayoflight new scene.xml
+       rayoflight install-desktop [--uninstall]
+       rayoflight schema | completions SHELL | man [SUBCOMMAND]
        rayoflight --help | --version";
 
 /// What the top-level help says after the flags and subcommands.
@@ -79,6 +83,17 @@ pub enum Command {
     Bench(super::bench::BenchArgs),
     /// `study [--out DIR] [--runs K] [--threads N] [scene.xml…]`.
     Study(super::study::StudyArgs),
+    /// `new scene.xml`: write the built-in example as a starting scene
+    /// (`-`: on stdout).
+    New { scene: PathBuf },
+    /// `schema`: print the scene format's XML Schema.
+    Schema,
+    /// `completions SHELL`: print the shell's completion script.
+    Completions(clap_complete::Shell),
+    /// `man [SUBCOMMAND]`: print a man page (roff).
+    Man { subcommand: Option<String> },
+    /// `install-desktop [--uninstall]`.
+    InstallDesktop { uninstall: bool },
 }
 
 impl Command {
@@ -91,7 +106,12 @@ impl Command {
             | Command::Split(_)
             | Command::Explain(_)
             | Command::Bench(_)
-            | Command::Study(_) => true,
+            | Command::Study(_)
+            | Command::Schema
+            | Command::Completions(_)
+            | Command::Man { .. } => true,
+            Command::New { scene } => scene.as_os_str() == "-",
+            Command::InstallDesktop { .. } => false,
             Command::Render(r) => r.time,
             Command::Assemble { .. }
             | Command::Sheet { .. }
@@ -154,14 +174,16 @@ pub struct EditArgs {
 
 impl RenderArgs {
     /// Whether the command asks for headless work: any of `-out`, `-time`,
-    /// `--no-gui`, `--threads`, `--aa`, `--method`, `--region`, `--set`,
-    /// `--pass`. In the GUI
-    /// build, anything else opens the app (the headless build never asks).
+    /// `--no-gui`, `--quiet`, `--threads`, `--aa`, `--method`, `--region`,
+    /// `--set`, `--pass`: every flag but the scene is the command line's.
+    /// In the GUI build, anything else opens the app (the headless build
+    /// never asks).
     #[cfg_attr(not(feature = "gui"), allow(dead_code))]
     pub fn headless(&self) -> bool {
         self.out.is_some()
             || self.time
             || self.no_gui
+            || self.quiet
             || self.request != RenderRequest::default()
             || !self.edits.is_empty()
             || self.pass != Pass::Final
@@ -191,7 +213,8 @@ pub enum UsageError {
 #[command(
     name = "rayoflight",
     version,
-    about = "Renders an XML scene (spheres, planes, lights, one camera, an \
+    about = "A raytracer for XML scenes, with a live desktop previewer",
+    long_about = "Renders an XML scene (spheres, planes, lights, one camera, an \
              illumination model) to an image; without -out, -time or --no-gui \
              (GUI build), opens the live previewer on it.",
     override_usage = USAGE.trim_start_matches("Usage: "),
@@ -233,9 +256,8 @@ struct RenderFlags {
     /// N×N rays per pixel, 1 to 16 [default: 1, the pixel centre]
     #[arg(long, value_name = "N", value_parser = aa, allow_negative_numbers = true)]
     aa: Option<u32>,
-    /// Render with this method instead of auto (default, auto, f32,
-    /// textbook, draft, …; see docs/study.md).
-    #[arg(long, value_name = "NAME", value_parser = method)]
+    /// Render with this method instead of auto (see docs/study.md).
+    #[arg(long, value_name = "NAME", value_parser = Named::new(method, method_names))]
     method: Option<Method>,
     /// Never open a window (the headless build never does).
     #[arg(long)]
@@ -256,7 +278,7 @@ struct RenderFlags {
     ///
     /// final (default), ambient, diffuse, specular, reflection (the camera
     /// ray's terms; in .exr they add up to final), normal, depth, object.
-    #[arg(long, value_name = "NAME", value_parser = pass)]
+    #[arg(long, value_name = "NAME", value_parser = Named::new(pass, pass_names))]
     pass: Option<Pass>,
     /// Render only this rectangle of the image, into the PNG part -out
     /// names.
@@ -359,6 +381,54 @@ enum Sub {
     /// given. Prints a table on stdout and writes DIR/study.csv, the chart
     /// DIR/study.png and a picture of each failure. See docs/study.md.
     Study(StudyFlags),
+    /// Write the built-in example scene to a new file, to start from.
+    ///
+    /// Never over an existing file. '-' prints it on stdout.
+    New {
+        /// The scene file to create.
+        #[arg(value_name = "FILE", value_hint = ValueHint::FilePath)]
+        scene: PathBuf,
+    },
+    /// Print the XML Schema (XSD 1.0) of the scene format.
+    ///
+    /// Generated from the loader's own tables: every element and
+    /// attribute, which are required, the ranges and the numbers the
+    /// loader reads, each documented (what editors show on hover). Save
+    /// it as rayoflight.xsd and point the editor at it; see the README.
+    Schema,
+    /// Print the shell completion script for SHELL.
+    ///
+    /// Completes subcommands, flags, file names where a file goes and the
+    /// names --method, --pass and --add take. For bash:
+    /// rayoflight completions bash > ~/.local/share/bash-completion/completions/rayoflight
+    Completions {
+        /// The shell.
+        #[arg(value_name = "SHELL")]
+        shell: clap_complete::Shell,
+    },
+    /// Put the app in the desktop's menus and "Open with", for this user.
+    ///
+    /// Writes a desktop entry (that runs this binary, by its absolute
+    /// path), the icons in the hicolor theme and the type of scenes that
+    /// name rayoflight.xsd under $XDG_DATA_HOME (default ~/.local/share),
+    /// and updates the desktop's databases when their tools are installed.
+    /// RayOfLight is the default for its own type only, never for every
+    /// XML file. Never over a file it did not write; --uninstall removes
+    /// exactly what it wrote.
+    InstallDesktop {
+        /// Remove what install-desktop wrote.
+        #[arg(long)]
+        uninstall: bool,
+    },
+    /// Print a man page: rayoflight(1), or one subcommand's.
+    ///
+    /// For example: rayoflight man | man -l -, or rayoflight man edit >
+    /// rayoflight-edit.1.
+    Man {
+        /// The subcommand whose page to print [default: rayoflight(1)]
+        #[arg(value_name = "SUBCOMMAND", value_parser = Named::new(subcommand, subcommand_names))]
+        subcommand: Option<String>,
+    },
 }
 
 #[derive(Args, Debug)]
@@ -390,7 +460,7 @@ struct RenderOf {
     #[arg(long, value_name = "N", value_parser = aa, allow_negative_numbers = true)]
     aa: Option<u32>,
     /// The study method the render uses instead of auto.
-    #[arg(long, value_name = "NAME", value_parser = method)]
+    #[arg(long, value_name = "NAME", value_parser = Named::new(method, method_names))]
     method: Option<Method>,
 }
 
@@ -460,7 +530,7 @@ struct EditFlags {
     remove: Vec<String>,
     /// Add an element with default values, after the last of its kind:
     /// sphere, plane or light.
-    #[arg(long, value_name = "KIND")]
+    #[arg(long, value_name = "KIND", value_parser = Named::new(kind, kind_names))]
     add: Vec<String>,
     /// Write the edited scene to FILE instead of the scene file.
     #[arg(short, long, value_name = "FILE")]
@@ -475,7 +545,7 @@ struct BenchFlags {
     /// Runs per measurement; the median is reported.
     #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs, allow_negative_numbers = true)]
     runs: usize,
-    /// Also write the results as CSV to FILE.
+    /// Also write the results as CSV to FILE (also --out).
     #[arg(long, short = 'o', visible_alias = "out", value_name = "FILE")]
     csv: Option<PathBuf>,
     /// Do not render with POV-Ray, even where it is installed.
@@ -594,11 +664,68 @@ fn pass(text: &str) -> Result<Pass, String> {
     })
 }
 
+fn pass_names() -> Vec<&'static str> {
+    Pass::ALL.iter().map(|p| p.name()).collect()
+}
+
 fn method(text: &str) -> Result<Method, String> {
-    render::method(text).ok_or_else(|| {
-        let names: Vec<_> = render::methods().iter().map(|m| m.name).collect();
-        format!("expects one of {}", names.join(", "))
-    })
+    render::method(text).ok_or_else(|| format!("expects one of {}", method_names().join(", ")))
+}
+
+fn method_names() -> Vec<&'static str> {
+    render::methods().iter().map(|m| m.name).collect()
+}
+
+/// `--add`'s kind, read (and refused, naming the scene) with the edits.
+fn kind(text: &str) -> Result<String, String> {
+    Ok(text.to_owned())
+}
+
+fn kind_names() -> Vec<&'static str> {
+    NewElement::ALL.iter().map(|k| k.name()).collect()
+}
+
+fn subcommand(text: &str) -> Result<String, String> {
+    match SUBCOMMANDS.contains(&text) {
+        true => Ok(text.to_owned()),
+        false => Err(format!("expects one of {}", SUBCOMMANDS.join(", "))),
+    }
+}
+
+fn subcommand_names() -> Vec<&'static str> {
+    SUBCOMMANDS.to_vec()
+}
+
+/// A value parser that also names the values it takes, for the shell
+/// completions, the help and the man pages; parsing (and its message)
+/// stays the function's.
+#[derive(Clone)]
+struct Named<T> {
+    parse: fn(&str) -> Result<T, String>,
+    names: fn() -> Vec<&'static str>,
+}
+
+impl<T> Named<T> {
+    fn new(parse: fn(&str) -> Result<T, String>, names: fn() -> Vec<&'static str>) -> Named<T> {
+        Named { parse, names }
+    }
+}
+
+impl<T: Clone + Send + Sync + 'static> TypedValueParser for Named<T> {
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<T, clap::Error> {
+        self.parse.parse_ref(cmd, arg, value)
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new((self.names)().into_iter().map(PossibleValue::new)))
+    }
 }
 
 // ----- resolving -----
@@ -698,7 +825,18 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             scenes: s.scenes,
             quiet: s.quiet,
         }),
+        Some(Sub::New { scene }) => Command::New { scene },
+        Some(Sub::Schema) => Command::Schema,
+        Some(Sub::Completions { shell }) => Command::Completions(shell),
+        Some(Sub::Man { subcommand }) => Command::Man { subcommand },
+        Some(Sub::InstallDesktop { uninstall }) => Command::InstallDesktop { uninstall },
     })
+}
+
+/// The command line's definition, as clap reads it: what the shell
+/// completions and the man pages are generated from.
+pub fn definition() -> clap::Command {
+    Cli::command()
 }
 
 fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
@@ -925,7 +1063,7 @@ fn edit_distance(a: &str, b: &str) -> usize {
 }
 
 /// The subcommands' names, as clap derives them from `Sub`.
-const SUBCOMMANDS: [&str; 9] = [
+const SUBCOMMANDS: [&str; 14] = [
     "split",
     "assemble",
     "sheet",
@@ -935,6 +1073,11 @@ const SUBCOMMANDS: [&str; 9] = [
     "bench",
     "edit",
     "study",
+    "new",
+    "schema",
+    "completions",
+    "install-desktop",
+    "man",
 ];
 
 /// The subcommand the arguments run, if any: only the first argument can

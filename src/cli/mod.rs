@@ -8,6 +8,7 @@ mod bench;
 mod cluster;
 mod edit;
 mod explain;
+mod generated;
 mod progress;
 mod stdout;
 mod study;
@@ -123,7 +124,78 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             study::run(&args, &steps).map_err(Failure::Error)
         }
         Command::Render(r) => render_scene(r),
+        Command::New { scene } => new_scene(&scene),
+        Command::InstallDesktop { uninstall } => install_desktop(uninstall),
+        Command::Schema => print_line(rayoflight::scene::schema::xsd().trim_end()),
+        Command::Completions(shell) => {
+            stdout::write(&generated::completions(shell)).map_err(Failure::Error)
+        }
+        Command::Man { subcommand } => {
+            let page = generated::man_page(subcommand.as_deref()).map_err(usage)?;
+            stdout::write(&page).map_err(Failure::Error)
+        }
     }
+}
+
+/// `rayoflight install-desktop [--uninstall]`: what was done, on stderr.
+fn install_desktop(uninstall: bool) -> Result<(), Failure> {
+    use rayoflight::desktop;
+    if !cfg!(feature = "gui") {
+        return Err(Failure::Error(
+            "rayoflight: this build has no desktop app (built without the gui feature): \
+             nothing to install"
+                .to_owned(),
+        ));
+    }
+    let home = desktop::data_home().map_err(fail)?;
+    let done = match uninstall {
+        false => {
+            let exec = std::env::current_exe()
+                .and_then(std::fs::canonicalize)
+                .map_err(|e| Failure::Error(format!("rayoflight: where is this binary? {e}")))?;
+            let done = desktop::install(&home, &exec).map_err(fail)?;
+            eprintln!(
+                "installed under {}: the desktop entry (running {}), {} icons and the scene type",
+                home.display(),
+                exec.display(),
+                desktop::ICON_PNGS.len() + 1
+            );
+            done
+        }
+        true => {
+            let done = desktop::uninstall(&home).map_err(fail)?;
+            match done.files.len() {
+                0 => eprintln!(
+                    "nothing to remove: install-desktop wrote nothing under {}",
+                    home.display()
+                ),
+                n => eprintln!(
+                    "removed the {n} files install-desktop wrote under {}",
+                    home.display()
+                ),
+            }
+            done
+        }
+    };
+    for ran in &done.ran {
+        eprintln!("ran {ran}");
+    }
+    for tool in &done.missing {
+        eprintln!(
+            "{tool} is not installed: the desktop may see the change only after its next login"
+        );
+    }
+    Ok(())
+}
+
+/// `rayoflight new scene.xml`: the built-in example, to start from, in a
+/// file that did not exist (never over one: its text was not read), or on
+/// stdout for `-`.
+fn new_scene(path: &Path) -> Result<(), Failure> {
+    if path.as_os_str() == "-" {
+        return stdout::write(rayoflight::EXAMPLE_SCENE).map_err(Failure::Error);
+    }
+    output::write_new(path, rayoflight::EXAMPLE_SCENE.as_bytes()).map_err(fail)
 }
 
 /// Prints a line to stdout ([`stdout::write`]).

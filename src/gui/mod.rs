@@ -11,6 +11,8 @@
 //! - [`pace`]: how coarse to render while the mouse moves.
 //! - [`settings`]: what the app remembers between runs, the recent files
 //!   among it.
+//! - [`editor`]: the user's editor, started on the scene at an element
+//!   (Edit › Open in editor).
 //! - [`preview`]: the picture assembled from the worker's tiles.
 //! - [`texture`]: that picture on the GPU, uploaded a changed tile (or a
 //!   band of rows) at a time.
@@ -19,11 +21,12 @@
 //!   after a crash or a logout.
 //! - [`study`]: the Study window and the live preview's choice of method.
 //!
-//! It reaches the core only through `scene`, `render`, `study` and
-//! `output`.
+//! It reaches the core only through `scene`, `render`, `study`,
+//! `output` and `desktop` (the window's id and icon).
 
 pub mod app;
 pub mod document;
+pub mod editor;
 pub mod journal;
 pub mod pace;
 mod panel;
@@ -68,6 +71,25 @@ pub fn first_document(
         .unwrap_or_else(document::Document::builtin))
 }
 
+/// The app's icon (its 256-pixel PNG), for the window and the task bar.
+fn window_icon() -> egui::IconData {
+    let png = crate::desktop::ICON_PNGS
+        .iter()
+        .find(|(side, _)| *side == 256)
+        .map_or(&[][..], |(_, png)| *png);
+    match image::load_from_memory_with_format(png, image::ImageFormat::Png) {
+        Ok(icon) => {
+            let icon = icon.to_rgba8();
+            egui::IconData {
+                width: icon.width(),
+                height: icon.height(),
+                rgba: icon.into_raw(),
+            }
+        }
+        Err(_) => egui::IconData::default(),
+    }
+}
+
 /// Whether a display server is reachable by the environment's say-so.
 pub fn display_available() -> bool {
     ["DISPLAY", "WAYLAND_DISPLAY"]
@@ -96,7 +118,11 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
             .with_inner_size(persisted.settings.window.unwrap_or([1200.0, 800.0]))
             .with_min_inner_size([480.0, 320.0])
             .with_drag_and_drop(true)
-            .with_title("RayOfLight"),
+            .with_title("RayOfLight")
+            // The desktop entry's id: the shell shows the entry's name and
+            // icon for the window (Wayland app id, X11 class).
+            .with_app_id(crate::desktop::APP_ID)
+            .with_icon(window_icon()),
         // egui dithers every fragment against banding in its gradients;
         // there are none here, the picture's texels are already 8 bits,
         // and with Mesa's software renderer (Xvfb, remote desktops) the

@@ -1,5 +1,6 @@
 //! What the app remembers between runs, in its own struct: the window's
-//! size, the anti-aliasing, the study's runs and the last file open
+//! size, the anti-aliasing, the study's runs, the last file open, the
+//! editor of Edit › Open in editor
 //! ([`Settings`], `settings.txt`), and the recent files ([`Recent`],
 //! `recent.txt`, one path per line, newest first). Both live in
 //! `$XDG_CONFIG_HOME/rayoflight/` (or `~/.config/rayoflight/`) and are
@@ -62,6 +63,9 @@ pub struct Settings {
     /// The scene file open when the app last closed (`None`: the built-in
     /// example); the app reopens it when started without a file.
     pub last_file: Option<PathBuf>,
+    /// Edit › Open in editor's command (`editor = code -g {file}:{line}`),
+    /// when RAYOFLIGHT_EDITOR does not say ([`crate::gui::editor`]).
+    pub editor: Option<String>,
     /// Where they are saved; `None`: nowhere.
     store: Option<PathBuf>,
 }
@@ -73,6 +77,7 @@ impl Default for Settings {
             aa: 1,
             study_runs: 3,
             last_file: None,
+            editor: None,
             store: None,
         }
     }
@@ -118,6 +123,7 @@ impl Settings {
                     }
                 }
                 "last_file" if !value.is_empty() => s.last_file = Some(PathBuf::from(value)),
+                "editor" if !value.is_empty() => s.editor = Some(value.to_owned()),
                 _ => {}
             }
         }
@@ -133,6 +139,9 @@ impl Settings {
         text.push_str(&format!("study_runs = {}\n", self.study_runs));
         if let Some(path) = self.last_file.as_deref().and_then(as_line) {
             text.push_str(&format!("last_file = {path}\n"));
+        }
+        if let Some(editor) = self.editor.as_deref().filter(|e| !e.contains(['\n', '\r'])) {
+            text.push_str(&format!("editor = {editor}\n"));
         }
         text
     }
@@ -231,6 +240,7 @@ mod tests {
         s.aa = 3;
         s.study_runs = 5;
         s.last_file = Some(dir.path().join("a scene.xml"));
+        s.editor = Some("code -g \"{file}:{line}:{column}\"".into());
         s.save();
         let back = Settings::load(Some(file));
         assert_eq!(back, s);

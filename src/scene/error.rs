@@ -128,6 +128,18 @@ pub enum LoadErrorKind {
         attribute: String,
         allowed: &'static [&'static str],
     },
+    /// `<scene>`'s schema attributes, not as XML Schema defines them: an
+    /// `xsi:` attribute without `xmlns:xsi`, or `xmlns:xsi` naming another
+    /// namespace (`value`).
+    #[error(
+        "<scene> names its schema with xmlns:xsi=\"{}\"{}",
+        super::grammar::XSI_NAMESPACE,
+        match value {
+            Some(value) => format!(", not \"{}\"", shown(value)),
+            None => " first: xsi:noNamespaceSchemaLocation needs it".to_owned(),
+        }
+    )]
+    SchemaNamespace { value: Option<Box<str>> },
     /// A required attribute is absent.
     #[error("<{element}> is missing the required attribute {attribute}")]
     MissingAttribute {

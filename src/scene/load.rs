@@ -31,6 +31,11 @@ use quick_xml::events::attributes::AttrError;
 use quick_xml::events::{BytesStart, Event};
 
 use super::error::{LoadError, LoadErrorKind, Position};
+use super::grammar::{
+    CAMERA_ATTRS, CAMERA_CHILDREN, COLOR_ATTRS, LIGHT_ATTRS, LIGHT_CHILDREN, MATERIAL_ATTRS,
+    MODEL_ATTRS, NONE, OBJECT_CHILDREN, ROTATE_ATTRS, SCALE_ATTRS, SCENE_ATTRS, SCENE_CHILDREN,
+    TRANSFORM_CHILDREN, TRANSLATE_ATTRS, XSI_NAMESPACE,
+};
 use super::xml;
 use super::{Camera, Color, Illumination, Light, Material, Model, Object, Scene, Shape};
 use crate::math::{Transform, TransformError, TransformStep, Vec3};
@@ -43,22 +48,6 @@ pub const MAX_OBJECTS: usize = 10_000_000;
 pub const MAX_LIGHTS: usize = 1_000_000;
 /// Most pixels (`width * height`) in the camera's image: 2^28.
 pub const MAX_PIXELS: u64 = 1 << 28;
-
-const SCENE_CHILDREN: &[&str] = &["sphere", "plane", "light", "camera", "model"];
-const OBJECT_CHILDREN: &[&str] = &["color", "material", "transformation"];
-const LIGHT_CHILDREN: &[&str] = &["color"];
-const CAMERA_CHILDREN: &[&str] = &["transformation"];
-const TRANSFORM_CHILDREN: &[&str] = &["translate", "rotate-x", "rotate-y", "rotate-z", "scale"];
-const NONE: &[&str] = &[];
-
-const COLOR_ATTRS: &[&str] = &["red", "green", "blue"];
-const MATERIAL_ATTRS: &[&str] = &["ka", "kd", "ks", "m"];
-const LIGHT_ATTRS: &[&str] = &["x", "y", "z"];
-const CAMERA_ATTRS: &[&str] = &["width", "height", "eyeDistance"];
-const MODEL_ATTRS: &[&str] = &["type", "depth"];
-const TRANSLATE_ATTRS: &[&str] = &["x", "y", "z"];
-const ROTATE_ATTRS: &[&str] = &["angle"];
-const SCALE_ATTRS: &[&str] = &["factor", "x", "y", "z"];
 
 /// Reads and parses the scene file at `path`.
 ///
@@ -812,7 +801,22 @@ impl<'a> Parser<'a> {
                 },
             ));
         }
-        self.attrs(&root, "scene", NONE)?;
+        // A scene may name its schema, as editors write it, and nothing else.
+        let attrs = self.attrs(&root, "scene", SCENE_ATTRS)?;
+        match (
+            attrs.get("xmlns:xsi"),
+            attrs.get("xsi:noNamespaceSchemaLocation"),
+        ) {
+            (Some(ns), _) if ns.value != XSI_NAMESPACE => {
+                let value = Some(Box::from(ns.value.as_ref()));
+                return Err(self.error_at(ns.at, LoadErrorKind::SchemaNamespace { value }));
+            }
+            (None, Some(location)) => {
+                let kind = LoadErrorKind::SchemaNamespace { value: None };
+                return Err(self.error_at(location.at, kind));
+            }
+            _ => {}
+        }
 
         let mut scene = Gathered::default();
         self.children(&root, "scene", SCENE_CHILDREN, false, |p, e, name| {

@@ -11,14 +11,18 @@
 //! command line's `edit` and `--set`); [`splice`] writes those changes back
 //! into the file's text, keeping every byte that was not edited; [`merge`]
 //! replays unsaved edits onto a version of the file another program saved;
-//! [`names`] names objects for people (`#2 RED sphere`).
+//! [`names`] names objects for people (`#2 RED sphere`). [`grammar`] is the
+//! format's elements and attributes as data, which the loader reads with
+//! and [`schema`] writes as an XML Schema for editors.
 
 pub mod edit;
 mod error;
+pub mod grammar;
 pub mod identity;
 mod load;
 pub mod merge;
 pub mod names;
+pub mod schema;
 pub mod splice;
 mod xml;
 

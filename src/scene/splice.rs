@@ -239,6 +239,16 @@ pub(super) fn object_comments(text: &str) -> Vec<Option<&str>> {
         .collect()
 }
 
+/// Where the element of object `index` (spheres and planes in file order)
+/// starts in `text`: its line and column, for an editor to open at.
+pub fn object_position(text: &str, index: usize) -> Option<super::Position> {
+    let doc = Doc::scan(text, Keep::TopLevel).ok()?;
+    let node = *doc
+        .children_named(doc.root, &["sphere", "plane"])
+        .get(index)?;
+    Some(super::Position::at_offset(text, doc.node(node).start))
+}
+
 /// A fresh scene file for `scene`, indented by two spaces:
 /// `parse(&to_xml(scene), path) == Ok(scene)` for every valid scene.
 ///

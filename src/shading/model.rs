@@ -16,7 +16,7 @@ impl Illumination {
     ];
 
     /// The `type` attribute value.
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Illumination::Ambient => "ambient",
             Illumination::Lambert => "lambert",

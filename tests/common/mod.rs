@@ -131,8 +131,7 @@ pub fn golden_scenes() -> Vec<std::path::PathBuf> {
 /// for each file, the line of the first error xmllint reports, or `None`
 /// when it finds the file well-formed (warnings and namespace errors, which
 /// leave its exit status 0, do not count). `None` as a whole when xmllint
-/// is not installed and `CI` is unset; in CI a missing xmllint fails the
-/// test (.ci/run installs libxml2-utils).
+/// is not installed and [`tool`] lets the test skip.
 pub fn xmllint(files: &[std::path::PathBuf]) -> Option<Vec<Option<usize>>> {
     let output = match Command::new("xmllint")
         .args(["--noout", "--nonet"])
@@ -140,11 +139,14 @@ pub fn xmllint(files: &[std::path::PathBuf]) -> Option<Vec<Option<usize>>> {
         .output()
     {
         Ok(output) => output,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound && std::env::var_os("CI").is_none() => {
-            eprintln!("xmllint is not installed: the comparison with libxml2 is skipped");
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            assert!(
+                !tool("xmllint", "libxml2-utils"),
+                "xmllint did not run: {e}"
+            );
             return None;
         }
-        Err(e) => panic!("xmllint (libxml2-utils) must be installed in CI: {e}"),
+        Err(e) => panic!("xmllint did not run: {e}"),
     };
     let stderr = String::from_utf8_lossy(&output.stderr);
     let lines: Vec<Option<usize>> = files
@@ -167,4 +169,25 @@ pub fn xmllint(files: &[std::path::PathBuf]) -> Option<Vec<Option<usize>>> {
         output.status
     );
     Some(lines)
+}
+
+/// Whether the program `tool` (from the Debian package `package`) is
+/// installed. A test that needs one fails without it, naming the package
+/// (.ci/run installs them all), unless `RAYOFLIGHT_SKIP_TOOLS` is set
+/// outside CI: then it says on stderr that it is skipped and why.
+pub fn tool(tool: &str, package: &str) -> bool {
+    let found = std::env::var_os("PATH")
+        .is_some_and(|paths| std::env::split_paths(&paths).any(|d| d.join(tool).is_file()));
+    if found {
+        return true;
+    }
+    let skip =
+        std::env::var_os("RAYOFLIGHT_SKIP_TOOLS").is_some() && std::env::var_os("CI").is_none();
+    assert!(
+        skip,
+        "this test needs {tool}: install the Debian package {package} \
+         (apt-get install {package}), or set RAYOFLIGHT_SKIP_TOOLS=1 to skip the tests that need a missing tool"
+    );
+    eprintln!("SKIPPED: {tool} is not installed (Debian package {package})");
+    false
 }

@@ -56,6 +56,9 @@ pub enum Command {
     /// Render the preview and exports with N×N rays a pixel (View ›
     /// Anti-aliasing).
     AntiAliasing(u32),
+    /// Open the scene in the user's editor at the selected object's
+    /// element (Edit › Open in editor, Ctrl+Shift+O).
+    OpenInEditor,
 }
 
 /// What runs a command from the keyboard.
@@ -103,8 +106,16 @@ const CTRL: Modifiers = Modifiers::COMMAND;
 const CTRL_SHIFT: Modifiers = Modifiers::COMMAND.plus(Modifiers::SHIFT);
 
 /// Every command with a fixed label or a key. The keys are tried in this
-/// order, so Redo comes before Undo: Ctrl+Shift+Z also matches Ctrl+Z.
+/// order, so Redo comes before Undo: Ctrl+Shift+Z also matches Ctrl+Z
+/// (and Open in editor before Open).
 pub(super) const BINDINGS: &[Binding] = &[
+    // Before Open: Ctrl+Shift+O also matches Ctrl+O.
+    Binding {
+        command: Command::OpenInEditor,
+        label: "Open in editor",
+        keys: &[Trigger::Chord(chord(CTRL_SHIFT, Key::O))],
+        help: "open the scene in your editor at the selected object (RAYOFLIGHT_EDITOR, $VISUAL)",
+    },
     Binding {
         command: Command::Open,
         label: "Open…",

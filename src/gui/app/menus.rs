@@ -155,6 +155,50 @@ impl RayOfLightApp {
                 self.aa = aa;
                 self.request_render();
             }
+            Command::OpenInEditor => self.open_in_editor(),
+        }
+    }
+
+    /// Edit › Open in editor: the scene file, at the selected object's
+    /// element (the top of the file when none is selected).
+    pub(super) fn open_in_editor(&mut self) {
+        use crate::gui::editor;
+        let Some(path) = self.doc.path().map(Path::to_owned) else {
+            self.notify("the built-in example has no file: save it first (File › Save as)".into());
+            return;
+        };
+        let env = editor::Environment::current();
+        let Some(chosen) = editor::resolve(&env, self.settings.editor.as_deref()) else {
+            self.notify(editor::EditorError::NoEditor.to_string());
+            return;
+        };
+        let selected = self.selection.object;
+        let position = selected.and_then(|n| self.doc.object_position(n));
+        let (line, column) = position.map_or((1, 1), |p| (p.line, p.column));
+        let started = editor::command_line(&chosen, &env, &path, line, column).and_then(|argv| {
+            let sender = self.editor_failed.0.clone();
+            let ctx = self.ctx.clone();
+            editor::start(&argv, chosen.source, move |said| {
+                let _ = sender.send(said);
+                ctx.request_repaint();
+            })
+            .map(|()| argv[0].clone())
+        });
+        let name = path.file_name().map_or_else(
+            || path.display().to_string(),
+            |n| n.to_string_lossy().into_owned(),
+        );
+        match started {
+            Ok(program) => {
+                let mut said = format!("opened {name}:{line} in {program}");
+                if selected.is_some() && position.is_none() {
+                    said.push_str(" (the selected object is not saved in the file yet)");
+                } else if self.doc.has_unsaved_edits() {
+                    said.push_str(" (the file, without the unsaved edits)");
+                }
+                self.notify(said);
+            }
+            Err(e) => self.notify(e.to_string()),
         }
     }
 
@@ -263,6 +307,8 @@ impl RayOfLightApp {
                 item(ui, undo.is_some(), None, undo_text, Command::Undo);
                 let redo_text = redo.as_deref().unwrap_or("Redo");
                 item(ui, redo.is_some(), None, redo_text, Command::Redo);
+                ui.separator();
+                pick(ui, has_file, Command::OpenInEditor);
             });
             ui.menu_button("View", |ui| {
                 pick(ui, true, Command::Fit);

@@ -142,6 +142,12 @@ pub struct RayOfLightApp {
     study: StudyWindow,
     /// A transient message for the status bar (export done, save failed).
     notice: Option<(String, Instant)>,
+    /// What an editor the app started said when it failed (its thread
+    /// sends it), for the status bar.
+    editor_failed: (
+        std::sync::mpsc::Sender<String>,
+        std::sync::mpsc::Receiver<String>,
+    ),
     /// The export running in the background, if any.
     export: Option<dialogs::Export>,
     /// The save under way, if any.
@@ -237,6 +243,7 @@ impl RayOfLightApp {
             methods: PreviewMethods::default(),
             study: StudyWindow::with_runs(settings.study_runs),
             notice: None,
+            editor_failed: std::sync::mpsc::channel(),
             export: None,
             saving: None,
             deferred_file_events: Vec::new(),

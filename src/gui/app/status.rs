@@ -273,6 +273,9 @@ impl RayOfLightApp {
         {
             self.notice = None;
         }
+        if let Ok(said) = self.editor_failed.1.try_recv() {
+            self.notify(said);
+        }
     }
 
     pub(super) fn notify(&mut self, message: String) {

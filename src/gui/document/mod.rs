@@ -270,6 +270,14 @@ impl Document {
         self.conflict.as_ref()
     }
 
+    /// Where object `n`'s element starts in the text last read from disk,
+    /// for an editor to open at; `None` for an object added since (it is
+    /// not in the file).
+    pub fn object_position(&self, n: usize) -> Option<scene::Position> {
+        let origin = self.shown.edited.object_origin(n)?;
+        scene::splice::object_position(&self.shown.source, origin)
+    }
+
     /// The panel's name for object `n`: `#2 RED sphere` when a comment
     /// directly above it in the file starts with "RED", else `#2 sphere`.
     pub fn object_label(&self, n: usize) -> String {

@@ -684,16 +684,28 @@ pub enum NewElement {
 }
 
 impl NewElement {
-    pub fn parse(name: &str) -> Result<NewElement, EditError> {
-        match name {
-            "sphere" => Ok(NewElement::Sphere),
-            "plane" => Ok(NewElement::Plane),
-            "light" => Ok(NewElement::Light),
-            _ => Err(path_error(
-                name,
-                "not an element that can be added; those are sphere, plane and light",
-            )),
+    /// Every kind, in the order the help names them.
+    pub const ALL: [NewElement; 3] = [NewElement::Sphere, NewElement::Plane, NewElement::Light];
+
+    /// The kind's name, as `--add` takes it (the element's tag).
+    pub fn name(self) -> &'static str {
+        match self {
+            NewElement::Sphere => "sphere",
+            NewElement::Plane => "plane",
+            NewElement::Light => "light",
         }
+    }
+
+    pub fn parse(name: &str) -> Result<NewElement, EditError> {
+        NewElement::ALL
+            .into_iter()
+            .find(|kind| kind.name() == name)
+            .ok_or_else(|| {
+                path_error(
+                    name,
+                    "not an element that can be added; those are sphere, plane and light",
+                )
+            })
     }
 }
 

@@ -1,0 +1,436 @@
+//! The app on a Linux desktop, for one user: `rayoflight install-desktop`
+//! writes the desktop entry (its `Exec` the running binary's absolute
+//! path), the icons in the hicolor theme and the MIME type of scenes that
+//! name RayOfLight's schema under `$XDG_DATA_HOME` (default
+//! `~/.local/share`), and `--uninstall` removes exactly what it wrote.
+//!
+//! The files are the repository's `assets/linux/`, built in. What was
+//! written, and which folders were created for it, is kept in
+//! `$XDG_DATA_HOME/rayoflight/installed-files`: an uninstall removes those
+//! and nothing else, and an install never writes over a file it did not
+//! write. The desktop databases are brought up to date when their tools
+//! (update-desktop-database, update-mime-database) are installed; when the
+//! last user type or entry goes, the caches they generated go too.
+//!
+//! RayOfLight is offered in "Open with" for XML files and is the default
+//! only for its own type, `application/x-rayoflight-scene`: it never claims
+//! every XML file (other formats use a bare `<scene>` root too).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The application's id: the desktop entry's, the icon's, the AppStream
+/// component's and the window's (Wayland app id, X11 class).
+pub const APP_ID: &str = "io.github.rayoflight.RayOfLight";
+
+/// The desktop entry as the repository keeps it (`Exec=rayoflight %f`).
+pub const DESKTOP_ENTRY: &str =
+    include_str!("../assets/linux/io.github.rayoflight.RayOfLight.desktop");
+/// The shared-mime-info package of `application/x-rayoflight-scene`.
+pub const MIME_PACKAGE: &str =
+    include_str!("../assets/linux/io.github.rayoflight.RayOfLight.mime.xml");
+/// The scalable icon.
+pub const ICON_SVG: &str = include_str!("../assets/linux/io.github.rayoflight.RayOfLight.svg");
+
+/// The icon as PNGs, side in pixels: the hicolor theme's sizes.
+pub const ICON_PNGS: &[(u32, &[u8])] = &[
+    (
+        16,
+        include_bytes!("../assets/linux/icons/16x16/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        24,
+        include_bytes!("../assets/linux/icons/24x24/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        32,
+        include_bytes!("../assets/linux/icons/32x32/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        48,
+        include_bytes!("../assets/linux/icons/48x48/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        64,
+        include_bytes!("../assets/linux/icons/64x64/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        128,
+        include_bytes!("../assets/linux/icons/128x128/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        256,
+        include_bytes!("../assets/linux/icons/256x256/io.github.rayoflight.RayOfLight.png"),
+    ),
+    (
+        512,
+        include_bytes!("../assets/linux/icons/512x512/io.github.rayoflight.RayOfLight.png"),
+    ),
+];
+
+/// Where the record of an install lives, under the data folder.
+const MANIFEST: &str = "rayoflight/installed-files";
+
+/// What went wrong.
+#[derive(Debug, thiserror::Error)]
+pub enum DesktopError {
+    #[error("no folder for the desktop files: set XDG_DATA_HOME or HOME to an absolute path")]
+    NoDataHome,
+    #[error(
+        "{}: already exists and was not written by install-desktop; nothing was written (remove it first to replace it)",
+        path.display()
+    )]
+    NotOurs { path: PathBuf },
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Write(#[from] crate::output::OutputError),
+    #[error("{}: the record of what install-desktop wrote is damaged (line {line}); nothing was removed", path.display())]
+    Manifest { path: PathBuf, line: usize },
+}
+
+/// What an install or an uninstall did.
+#[derive(Debug, Default)]
+pub struct Done {
+    /// The files written or removed, in order.
+    pub files: Vec<PathBuf>,
+    /// The database tools run (`update-mime-database`), with their folder.
+    pub ran: Vec<String>,
+    /// Tools that were not found, so not run.
+    pub missing: Vec<&'static str>,
+}
+
+/// The per-user data folder: `$XDG_DATA_HOME`, else `$HOME/.local/share`.
+pub fn data_home() -> Result<PathBuf, DesktopError> {
+    let absolute = |v: std::ffi::OsString| Some(PathBuf::from(v)).filter(|p| p.is_absolute());
+    std::env::var_os("XDG_DATA_HOME")
+        .and_then(absolute)
+        .or_else(|| {
+            std::env::var_os("HOME")
+                .and_then(absolute)
+                .map(|h| h.join(".local/share"))
+        })
+        .ok_or(DesktopError::NoDataHome)
+}
+
+/// The desktop entry with `Exec` and `TryExec` set to `exec`.
+pub fn desktop_entry(exec: &Path) -> String {
+    let program = exec_quoted(exec);
+    DESKTOP_ENTRY
+        .lines()
+        .map(|line| {
+            if line.starts_with("Exec=") {
+                format!("Exec={program} %f")
+            } else if line.starts_with("TryExec=") {
+                format!("TryExec={}", escaped_string(&exec.to_string_lossy()))
+            } else {
+                line.to_owned()
+            }
+        })
+        .map(|line| line + "\n")
+        .collect()
+}
+
+/// A program path as the Desktop Entry Specification's `Exec` key takes
+/// it: quoted when it holds a reserved character, `"`, `` ` ``, `$` and
+/// `\` escaped in the quotes, then the whole escaped as a string value.
+fn exec_quoted(path: &Path) -> String {
+    let text = path.to_string_lossy();
+    let reserved = |c: char| " \t\n\"'\\><~|&;$*?#()`".contains(c);
+    let argument = if text.contains(reserved) {
+        let mut quoted = String::from("\"");
+        for c in text.chars() {
+            if matches!(c, '"' | '`' | '$' | '\\') {
+                quoted.push('\\');
+            }
+            quoted.push(c);
+        }
+        quoted.push('"');
+        quoted
+    } else {
+        text.into_owned()
+    };
+    escaped_string(&argument)
+}
+
+/// A desktop entry string value: `\`, newline, tab and carriage return
+/// escaped. A literal `%` in Exec is `%%`.
+fn escaped_string(text: &str) -> String {
+    let mut out = String::new();
+    for c in text.chars() {
+        match c {
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\t' => out.push_str("\\t"),
+            '\r' => out.push_str("\\r"),
+            '%' => out.push_str("%%"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// The files an install writes, relative to the data folder, with their
+/// bytes.
+fn files(exec: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut files = vec![
+        (
+            PathBuf::from(format!("applications/{APP_ID}.desktop")),
+            desktop_entry(exec).into_bytes(),
+        ),
+        (
+            PathBuf::from(format!("mime/packages/{APP_ID}.xml")),
+            MIME_PACKAGE.as_bytes().to_vec(),
+        ),
+        (
+            PathBuf::from(format!("icons/hicolor/scalable/apps/{APP_ID}.svg")),
+            ICON_SVG.as_bytes().to_vec(),
+        ),
+    ];
+    for (side, png) in ICON_PNGS {
+        files.push((
+            PathBuf::from(format!("icons/hicolor/{side}x{side}/apps/{APP_ID}.png")),
+            png.to_vec(),
+        ));
+    }
+    files
+}
+
+/// What the manifest records: the files written, the folders created.
+#[derive(Debug, Default)]
+struct Manifest {
+    files: Vec<PathBuf>,
+    folders: Vec<PathBuf>,
+}
+
+impl Manifest {
+    fn read(home: &Path) -> Result<Option<Manifest>, DesktopError> {
+        let path = home.join(MANIFEST);
+        let text = match std::fs::read_to_string(&path) {
+            Ok(text) => text,
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(source) => return Err(DesktopError::Io { path, source }),
+        };
+        let mut manifest = Manifest::default();
+        for (i, line) in text.lines().enumerate() {
+            let damaged = || DesktopError::Manifest {
+                path: path.clone(),
+                line: i + 1,
+            };
+            let (kind, relative) = line.split_once(' ').ok_or_else(damaged)?;
+            let relative = PathBuf::from(relative);
+            // Only paths inside the data folder, never `..`.
+            let inside = relative.is_relative()
+                && relative
+                    .components()
+                    .all(|c| matches!(c, std::path::Component::Normal(_)));
+            if !inside {
+                return Err(damaged());
+            }
+            match kind {
+                "file" => manifest.files.push(relative),
+                "folder" => manifest.folders.push(relative),
+                _ => return Err(damaged()),
+            }
+        }
+        Ok(Some(manifest))
+    }
+
+    fn text(&self) -> String {
+        let mut text = String::new();
+        for f in &self.files {
+            text.push_str(&format!("file {}\n", f.display()));
+        }
+        for d in &self.folders {
+            text.push_str(&format!("folder {}\n", d.display()));
+        }
+        text
+    }
+}
+
+/// Installs the desktop files for `exec` (the binary's absolute path)
+/// under the data folder `home`. An earlier install is replaced; a file
+/// in the way that it did not write is refused before anything is written.
+pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
+    let mut done = Done::default();
+    let earlier = Manifest::read(home)?.unwrap_or_default();
+    let files = files(exec);
+    for (relative, _) in &files {
+        let path = home.join(relative);
+        if std::fs::symlink_metadata(&path).is_ok() && !earlier.files.contains(relative) {
+            return Err(DesktopError::NotOurs { path });
+        }
+    }
+    let io = |path: &Path| {
+        let path = path.to_owned();
+        move |source| DesktopError::Io { path, source }
+    };
+    let mut manifest = Manifest {
+        files: Vec::new(),
+        folders: earlier.folders,
+    };
+    let manifest_path = home.join(MANIFEST);
+    let mut to_write: Vec<(PathBuf, Vec<u8>)> = files;
+    to_write.push((PathBuf::from(MANIFEST), Vec::new()));
+    // Folders first, each recorded when this install creates it.
+    for (relative, _) in &to_write {
+        let mut missing = Vec::new();
+        let mut folder = relative.parent();
+        while let Some(f) = folder.filter(|f| !f.as_os_str().is_empty()) {
+            if home.join(f).is_dir() {
+                break;
+            }
+            missing.push(f.to_owned());
+            folder = f.parent();
+        }
+        for f in missing.into_iter().rev() {
+            std::fs::create_dir(home.join(&f)).map_err(io(&home.join(&f)))?;
+            manifest.folders.push(f);
+        }
+    }
+    to_write.pop();
+    for (relative, bytes) in &to_write {
+        let path = home.join(relative);
+        crate::output::write_atomic(&path, bytes)?;
+        manifest.files.push(relative.clone());
+        done.files.push(path);
+    }
+    write_manifest(&manifest_path, &manifest)?;
+    refresh(home, &mut done);
+    Ok(done)
+}
+
+fn write_manifest(path: &Path, manifest: &Manifest) -> Result<(), DesktopError> {
+    let mut file = std::fs::File::create(path).map_err(|source| DesktopError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    file.write_all(manifest.text().as_bytes())
+        .and_then(|()| file.sync_all())
+        .map_err(|source| DesktopError::Io {
+            path: path.to_owned(),
+            source,
+        })
+}
+
+/// Removes what [`install`] wrote under `home`, and the folders it
+/// created once they are empty. Nothing installed: nothing done.
+pub fn uninstall(home: &Path) -> Result<Done, DesktopError> {
+    let mut done = Done::default();
+    let Some(manifest) = Manifest::read(home)? else {
+        return Ok(done);
+    };
+    for relative in &manifest.files {
+        let path = home.join(relative);
+        match std::fs::remove_file(&path) {
+            Ok(()) => done.files.push(path),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(source) => return Err(DesktopError::Io { path, source }),
+        }
+    }
+    refresh(home, &mut done);
+    forget_caches(home);
+    let manifest_path = home.join(MANIFEST);
+    std::fs::remove_file(&manifest_path).map_err(|source| DesktopError::Io {
+        path: manifest_path,
+        source,
+    })?;
+    // The deepest first; a folder something else now holds stays.
+    let mut folders = manifest.folders;
+    folders.sort_by_key(|f| std::cmp::Reverse(f.components().count()));
+    for f in folders {
+        let _ = std::fs::remove_dir(home.join(f));
+    }
+    Ok(done)
+}
+
+/// The database tools, run on the user's folders when installed.
+fn refresh(home: &Path, done: &mut Done) {
+    let applications = home.join("applications");
+    let mime = home.join("mime");
+    for (tool, folder, wanted) in [
+        (
+            "update-desktop-database",
+            &applications,
+            has_entries(&applications, "desktop"),
+        ),
+        (
+            "update-mime-database",
+            &mime,
+            has_entries(&mime.join("packages"), "xml"),
+        ),
+    ] {
+        if !wanted {
+            continue;
+        }
+        match Command::new(tool).arg(folder).output() {
+            Ok(_) => done.ran.push(format!("{tool} {}", folder.display())),
+            Err(_) => done.missing.push(tool),
+        }
+    }
+}
+
+/// Whether `folder` holds a file ending in `.ext`.
+fn has_entries(folder: &Path, ext: &str) -> bool {
+    std::fs::read_dir(folder).is_ok_and(|entries| {
+        entries
+            .flatten()
+            .any(|e| e.path().extension().is_some_and(|x| x == ext))
+    })
+}
+
+/// The files update-mime-database generates beside `packages/`.
+const MIME_DATABASE: &[&str] = &[
+    "aliases",
+    "generic-icons",
+    "globs",
+    "globs2",
+    "icons",
+    "magic",
+    "mime.cache",
+    "subclasses",
+    "treemagic",
+    "types",
+    "version",
+    "XMLnamespaces",
+];
+
+/// With no entry or type of the user's left, the caches generated from
+/// them describe nothing: they go, so that an uninstall leaves the folders
+/// as they were.
+fn forget_caches(home: &Path) {
+    let applications = home.join("applications");
+    if !has_entries(&applications, "desktop") {
+        let _ = std::fs::remove_file(applications.join("mimeinfo.cache"));
+    }
+    let mime = home.join("mime");
+    if has_entries(&mime.join("packages"), "xml") {
+        return;
+    }
+    for name in MIME_DATABASE {
+        let _ = std::fs::remove_file(mime.join(name));
+    }
+    // The folder of each media type (application/, text/…) holds one
+    // generated .xml a type.
+    let Ok(entries) = std::fs::read_dir(&mime) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if path.file_name().is_some_and(|n| n == "packages") || !path.is_dir() {
+            continue;
+        }
+        let generated = std::fs::read_dir(&path).is_ok_and(|files| {
+            files
+                .flatten()
+                .all(|f| f.path().extension().is_some_and(|x| x == "xml"))
+        });
+        if generated {
+            let _ = std::fs::remove_dir_all(&path);
+        }
+    }
+}
