@@ -31,6 +31,7 @@ const SUBCOMMANDS: &[&str] = &[
     "completions",
     "man",
     "install-desktop",
+    "lsp",
 ];
 
 fn run_ok(args: &[&str]) -> String {
@@ -252,6 +253,24 @@ fn man_renders_every_page_without_a_warning() {
     }
     let o = rayoflight(Path::new(ROOT), &["man", "frobnicate"]);
     assert_eq!(o.status.code(), Some(2));
+
+    // --dir writes them all, the same pages.
+    let all = dir.path().join("man1");
+    let o = rayoflight(Path::new(ROOT), &["man", "--dir", all.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(stdout(&o), "");
+    let mut expected: Vec<String> = SUBCOMMANDS
+        .iter()
+        .map(|s| format!("rayoflight-{s}.1"))
+        .chain(["rayoflight.1".to_owned()])
+        .collect();
+    expected.sort();
+    assert_eq!(files_in(&all), expected);
+    assert_eq!(
+        fs::read_to_string(all.join("rayoflight-edit.1")).unwrap(),
+        run_ok(&["man", "edit"])
+    );
+    assert_eq!(fs::read_to_string(all.join("rayoflight.1")).unwrap(), top);
 }
 
 /// Help, man pages and completions come from one definition: every flag

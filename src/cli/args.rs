@@ -40,7 +40,7 @@ Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
        rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]
        rayoflight new scene.xml
        rayoflight install-desktop [--uninstall]
-       rayoflight schema | completions SHELL | man [SUBCOMMAND]
+       rayoflight schema | completions SHELL | man [SUBCOMMAND] | lsp
        rayoflight --help | --version";
 
 /// What the top-level help says after the flags and subcommands.
@@ -90,10 +90,16 @@ pub enum Command {
     Schema,
     /// `completions SHELL`: print the shell's completion script.
     Completions(clap_complete::Shell),
-    /// `man [SUBCOMMAND]`: print a man page (roff).
-    Man { subcommand: Option<String> },
+    /// `man [SUBCOMMAND]`: print a man page (roff); `man --dir DIR`: write
+    /// them all into DIR.
+    Man {
+        subcommand: Option<String>,
+        dir: Option<PathBuf>,
+    },
     /// `install-desktop [--uninstall]`.
     InstallDesktop { uninstall: bool },
+    /// `lsp`: the language server on stdio.
+    Lsp,
 }
 
 impl Command {
@@ -109,9 +115,10 @@ impl Command {
             | Command::Study(_)
             | Command::Schema
             | Command::Completions(_)
-            | Command::Man { .. } => true,
+            | Command::Man { dir: None, .. } => true,
+            Command::Man { dir: Some(_), .. } => false,
             Command::New { scene } => scene.as_os_str() == "-",
-            Command::InstallDesktop { .. } => false,
+            Command::InstallDesktop { .. } | Command::Lsp => false,
             Command::Render(r) => r.time,
             Command::Assemble { .. }
             | Command::Sheet { .. }
@@ -420,14 +427,25 @@ enum Sub {
         #[arg(long)]
         uninstall: bool,
     },
+    /// A language server for scene files, on stdin and stdout (LSP).
+    ///
+    /// Errors as you type, at their line and column; completion of
+    /// elements, attributes and the model's types; what a name means on
+    /// hover; the objects, lights and camera as the document's symbols.
+    /// Start it from the editor's LSP client; see the README.
+    Lsp,
     /// Print a man page: rayoflight(1), or one subcommand's.
     ///
-    /// For example: rayoflight man | man -l -, or rayoflight man edit >
-    /// rayoflight-edit.1.
+    /// For example: rayoflight man | man -l -, rayoflight man edit, or
+    /// rayoflight man --dir ~/.local/share/man/man1 for every page.
     Man {
         /// The subcommand whose page to print [default: rayoflight(1)]
         #[arg(value_name = "SUBCOMMAND", value_parser = Named::new(subcommand, subcommand_names))]
         subcommand: Option<String>,
+        /// Write every page into DIR (made if missing) instead:
+        /// rayoflight.1 and rayoflight-SUBCOMMAND.1.
+        #[arg(long, value_name = "DIR", value_hint = ValueHint::DirPath, conflicts_with = "subcommand")]
+        dir: Option<PathBuf>,
     },
 }
 
@@ -828,8 +846,9 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
         Some(Sub::New { scene }) => Command::New { scene },
         Some(Sub::Schema) => Command::Schema,
         Some(Sub::Completions { shell }) => Command::Completions(shell),
-        Some(Sub::Man { subcommand }) => Command::Man { subcommand },
+        Some(Sub::Man { subcommand, dir }) => Command::Man { subcommand, dir },
         Some(Sub::InstallDesktop { uninstall }) => Command::InstallDesktop { uninstall },
+        Some(Sub::Lsp) => Command::Lsp,
     })
 }
 
@@ -1063,7 +1082,7 @@ fn edit_distance(a: &str, b: &str) -> usize {
 }
 
 /// The subcommands' names, as clap derives them from `Sub`.
-const SUBCOMMANDS: [&str; 14] = [
+const SUBCOMMANDS: [&str; 15] = [
     "split",
     "assemble",
     "sheet",
@@ -1077,6 +1096,7 @@ const SUBCOMMANDS: [&str; 14] = [
     "schema",
     "completions",
     "install-desktop",
+    "lsp",
     "man",
 ];
 

@@ -116,6 +116,20 @@ complete -F _rayoflight_files -o nosort -o bashdefault -o default rayoflight
     )
 }
 
+/// Every man page, with its file name: `rayoflight.1`, then
+/// `rayoflight-SUBCOMMAND.1` for each subcommand.
+pub fn man_pages() -> Result<Vec<(String, String)>, String> {
+    let names: Vec<String> = definition()
+        .get_subcommands()
+        .map(|s| s.get_name().to_owned())
+        .collect();
+    let mut pages = vec![("rayoflight.1".to_owned(), man_page(None)?)];
+    for name in names {
+        pages.push((format!("rayoflight-{name}.1"), man_page(Some(&name))?));
+    }
+    Ok(pages)
+}
+
 /// The man page of `subcommand` (`None`: rayoflight(1)), in roff.
 pub fn man_page(subcommand: Option<&str>) -> Result<String, String> {
     let mut root = definition();

@@ -9,6 +9,7 @@ mod cluster;
 mod edit;
 mod explain;
 mod generated;
+mod lsp;
 mod progress;
 mod stdout;
 mod study;
@@ -126,13 +127,25 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
         Command::Render(r) => render_scene(r),
         Command::New { scene } => new_scene(&scene),
         Command::InstallDesktop { uninstall } => install_desktop(uninstall),
+        Command::Lsp => lsp::run().map_err(Failure::Error),
         Command::Schema => print_line(rayoflight::scene::schema::xsd().trim_end()),
         Command::Completions(shell) => {
             stdout::write(&generated::completions(shell)).map_err(Failure::Error)
         }
-        Command::Man { subcommand } => {
+        Command::Man {
+            subcommand,
+            dir: None,
+        } => {
             let page = generated::man_page(subcommand.as_deref()).map_err(usage)?;
             stdout::write(&page).map_err(Failure::Error)
+        }
+        Command::Man { dir: Some(dir), .. } => {
+            std::fs::create_dir_all(&dir)
+                .map_err(|e| Failure::Error(format!("{}: {e}", dir.display())))?;
+            for (name, page) in generated::man_pages().map_err(Failure::Error)? {
+                output::write_atomic(&dir.join(name), page.as_bytes()).map_err(fail)?;
+            }
+            Ok(())
         }
     }
 }

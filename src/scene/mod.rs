@@ -13,12 +13,14 @@
 //! replays unsaved edits onto a version of the file another program saved;
 //! [`names`] names objects for people (`#2 RED sphere`). [`grammar`] is the
 //! format's elements and attributes as data, which the loader reads with
-//! and [`schema`] writes as an XML Schema for editors.
+//! and [`schema`] writes as an XML Schema for editors; [`language`] answers
+//! what an editor asks of a text (errors, completion, hover, outline).
 
 pub mod edit;
 mod error;
 pub mod grammar;
 pub mod identity;
+pub mod language;
 mod load;
 pub mod merge;
 pub mod names;

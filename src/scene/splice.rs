@@ -239,6 +239,27 @@ pub(super) fn object_comments(text: &str) -> Vec<Option<&str>> {
         .collect()
 }
 
+/// The elements directly inside `<scene>`, in file order: each one's name,
+/// its bytes (`<` to the end of its end tag) and its start tag's bytes.
+/// Empty when the text is not well-formed XML.
+pub fn top_level(text: &str) -> Vec<(&str, Range<usize>, Range<usize>)> {
+    let Ok(doc) = Doc::scan(text, Keep::TopLevel) else {
+        return Vec::new();
+    };
+    doc.node(doc.root)
+        .children
+        .iter()
+        .map(|&id| {
+            let node = doc.node(id);
+            (
+                node.name,
+                node.start..node.elem_end(),
+                node.start..node.tag_end,
+            )
+        })
+        .collect()
+}
+
 /// Where the element of object `index` (spheres and planes in file order)
 /// starts in `text`: its line and column, for an editor to open at.
 pub fn object_position(text: &str, index: usize) -> Option<super::Position> {

@@ -1,0 +1,603 @@
+//! The scene format as an editor sees it, for `rayoflight lsp`: a text's
+//! errors with their places, what may be typed at a place, what a name
+//! means, and the text's outline. No protocol here: positions are lines
+//! and UTF-16 columns (as the Language Server Protocol counts by default)
+//! or byte offsets, and the words come from [`super::grammar`], the table
+//! the loader reads with, and from the loader's own errors.
+//!
+//! Completion reads the text before the cursor leniently, as it is while
+//! being typed (a tag not closed yet, an attribute half written): the
+//! elements open at the cursor give the parent, the tag the cursor is in
+//! gives the element and the attributes it has.
+
+use super::grammar::{self, Presence, Value};
+use super::{LoadError, Position, names, splice};
+use std::ops::Range;
+use std::path::Path;
+
+/// A place as the protocol counts it: 0-based line, 0-based column in
+/// UTF-16 code units.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub struct Place {
+    pub line: u32,
+    pub column: u32,
+}
+
+/// The offsets where each line starts, to go between byte offsets and
+/// [`Place`]s. Lines end at LF, CR LF or a lone CR (as XML and the protocol
+/// both say).
+#[derive(Debug, Clone)]
+pub struct Lines {
+    starts: Vec<usize>,
+}
+
+impl Lines {
+    pub fn new(text: &str) -> Lines {
+        let bytes = text.as_bytes();
+        let mut starts = vec![0];
+        let mut i = 0;
+        while i < bytes.len() {
+            match bytes[i] {
+                b'\n' => starts.push(i + 1),
+                b'\r' if bytes.get(i + 1) != Some(&b'\n') => starts.push(i + 1),
+                _ => {}
+            }
+            i += 1;
+        }
+        Lines { starts }
+    }
+
+    /// The place of byte `offset` of `text` (clamped to the text).
+    pub fn place(&self, text: &str, offset: usize) -> Place {
+        let mut offset = offset.min(text.len());
+        while !text.is_char_boundary(offset) {
+            offset -= 1;
+        }
+        let line = self.starts.partition_point(|&s| s <= offset) - 1;
+        let start = self.starts[line];
+        let column = text[start..offset].encode_utf16().count();
+        Place {
+            line: u32::try_from(line).unwrap_or(u32::MAX),
+            column: u32::try_from(column).unwrap_or(u32::MAX),
+        }
+    }
+
+    /// The byte offset of `place` in `text`: a column past the line's end is
+    /// the line's end, one inside a character its start.
+    pub fn offset(&self, text: &str, place: Place) -> usize {
+        let Some(&start) = self.starts.get(place.line as usize) else {
+            return text.len();
+        };
+        let end = self
+            .starts
+            .get(place.line as usize + 1)
+            .copied()
+            .unwrap_or(text.len());
+        let line = &text[start..end];
+        let line = line.trim_end_matches(['\n', '\r']);
+        let mut units = 0u32;
+        for (i, c) in line.char_indices() {
+            if units >= place.column {
+                return start + i;
+            }
+            units += c.len_utf16() as u32;
+            if units > place.column {
+                return start + i;
+            }
+        }
+        start + line.len()
+    }
+
+    /// The byte offset of a loader [`Position`] (1-based line, column in
+    /// characters).
+    pub fn offset_of_position(&self, text: &str, position: Position) -> usize {
+        let Some(&start) = self.starts.get(position.line.saturating_sub(1)) else {
+            return text.len();
+        };
+        text[start..]
+            .char_indices()
+            .nth(position.column.saturating_sub(1))
+            .map_or(text.len(), |(i, _)| start + i)
+    }
+}
+
+/// One error of a text, for an editor to underline.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Diagnostic {
+    /// The bytes it is about: the name at the error's place, or the first
+    /// line when the error has no place (no camera).
+    pub range: Range<usize>,
+    /// The loader's message, without the file and place it starts with.
+    pub message: String,
+}
+
+/// The first error of `text` as the loader reports it, or none.
+pub fn diagnostics(text: &str) -> Vec<Diagnostic> {
+    match super::parse(text, Path::new("")) {
+        Ok(_) => Vec::new(),
+        Err(e) => vec![diagnostic(text, &e)],
+    }
+}
+
+fn diagnostic(text: &str, e: &LoadError) -> Diagnostic {
+    let message = e.kind.to_string();
+    let range = match e.position {
+        Some(position) => {
+            // The loader counts columns without a byte-order mark.
+            let bom = if text.starts_with('\u{feff}') && position.line == 1 {
+                '\u{feff}'.len_utf8()
+            } else {
+                0
+            };
+            let body = &text[bom..];
+            let at = bom + Lines::new(body).offset_of_position(body, position);
+            at..word_end(text, at)
+        }
+        None => {
+            // The root's start tag, else the start of the text.
+            let root = text.find("<scene").unwrap_or(0);
+            root..word_end(text, root)
+        }
+    };
+    Diagnostic { range, message }
+}
+
+/// The end of the name or word starting at `at` (at least one character,
+/// within its line).
+fn word_end(text: &str, at: usize) -> usize {
+    let rest = &text[at.min(text.len())..];
+    let mut end = 0;
+    for (i, c) in rest.char_indices() {
+        let name = c.is_alphanumeric() || matches!(c, '-' | '_' | ':' | '.' | '<' | '/' | '+');
+        if i > 0 && !name || c == '\n' || c == '\r' {
+            break;
+        }
+        end = i + c.len_utf8();
+    }
+    at + end
+}
+
+/// Something that may be typed at a place.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Completion {
+    /// What the list shows (`sphere`, `ka`, `phong`).
+    pub label: String,
+    /// What is inserted in place of the word being typed.
+    pub insert: String,
+    pub kind: CompletionKind,
+    /// Its meaning, range and default.
+    pub doc: String,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CompletionKind {
+    Element,
+    Attribute,
+    Value,
+}
+
+/// Where in the markup a byte offset is.
+#[derive(Debug, PartialEq, Eq)]
+enum Spot<'t> {
+    /// Between elements, inside `parent` (`None`: outside the root).
+    Content { parent: Option<&'t str> },
+    /// Typing an element's name after `<`, inside `parent`.
+    ElementName {
+        parent: Option<&'t str>,
+        typed: &'t str,
+    },
+    /// In `element`'s start tag, where an attribute name goes; `present`
+    /// are those it has.
+    AttributeName {
+        element: &'t str,
+        present: Vec<&'t str>,
+        typed: &'t str,
+    },
+    /// In the value of `attribute` of `element`.
+    AttributeValue {
+        element: &'t str,
+        attribute: &'t str,
+        typed: &'t str,
+    },
+}
+
+fn is_name_char(c: char) -> bool {
+    c.is_alphanumeric() || matches!(c, '-' | '_' | ':' | '.')
+}
+
+/// Where `offset` is in `text`, read leniently from the start.
+fn spot(text: &str, offset: usize) -> Spot<'_> {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let mut open: Vec<&str> = Vec::new();
+    let mut i = 0;
+    let bytes = before.as_bytes();
+    while let Some(lt) = before[i..].find('<').map(|k| i + k) {
+        let rest = &before[lt..];
+        if rest.starts_with("<!--") {
+            match rest.find("-->") {
+                Some(end) => i = lt + end + 3,
+                None => {
+                    return Spot::Content {
+                        parent: open.last().copied(),
+                    };
+                }
+            }
+            continue;
+        }
+        if rest.starts_with("<?") || rest.starts_with("<!") {
+            match rest.find('>') {
+                Some(end) => i = lt + end + 1,
+                None => {
+                    return Spot::Content {
+                        parent: open.last().copied(),
+                    };
+                }
+            }
+            continue;
+        }
+        if let Some(closing) = rest.strip_prefix("</") {
+            let name_len = closing
+                .find(|c: char| !is_name_char(c))
+                .unwrap_or(closing.len());
+            let name = &closing[..name_len];
+            if let Some(k) = open.iter().rposition(|o| *o == name) {
+                open.truncate(k);
+            }
+            i = match rest.find('>') {
+                Some(end) => lt + end + 1,
+                None => {
+                    return Spot::Content {
+                        parent: open.last().copied(),
+                    };
+                }
+            };
+            continue;
+        }
+        // A start tag: its name, then attributes, up to `>` outside quotes.
+        let after = &rest[1..];
+        let name_len = after
+            .find(|c: char| !is_name_char(c))
+            .unwrap_or(after.len());
+        let name = &after[..name_len];
+        let mut j = lt + 1 + name_len;
+        if j == before.len() {
+            return Spot::ElementName {
+                parent: open.last().copied(),
+                typed: name,
+            };
+        }
+        let mut present = Vec::new();
+        let mut quote: Option<(u8, usize, &str)> = None;
+        let mut closed = false;
+        while j < bytes.len() {
+            let b = bytes[j];
+            match quote {
+                Some((q, _, _)) if b == q => quote = None,
+                Some(_) => {}
+                None if b == b'"' || b == b'\'' => {
+                    // The attribute this value belongs to: the name before `=`.
+                    let head = before[lt..j].trim_end();
+                    let head = head.strip_suffix('=').unwrap_or(head).trim_end();
+                    let start = head.rfind(|c: char| !is_name_char(c)).map_or(0, |k| k + 1);
+                    let attribute = &head[start..];
+                    present.push(attribute);
+                    quote = Some((b, j + 1, attribute));
+                }
+                None if b == b'>' => {
+                    closed = true;
+                    break;
+                }
+                None => {}
+            }
+            j += 1;
+        }
+        if !closed {
+            return match quote {
+                Some((_, start, attribute)) => Spot::AttributeValue {
+                    element: name,
+                    attribute,
+                    typed: &before[start..],
+                },
+                None => {
+                    let typed_start = before
+                        .rfind(|c: char| !is_name_char(c))
+                        .map_or(0, |k| k + 1);
+                    let typed = &before[typed_start.max(lt + 1 + name_len)..];
+                    Spot::AttributeName {
+                        element: name,
+                        present,
+                        typed,
+                    }
+                }
+            };
+        }
+        if bytes[j - 1] != b'/' {
+            open.push(name);
+        }
+        i = j + 1;
+    }
+    Spot::Content {
+        parent: open.last().copied(),
+    }
+}
+
+/// The elements that may go in `parent` (`None`: the root).
+fn children_of(parent: Option<&str>) -> &'static [&'static str] {
+    match parent {
+        None => &["scene"],
+        Some(p) => grammar::element(p).map_or(&[][..], |e| e.children),
+    }
+}
+
+fn element_doc(name: &str) -> String {
+    grammar::element(name).map_or_else(String::new, |e| match e.also {
+        Some(also) => format!("{} {also}", e.doc),
+        None => e.doc.to_owned(),
+    })
+}
+
+/// What an attribute means, its range and its default, as one text.
+pub fn attribute_doc(attribute: &grammar::Attribute) -> String {
+    let range = match attribute.value {
+        Value::Number { min: None, .. } => "Any finite number.".to_owned(),
+        Value::Number {
+            min: Some(min),
+            min_exclusive,
+        } => format!("A number {} {min}.", if min_exclusive { ">" } else { "≥" }),
+        Value::Integer { min, max } => format!("An integer from {min} to {max}."),
+        Value::Choice(names) => format!("One of {}.", names.join(", ")),
+    };
+    let presence = match attribute.presence {
+        Presence::Required => "Required.".to_owned(),
+        Presence::Default(v) => format!("Default: {v}."),
+        Presence::Optional => "Optional.".to_owned(),
+    };
+    format!("{} {range} {presence}", attribute.doc)
+}
+
+/// What may be typed at byte `offset` of `text`.
+pub fn completions(text: &str, offset: usize) -> Vec<Completion> {
+    let element = |name: &str, insert: String| Completion {
+        label: name.to_owned(),
+        insert,
+        kind: CompletionKind::Element,
+        doc: element_doc(name),
+    };
+    match spot(text, offset) {
+        Spot::Content { parent } => children_of(parent)
+            .iter()
+            .map(|name| element(name, format!("<{name}")))
+            .collect(),
+        Spot::ElementName { parent, typed } => children_of(parent)
+            .iter()
+            .filter(|name| name.starts_with(typed))
+            .map(|name| element(name, (*name).to_owned()))
+            .collect(),
+        Spot::AttributeName {
+            element,
+            present,
+            typed,
+        } => grammar::element(element)
+            .map(|e| e.attributes)
+            .unwrap_or_default()
+            .iter()
+            .filter(|a| !present.contains(a) && a.starts_with(typed))
+            .filter_map(|a| grammar::attribute(element, a))
+            .map(|a| Completion {
+                label: a.name.to_owned(),
+                insert: format!("{}=\"\"", a.name),
+                kind: CompletionKind::Attribute,
+                doc: attribute_doc(a),
+            })
+            .collect(),
+        Spot::AttributeValue {
+            element,
+            attribute,
+            typed,
+        } => match grammar::attribute(element, attribute).map(|a| (a, a.value)) {
+            Some((a, Value::Choice(values))) => values
+                .iter()
+                .filter(|v| v.starts_with(typed.trim_start()))
+                .map(|v| Completion {
+                    label: (*v).to_owned(),
+                    insert: (*v).to_owned(),
+                    kind: CompletionKind::Value,
+                    doc: a.doc.to_owned(),
+                })
+                .collect(),
+            _ => Vec::new(),
+        },
+    }
+}
+
+/// What the name at byte `offset` means (an element's or an attribute's),
+/// and the bytes of that name.
+pub fn hover(text: &str, offset: usize) -> Option<(String, Range<usize>)> {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    // The whole name around the offset.
+    let start = text[..offset]
+        .rfind(|c: char| !is_name_char(c))
+        .map_or(0, |k| k + 1);
+    let end = text[offset..]
+        .find(|c: char| !is_name_char(c))
+        .map_or(text.len(), |k| offset + k);
+    let name = &text[start..end];
+    if name.is_empty() {
+        return None;
+    }
+    let before = text[..start].trim_end_matches([' ', '\t']);
+    if before.ends_with('<') || before.ends_with("</") {
+        return grammar::element(name).map(|_| (element_doc(name), start..end));
+    }
+    match spot(text, end) {
+        Spot::AttributeName { element, .. } | Spot::AttributeValue { element, .. } => {
+            grammar::attribute(element, name).map(|a| (attribute_doc(a), start..end))
+        }
+        _ => None,
+    }
+}
+
+/// One entry of a text's outline.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Symbol {
+    /// As the app's panel names it: `#2 RED sphere`, `light 1`, `camera`.
+    pub name: String,
+    pub kind: SymbolKind,
+    /// The element's bytes, and its start tag's.
+    pub range: Range<usize>,
+    pub selection: Range<usize>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SymbolKind {
+    Object,
+    Light,
+    Camera,
+    Model,
+}
+
+/// The objects, lights, camera and model of `text`, in file order (none
+/// when it is not well-formed XML).
+pub fn symbols(text: &str) -> Vec<Symbol> {
+    let labels = names::object_labels(text);
+    let (mut objects, mut lights) = (0, 0);
+    splice::top_level(text)
+        .into_iter()
+        .map(|(name, range, selection)| {
+            let (name, kind) = match name {
+                "sphere" | "plane" => {
+                    objects += 1;
+                    let words = labels.get(objects - 1).cloned().flatten();
+                    (
+                        names::object_name(objects - 1, name, words.as_deref()),
+                        SymbolKind::Object,
+                    )
+                }
+                "light" => {
+                    lights += 1;
+                    (format!("light {lights}"), SymbolKind::Light)
+                }
+                "camera" => ("camera".to_owned(), SymbolKind::Camera),
+                other => (other.to_owned(), SymbolKind::Model),
+            };
+            Symbol {
+                name,
+                kind,
+                range,
+                selection,
+            }
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn places_count_utf16_units() {
+        let text = "<!-- é😀 -->\r\n<scene>\r<x/>\n";
+        let lines = Lines::new(text);
+        let at = text.find("-->").unwrap();
+        // é is one unit, 😀 two.
+        assert_eq!(lines.place(text, at), Place { line: 0, column: 9 });
+        assert_eq!(lines.offset(text, Place { line: 0, column: 9 }), at);
+        let x = text.find("<x").unwrap();
+        assert_eq!(lines.place(text, x), Place { line: 2, column: 0 });
+        assert_eq!(
+            lines.offset(
+                text,
+                Place {
+                    line: 1,
+                    column: 99
+                }
+            ),
+            text.find('\r').unwrap() + 9
+        );
+        assert_eq!(lines.offset(text, Place { line: 9, column: 0 }), text.len());
+    }
+
+    #[test]
+    fn an_error_is_at_its_name_after_non_ascii_text() {
+        let text = "<scene><!-- é😀 --><sphere><material ka=\"-1\"/></sphere></scene>";
+        let d = diagnostics(text);
+        assert_eq!(d.len(), 1);
+        assert_eq!(&text[d[0].range.clone()], "ka");
+        assert!(d[0].message.contains("must be >= 0"), "{}", d[0].message);
+        assert!(diagnostics(crate::EXAMPLE_SCENE).is_empty());
+        let no_camera = diagnostics("<scene>\n</scene>");
+        assert_eq!(no_camera[0].range, 0..6);
+    }
+
+    #[test]
+    fn completion_knows_where_it_is() {
+        let labels = |text: &str| -> Vec<String> {
+            completions(text, text.len())
+                .into_iter()
+                .map(|c| c.label)
+                .collect()
+        };
+        assert_eq!(labels(""), ["scene"]);
+        assert_eq!(
+            labels("<scene>\n  "),
+            ["sphere", "plane", "light", "camera", "model"]
+        );
+        assert_eq!(labels("<scene>\n  <sp"), ["sphere"]);
+        assert_eq!(
+            labels("<scene><sphere><"),
+            ["color", "material", "transformation"]
+        );
+        assert_eq!(
+            labels("<scene><sphere/><"),
+            ["sphere", "plane", "light", "camera", "model"]
+        );
+        assert_eq!(
+            labels("<scene><!-- <x> --><sphere></sphere><light "),
+            ["x", "y", "z"]
+        );
+        assert_eq!(labels("<scene><light x=\"1\" "), ["y", "z"]);
+        assert_eq!(labels("<scene><material ka=\"0.2\" k"), ["kd", "ks"]);
+        assert_eq!(
+            labels("<scene><model type=\""),
+            ["ambient", "lambert", "phong", "whitted"]
+        );
+        assert_eq!(labels("<scene><model type=\"ph"), ["phong"]);
+        assert_eq!(labels("<scene><light x=\""), Vec::<String>::new());
+        let c = completions("<scene><material ", 17);
+        assert_eq!(c[0].insert, "ka=\"\"");
+        assert!(c[0].doc.contains("Default: 0.2."), "{}", c[0].doc);
+    }
+
+    #[test]
+    fn hover_says_what_a_name_means() {
+        let text = "<scene><sphere><material ka=\"0.5\"/></sphere><model type=\"phong\"/></scene>";
+        let (doc, range) = hover(text, text.find("ka").unwrap() + 1).unwrap();
+        assert_eq!(&text[range], "ka");
+        assert!(
+            doc.contains("Ambient") && doc.contains("Default: 0.2."),
+            "{doc}"
+        );
+        let (doc, _) = hover(text, text.find("model").unwrap()).unwrap();
+        assert!(doc.contains("illumination model"), "{doc}");
+        assert!(hover(text, text.find("0.5").unwrap()).is_none());
+    }
+
+    #[test]
+    fn symbols_are_named_as_the_panel_names_them() {
+        let text = "<scene>\n<!-- RED ball -->\n<sphere/>\n<plane/>\n<light x=\"0\" y=\"0\" z=\"0\"/>\n<camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>\n</scene>";
+        let s = symbols(text);
+        let names: Vec<&str> = s.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(
+            names,
+            ["#1 RED ball sphere", "#2 plane", "light 1", "camera"]
+        );
+        assert_eq!(&text[s[0].range.clone()], "<sphere/>");
+    }
+}

@@ -1,0 +1,84 @@
+//! `rayoflight lsp` with a real client (issue 29): Neovim, headless, its
+//! own LSP client scripted in Lua (`tests/lsp/client.lua`), on a copy of
+//! the example scene. Diagnostics come at the right place after
+//! non-ASCII text as the buffer changes, and go when it is fixed;
+//! completion, hover and symbols answer; the file is never written.
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+use std::process::Command;
+
+#[test]
+fn neovim_gets_diagnostics_completion_hover_and_symbols() {
+    if !common::tool("nvim", "neovim") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.xml");
+    fs::write(&scene, rayoflight::EXAMPLE_SCENE).unwrap();
+    let out = dir.path().join("out.json");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/client.lua");
+    let o = Command::new("timeout")
+        .arg("60")
+        .args(["nvim", "--headless", "--clean", "-u", "NONE", "-S"])
+        .arg(&script)
+        .current_dir(dir.path())
+        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
+        .env("ROL_OUT", &out)
+        .env("HOME", dir.path())
+        .env("XDG_STATE_HOME", dir.path().join("state"))
+        .env("XDG_DATA_HOME", dir.path().join("data"))
+        .output()
+        .unwrap();
+    let said = format!(
+        "{}{}",
+        String::from_utf8_lossy(&o.stdout),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(o.status.success(), "nvim: {said}");
+    let got: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(&out).expect("the client wrote its results"))
+            .unwrap();
+    assert_eq!(got["initialized"], true, "{got}");
+    assert_eq!(got["server_encoding"], "utf-16", "{got}");
+    // The typed line: ' <!-- é😀 --><material ka="-1" …'; Neovim gives
+    // the column in bytes, converted from the server's UTF-16 units.
+    let line = " <!-- é😀 --><material ka=\"-1\"";
+    let ka = line.find("ka").unwrap();
+    assert_eq!(got["got_diag"], true, "{got}");
+    assert_eq!(got["diag"]["lnum"], 4, "{got}");
+    assert_eq!(got["diag"]["col"], ka, "{got}");
+    assert_eq!(got["diag"]["end_col"], ka + 2, "{got}");
+    assert_eq!(
+        got["diag"]["message"],
+        "<material> attribute ka=\"-1\" must be >= 0"
+    );
+    assert_eq!(got["cleared"], true, "the fixed text clears it: {got}");
+    assert_eq!(
+        got["completion"],
+        serde_json::json!(["ka", "kd", "ks", "m"]),
+        "{got}"
+    );
+    let hover = got["hover"].as_str().unwrap_or_default();
+    assert!(
+        hover.starts_with("Ambient coefficient") && hover.ends_with("Default: 0.2."),
+        "{got}"
+    );
+    assert_eq!(
+        got["symbols"],
+        serde_json::json!([
+            "#1 sphere@2",
+            "#2 sphere@9",
+            "light 1@16",
+            "camera@19",
+            "model@24"
+        ]),
+        "{got}"
+    );
+    assert_eq!(
+        fs::read_to_string(&scene).unwrap(),
+        rayoflight::EXAMPLE_SCENE
+    );
+}
