@@ -6,10 +6,11 @@
 //! What it answers comes from `rayoflight::scene::language`; this module
 //! only speaks the protocol. Positions are UTF-16 code units (the
 //! protocol's default, which the server announces). Documents are synced
-//! incrementally. Errors are found off the message loop, on a thread of
-//! their own that takes the newest text of each document and checks it at
-//! most every 100 ms: a big buffer makes its errors come later, never the
-//! typing slower.
+//! incrementally: a change is spliced into the document's text and its
+//! line index is moved, not rebuilt. Errors are found off the message
+//! loop, on a thread of their own that copies the newest text of each
+//! changed document and checks it at most every 100 ms: a big buffer makes
+//! its errors come later, never the typing slower.
 
 use lsp_server::{Connection, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
@@ -27,8 +28,8 @@ use lsp_types::{
 };
 use rayoflight::scene::language::{self, Lines, Place};
 use std::collections::HashMap;
-use std::sync::Arc;
 use std::sync::mpsc;
+use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
 
 /// `value` as JSON (`null` for none).
@@ -38,6 +39,19 @@ macro_rules! json {
             .and_then(|v| serde_json::to_value(v).ok())
             .unwrap_or(serde_json::Value::Null)
     };
+}
+
+/// An open document: the editor's text and where its lines start.
+struct Document {
+    text: String,
+    lines: Lines,
+}
+
+/// The open documents, by URI, shared with the thread that checks them.
+type Documents = Arc<Mutex<HashMap<String, Document>>>;
+
+fn lock(documents: &Documents) -> std::sync::MutexGuard<'_, HashMap<String, Document>> {
+    documents.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
 /// The least time between two checks of the documents' errors.
@@ -64,8 +78,8 @@ pub fn run() -> Result<(), String> {
         .initialize(capabilities)
         .map_err(|e| format!("lsp: {e}"))?;
     let sender = connection.sender.clone();
-    let diagnose = diagnosis_thread(move |m| sender.send(m).is_ok());
-    let mut documents: HashMap<String, Arc<String>> = HashMap::new();
+    let documents: Documents = Arc::default();
+    let diagnose = diagnosis_thread(Arc::clone(&documents), move |m| sender.send(m).is_ok());
     for message in &connection.receiver {
         match message {
             Message::Request(request) => {
@@ -82,9 +96,9 @@ pub fn run() -> Result<(), String> {
                     .map_err(|e| format!("lsp: {e}"))?;
             }
             Message::Notification(n) => {
-                if let Some((uri, text)) = changed(&mut documents, n) {
+                if let Some(uri) = changed(&documents, n) {
                     // The thread has gone only if the server is ending.
-                    let _ = diagnose.send((uri, text));
+                    let _ = diagnose.send(uri);
                 }
             }
             Message::Response(_) => {}
@@ -94,43 +108,45 @@ pub fn run() -> Result<(), String> {
     io_threads.join().map_err(|e| format!("lsp: {e}"))
 }
 
-/// A document opened, changed or closed: its new text (`None`: closed).
-fn changed(
-    documents: &mut HashMap<String, Arc<String>>,
-    n: Notification,
-) -> Option<(Uri, Option<Arc<String>>)> {
+/// A document opened, changed or closed: the key of the one that changed.
+fn changed(documents: &Documents, n: Notification) -> Option<(String, Uri)> {
     match n.method.as_str() {
         DidOpenTextDocument::METHOD => {
             let p: DidOpenTextDocumentParams = serde_json::from_value(n.params).ok()?;
-            let text = Arc::new(p.text_document.text);
-            documents.insert(p.text_document.uri.to_string(), Arc::clone(&text));
-            Some((p.text_document.uri, Some(text)))
+            let (uri, text) = (p.text_document.uri, p.text_document.text);
+            let key = uri.to_string();
+            let lines = Lines::new(&text);
+            let document = Document { text, lines };
+            lock(documents).insert(key.clone(), document);
+            Some((key, uri))
         }
         DidChangeTextDocument::METHOD => {
             let p: DidChangeTextDocumentParams = serde_json::from_value(n.params).ok()?;
             let key = p.text_document.uri.to_string();
-            let mut text = documents
-                .get(&key)
-                .map_or_else(String::new, |t| (**t).clone());
+            let mut all = lock(documents);
+            let document = all.get_mut(&key)?;
             for change in p.content_changes {
+                let Document { text, lines, .. } = &mut *document;
                 match change.range {
                     Some(range) => {
-                        let lines = Lines::new(&text);
-                        let start = lines.offset(&text, place(range.start));
-                        let end = lines.offset(&text, place(range.end)).max(start);
+                        let start = lines.offset(text, place(range.start));
+                        let end = lines.offset(text, place(range.end)).max(start);
                         text.replace_range(start..end, &change.text);
+                        lines.edit(text, start..end, change.text.len());
                     }
-                    None => text = change.text,
+                    None => {
+                        *lines = Lines::new(&change.text);
+                        *text = change.text;
+                    }
                 }
             }
-            let text = Arc::new(text);
-            documents.insert(key, Arc::clone(&text));
-            Some((p.text_document.uri, Some(text)))
+            Some((key, p.text_document.uri))
         }
         DidCloseTextDocument::METHOD => {
             let p: DidCloseTextDocumentParams = serde_json::from_value(n.params).ok()?;
-            documents.remove(&p.text_document.uri.to_string());
-            Some((p.text_document.uri, None))
+            let key = p.text_document.uri.to_string();
+            lock(documents).remove(&key);
+            Some((key, p.text_document.uri))
         }
         _ => None,
     }
@@ -157,26 +173,27 @@ fn range(text: &str, lines: &Lines, bytes: std::ops::Range<usize>) -> Range {
     }
 }
 
-/// The thread that checks the documents: it keeps the newest text of each
-/// and publishes its errors, at most every [`DIAGNOSE_EVERY`].
+/// The thread that checks the documents: told which changed, it copies
+/// the newest text of each and publishes its errors, at most every
+/// [`DIAGNOSE_EVERY`]; a document closed gets an empty list.
 fn diagnosis_thread(
+    documents: Documents,
     send: impl Fn(Message) -> bool + Send + 'static,
-) -> mpsc::Sender<(Uri, Option<Arc<String>>)> {
-    let (tx, rx) = mpsc::channel::<(Uri, Option<Arc<String>>)>();
+) -> mpsc::Sender<(String, Uri)> {
+    let (tx, rx) = mpsc::channel::<(String, Uri)>();
     std::thread::spawn(move || {
         let mut last = Instant::now() - DIAGNOSE_EVERY;
         while let Ok(first) = rx.recv() {
-            // Not more often than every DIAGNOSE_EVERY; what came meanwhile
-            // replaces what was waiting.
             std::thread::sleep(DIAGNOSE_EVERY.saturating_sub(last.elapsed()));
-            let mut newest: Vec<(Uri, Option<Arc<String>>)> = vec![first];
-            for (uri, text) in rx.try_iter() {
-                match newest.iter_mut().find(|(u, _)| *u == uri) {
-                    Some(slot) => slot.1 = text,
-                    None => newest.push((uri, text)),
+            let mut changed = vec![first];
+            for next in rx.try_iter() {
+                if !changed.contains(&next) {
+                    changed.push(next);
                 }
             }
-            for (uri, text) in newest {
+            for (key, uri) in changed {
+                // A copy, so that the message loop goes on changing it.
+                let text = lock(&documents).get(&key).map(|d| d.text.clone());
                 let diagnostics = match &text {
                     Some(text) => {
                         let lines = Lines::new(text);
@@ -211,7 +228,7 @@ fn diagnosis_thread(
 
 /// The answer to a request, or an error response for what it does not
 /// know.
-fn answer(documents: &HashMap<String, Arc<String>>, request: Request) -> Response {
+fn answer(documents: &Documents, request: Request) -> Response {
     let id = request.id.clone();
     let result = match request.method.as_str() {
         Completion::METHOD => serde_json::from_value::<CompletionParams>(request.params).map(|p| {
@@ -270,13 +287,10 @@ fn unknown(id: RequestId, method: &str) -> Response {
 }
 
 /// `f` of the document's text, if the client opened it.
-fn with_text<T>(
-    documents: &HashMap<String, Arc<String>>,
-    uri: &Uri,
-    f: impl FnOnce(&str, &Lines) -> T,
-) -> Option<T> {
-    let text = documents.get(&uri.to_string())?;
-    Some(f(text, &Lines::new(text)))
+fn with_text<T>(documents: &Documents, uri: &Uri, f: impl FnOnce(&str, &Lines) -> T) -> Option<T> {
+    let all = lock(documents);
+    let document = all.get(&uri.to_string())?;
+    Some(f(&document.text, &document.lines))
 }
 
 fn completion_items(text: &str, offset: usize) -> Vec<CompletionItem> {

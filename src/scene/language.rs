@@ -47,6 +47,36 @@ impl Lines {
         Lines { starts }
     }
 
+    /// After `text[range]` was replaced by `inserted` bytes (`text` is the
+    /// new text): the line starts moved, without reading the rest of the
+    /// text again.
+    pub fn edit(&mut self, text: &str, range: Range<usize>, inserted: usize) {
+        // A line starts at p when byte p - 1 is LF, or CR not followed by
+        // LF: it depends on bytes p - 1 and p. Starts before the edit
+        // stay, those from one past its end on move by the change in
+        // length, and those in between are found again.
+        let (a, b) = (range.start, range.end);
+        let new_end = a + inserted;
+        let is_start = |p: usize| {
+            let bytes = text.as_bytes();
+            match bytes.get(p.wrapping_sub(1)) {
+                Some(b'\n') => true,
+                Some(b'\r') => bytes.get(p) != Some(&b'\n'),
+                _ => false,
+            }
+        };
+        let keep = self.starts.partition_point(|&s| s < a.max(1));
+        let after = self.starts.partition_point(|&s| s < b + 1);
+        let moved: Vec<usize> = self.starts[after..]
+            .iter()
+            .map(|&s| s - b + new_end)
+            .collect();
+        self.starts.truncate(keep);
+        self.starts
+            .extend((a.max(1)..=new_end.min(text.len())).filter(|&p| is_start(p)));
+        self.starts.extend(moved);
+    }
+
     /// The place of byte `offset` of `text` (clamped to the text).
     pub fn place(&self, text: &str, offset: usize) -> Place {
         let mut offset = offset.min(text.len());
@@ -522,6 +552,36 @@ mod tests {
             text.find('\r').unwrap() + 9
         );
         assert_eq!(lines.offset(text, Place { line: 9, column: 0 }), text.len());
+    }
+
+    #[test]
+    fn lines_follow_edits_without_reading_the_text_again() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut rng = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let pieces = ["a", "\n", "\r", "\r\n", "é", "😀", "<x/>", ""];
+        let mut text = "ab\ncd\r\nef\rgh\n".to_owned();
+        let mut lines = Lines::new(&text);
+        for _ in 0..2000 {
+            let mut start = rng() as usize % (text.len() + 1);
+            while !text.is_char_boundary(start) {
+                start -= 1;
+            }
+            let mut end = (start + rng() as usize % 4).min(text.len());
+            while !text.is_char_boundary(end) {
+                end += 1;
+            }
+            let inserted: String = (0..rng() % 3)
+                .map(|_| pieces[rng() as usize % pieces.len()])
+                .collect();
+            text.replace_range(start..end, &inserted);
+            lines.edit(&text, start..end, inserted.len());
+            assert_eq!(lines.starts, Lines::new(&text).starts, "{text:?}");
+        }
     }
 
     #[test]
