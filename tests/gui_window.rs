@@ -713,6 +713,21 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
     );
     let window = app_window(&xdotool);
     xdotool(&["windowfocus", "--sync", &window]);
+    // The window has the app's icon and the desktop entry's class (an
+    // icon of 256 × 256 overflowed a request: the property came empty).
+    if common::tool("xprop", "x11-utils") {
+        let props = Command::new("xprop")
+            .args(["-id", &window, "WM_CLASS", "_NET_WM_ICON"])
+            .env("DISPLAY", display)
+            .output()
+            .unwrap();
+        let props = String::from_utf8_lossy(&props.stdout);
+        assert!(
+            props.contains("\"io.github.rayoflight.RayOfLight\""),
+            "{props:.200}"
+        );
+        assert!(props.contains("Icon (128 x 128)"), "{props:.200}");
+    }
     let recorded = |what: &str| -> Vec<String> {
         let start = Instant::now();
         loop {

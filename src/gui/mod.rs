@@ -71,11 +71,13 @@ pub fn first_document(
         .unwrap_or_else(document::Document::builtin))
 }
 
-/// The app's icon (its 256-pixel PNG), for the window and the task bar.
+/// The app's icon (its 128-pixel PNG), for the window and the task bar.
+/// Not the 256: on X11 its 65 538 words overflow a request of the core
+/// protocol, and the window gets an empty `_NET_WM_ICON`.
 fn window_icon() -> egui::IconData {
     let png = crate::desktop::ICON_PNGS
         .iter()
-        .find(|(side, _)| *side == 256)
+        .find(|(side, _)| *side == 128)
         .map_or(&[][..], |(_, png)| *png);
     match image::load_from_memory_with_format(png, image::ImageFormat::Png) {
         Ok(icon) => {
