@@ -23,6 +23,8 @@
 //!   the renders of a sweep side by side.
 //! - [`desktop`]: the app's desktop entry, icons and scene MIME type,
 //!   installed for the user and removed again.
+//! - [`editor_link`]: the editor's unsaved text from `rayoflight lsp` to
+//!   the app, over a socket of the user's own.
 //! - [`files`]: special files, symbolic links, permissions and locks, for
 //!   reading and writing.
 //! - [`interrupt`]: SIGINT, SIGTERM and SIGHUP stop a write or a render
@@ -47,6 +49,8 @@
 pub mod assemble;
 pub mod bench;
 pub mod desktop;
+#[cfg(unix)]
+pub mod editor_link;
 pub mod files;
 pub mod geometry;
 #[cfg(feature = "gui")]

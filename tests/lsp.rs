@@ -82,3 +82,60 @@ fn neovim_gets_diagnostics_completion_hover_and_symbols() {
         rayoflight::EXAMPLE_SCENE
     );
 }
+
+/// The editor's unsaved text goes to the user's apps over the link
+/// (`rayoflight::editor_link`): a listener in a private runtime folder
+/// gets the typed text before any save, then "released" when the editor
+/// saves.
+#[test]
+fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
+    use rayoflight::editor_link::{self, Listener, Message};
+    if !common::tool("nvim", "neovim") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.xml");
+    fs::write(&scene, rayoflight::EXAMPLE_SCENE).unwrap();
+    let runtime = dir.path().join("run");
+    fs::create_dir(&runtime).unwrap();
+    let folder = editor_link::folder_in(&runtime.join("rayoflight")).unwrap();
+    let listener = Listener::bind(&folder).unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let Ok(stream) = listener.accept() else {
+            return;
+        };
+        let mut r = std::io::BufReader::new(stream);
+        while let Ok(Some(m)) = editor_link::receive(&mut r) {
+            let _ = tx.send((m, fs::read_to_string(&scene).unwrap_or_default()));
+        }
+    });
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/link.lua");
+    let o = Command::new("timeout")
+        .arg("60")
+        .args(["nvim", "--headless", "--clean", "-u", "NONE", "-S"])
+        .arg(&script)
+        .current_dir(dir.path())
+        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
+        .env("XDG_RUNTIME_DIR", &runtime)
+        .env("HOME", dir.path())
+        .env("XDG_STATE_HOME", dir.path().join("state"))
+        .env("XDG_DATA_HOME", dir.path().join("data"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: Vec<(Message, String)> = rx.try_iter().collect();
+    let path = fs::canonicalize(dir.path()).unwrap().join("s.xml");
+    let typed = rayoflight::EXAMPLE_SCENE.replacen("ka=\"0.3\"", "ka=\"0.9\"", 1);
+    let unsaved = got.iter().position(|(m, on_disk)| {
+        *m == Message::Buffer {
+            path: path.clone(),
+            text: typed.clone(),
+        } && on_disk == rayoflight::EXAMPLE_SCENE
+    });
+    assert!(unsaved.is_some(), "the typed text before the save: {got:?}");
+    let released = got
+        .iter()
+        .position(|(m, _)| *m == Message::Released { path: path.clone() });
+    assert!(released > unsaved, "released after the text: {got:?}");
+}

@@ -10,22 +10,27 @@
 //! line index is moved, not rebuilt. Errors are found off the message
 //! loop, on a thread of their own that copies the newest text of each
 //! changed document and checks it at most every 100 ms: a big buffer makes
-//! its errors come later, never the typing slower.
+//! its errors come later, never the typing slower. The same thread hands
+//! each newest text to the user's running apps
+//! ([`rayoflight::editor_link`]), and tells them when the editor saves or
+//! closes the document.
 
 use lsp_server::{Connection, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
-    DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, Notification as _,
-    PublishDiagnostics,
+    DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument,
+    Notification as _, PublishDiagnostics,
 };
 use lsp_types::request::{Completion, DocumentSymbolRequest, HoverRequest, Request as _};
 use lsp_types::{
     CompletionItem, CompletionItemKind, CompletionOptions, CompletionParams, CompletionResponse,
     Diagnostic, DiagnosticSeverity, DidChangeTextDocumentParams, DidCloseTextDocumentParams,
-    DidOpenTextDocumentParams, DocumentSymbol, DocumentSymbolParams, DocumentSymbolResponse,
-    Documentation, Hover, HoverContents, HoverParams, HoverProviderCapability, MarkupContent,
-    MarkupKind, OneOf, Position, PositionEncodingKind, PublishDiagnosticsParams, Range,
-    ServerCapabilities, SymbolKind, TextDocumentSyncCapability, TextDocumentSyncKind, Uri,
+    DidOpenTextDocumentParams, DidSaveTextDocumentParams, DocumentSymbol, DocumentSymbolParams,
+    DocumentSymbolResponse, Documentation, Hover, HoverContents, HoverParams,
+    HoverProviderCapability, MarkupContent, MarkupKind, OneOf, Position, PositionEncodingKind,
+    PublishDiagnosticsParams, Range, ServerCapabilities, SymbolKind, TextDocumentSyncCapability,
+    TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
 };
+use rayoflight::editor_link;
 use rayoflight::scene::language::{self, Lines, Place};
 use std::collections::HashMap;
 use std::sync::mpsc;
@@ -54,6 +59,17 @@ fn lock(documents: &Documents) -> std::sync::MutexGuard<'_, HashMap<String, Docu
     documents.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
+/// What a notification changed.
+#[derive(Debug, Clone, PartialEq)]
+enum Changed {
+    /// The text of a document (by key and URI).
+    Text(String, Uri),
+    /// The editor saved it: its text is the file's.
+    Released(Uri),
+    /// The editor closed it.
+    Closed(String, Uri),
+}
+
 /// The least time between two checks of the documents' errors.
 const DIAGNOSE_EVERY: Duration = Duration::from_millis(100);
 
@@ -62,8 +78,13 @@ pub fn run() -> Result<(), String> {
     let (connection, io_threads) = Connection::stdio();
     let capabilities = ServerCapabilities {
         position_encoding: Some(PositionEncodingKind::UTF16),
-        text_document_sync: Some(TextDocumentSyncCapability::Kind(
-            TextDocumentSyncKind::INCREMENTAL,
+        text_document_sync: Some(TextDocumentSyncCapability::Options(
+            TextDocumentSyncOptions {
+                open_close: Some(true),
+                change: Some(TextDocumentSyncKind::INCREMENTAL),
+                save: Some(true.into()),
+                ..TextDocumentSyncOptions::default()
+            },
         )),
         completion_provider: Some(CompletionOptions {
             trigger_characters: Some(vec!["<".into(), " ".into(), "\"".into()]),
@@ -96,9 +117,9 @@ pub fn run() -> Result<(), String> {
                     .map_err(|e| format!("lsp: {e}"))?;
             }
             Message::Notification(n) => {
-                if let Some(uri) = changed(&documents, n) {
+                if let Some(change) = changed(&documents, n) {
                     // The thread has gone only if the server is ending.
-                    let _ = diagnose.send(uri);
+                    let _ = diagnose.send(change);
                 }
             }
             Message::Response(_) => {}
@@ -108,8 +129,9 @@ pub fn run() -> Result<(), String> {
     io_threads.join().map_err(|e| format!("lsp: {e}"))
 }
 
-/// A document opened, changed or closed: the key of the one that changed.
-fn changed(documents: &Documents, n: Notification) -> Option<(String, Uri)> {
+/// A document opened, changed, saved or closed: the key of the one that
+/// changed, and whether the editor let go of its text (saved or closed).
+fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
     match n.method.as_str() {
         DidOpenTextDocument::METHOD => {
             let p: DidOpenTextDocumentParams = serde_json::from_value(n.params).ok()?;
@@ -118,7 +140,7 @@ fn changed(documents: &Documents, n: Notification) -> Option<(String, Uri)> {
             let lines = Lines::new(&text);
             let document = Document { text, lines };
             lock(documents).insert(key.clone(), document);
-            Some((key, uri))
+            Some(Changed::Text(key, uri))
         }
         DidChangeTextDocument::METHOD => {
             let p: DidChangeTextDocumentParams = serde_json::from_value(n.params).ok()?;
@@ -140,13 +162,17 @@ fn changed(documents: &Documents, n: Notification) -> Option<(String, Uri)> {
                     }
                 }
             }
-            Some((key, p.text_document.uri))
+            Some(Changed::Text(key, p.text_document.uri))
+        }
+        DidSaveTextDocument::METHOD => {
+            let p: DidSaveTextDocumentParams = serde_json::from_value(n.params).ok()?;
+            Some(Changed::Released(p.text_document.uri))
         }
         DidCloseTextDocument::METHOD => {
             let p: DidCloseTextDocumentParams = serde_json::from_value(n.params).ok()?;
             let key = p.text_document.uri.to_string();
             lock(documents).remove(&key);
-            Some((key, p.text_document.uri))
+            Some(Changed::Closed(key, p.text_document.uri))
         }
         _ => None,
     }
@@ -174,14 +200,16 @@ fn range(text: &str, lines: &Lines, bytes: std::ops::Range<usize>) -> Range {
 }
 
 /// The thread that checks the documents: told which changed, it copies
-/// the newest text of each and publishes its errors, at most every
-/// [`DIAGNOSE_EVERY`]; a document closed gets an empty list.
+/// the newest text of each, publishes its errors and hands it to the
+/// user's apps, at most every [`DIAGNOSE_EVERY`]; a document closed gets an
+/// empty list, and the apps are told when the editor saves or closes one.
 fn diagnosis_thread(
     documents: Documents,
     send: impl Fn(Message) -> bool + Send + 'static,
-) -> mpsc::Sender<(String, Uri)> {
-    let (tx, rx) = mpsc::channel::<(String, Uri)>();
+) -> mpsc::Sender<Changed> {
+    let (tx, rx) = mpsc::channel::<Changed>();
     std::thread::spawn(move || {
+        let mut apps = Apps::default();
         let mut last = Instant::now() - DIAGNOSE_EVERY;
         while let Ok(first) = rx.recv() {
             std::thread::sleep(DIAGNOSE_EVERY.saturating_sub(last.elapsed()));
@@ -191,7 +219,18 @@ fn diagnosis_thread(
                     changed.push(next);
                 }
             }
-            for (key, uri) in changed {
+            for change in changed {
+                let (key, uri) = match change {
+                    Changed::Released(uri) => {
+                        apps.released(&uri);
+                        continue;
+                    }
+                    Changed::Closed(key, uri) => {
+                        apps.released(&uri);
+                        (key, uri)
+                    }
+                    Changed::Text(key, uri) => (key, uri),
+                };
                 // A copy, so that the message loop goes on changing it.
                 let text = lock(&documents).get(&key).map(|d| d.text.clone());
                 let diagnostics = match &text {
@@ -210,6 +249,9 @@ fn diagnosis_thread(
                     }
                     None => Vec::new(),
                 };
+                if let Some(text) = text {
+                    apps.buffer(&uri, text);
+                }
                 let params = PublishDiagnosticsParams {
                     uri,
                     diagnostics,
@@ -224,6 +266,50 @@ fn diagnosis_thread(
         }
     });
     tx
+}
+
+/// The user's running apps ([`rayoflight::editor_link`]), connected to as
+/// they come and dropped as they go.
+#[derive(Default)]
+struct Apps {
+    connections: HashMap<std::path::PathBuf, std::os::unix::net::UnixStream>,
+}
+
+impl Apps {
+    /// Sends `message` to every app in the runtime folder.
+    fn tell(&mut self, message: &editor_link::Message) {
+        let Ok(folder) = editor_link::folder() else {
+            return;
+        };
+        let sockets = editor_link::apps(&folder);
+        self.connections
+            .retain(|socket, _| sockets.contains(socket));
+        for socket in sockets {
+            if !self.connections.contains_key(&socket)
+                && let Ok(stream) = editor_link::connect(&socket)
+            {
+                self.connections.insert(socket.clone(), stream);
+            }
+            let Some(stream) = self.connections.get_mut(&socket) else {
+                continue;
+            };
+            if editor_link::send(stream, message).is_err() {
+                self.connections.remove(&socket);
+            }
+        }
+    }
+
+    fn buffer(&mut self, uri: &Uri, text: String) {
+        if let Some(path) = editor_link::uri_path(uri.as_str()) {
+            self.tell(&editor_link::Message::Buffer { path, text });
+        }
+    }
+
+    fn released(&mut self, uri: &Uri) {
+        if let Some(path) = editor_link::uri_path(uri.as_str()) {
+            self.tell(&editor_link::Message::Released { path });
+        }
+    }
 }
 
 /// The answer to a request, or an error response for what it does not

@@ -1,0 +1,343 @@
+//! The link between `rayoflight lsp` (in the user's editor) and the
+//! desktop app: the editor's unsaved text of a scene goes to every app of
+//! the same user, which renders it if it has that file open; an app asks
+//! the editor to show an element.
+//!
+//! Each app listens on a Unix socket `app-PID.sock` in the user's runtime
+//! folder, `$XDG_RUNTIME_DIR/rayoflight/` (made mode 0700; a folder that
+//! is not the user's own, or that others may enter, is refused). A
+//! connection from a process of another user is closed at once: the
+//! kernel says who is at the other end (`SO_PEERCRED`). The language
+//! server connects to every socket there and sends each change of a file
+//! it has open; sockets of apps that are gone are removed.
+//!
+//! A message is one line of JSON (`{"kind":"buffer","path":…,"bytes":N}`)
+//! followed by N bytes of text for a buffer.
+
+use std::io::{self, BufRead, Read, Write};
+use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+use std::os::unix::net::{UnixListener, UnixStream};
+use std::path::{Path, PathBuf};
+
+/// What goes over the link.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Message {
+    /// The editor's text of `path`, unsaved: the app renders it.
+    Buffer { path: PathBuf, text: String },
+    /// The editor saved or closed `path`: the app is back to the file.
+    Released { path: PathBuf },
+    /// The app asks the editor to show `path` at the element that starts
+    /// at `line` and `column` (1-based, the loader's).
+    Show {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+    },
+}
+
+/// Why the runtime folder cannot be used.
+#[derive(Debug, thiserror::Error)]
+pub enum LinkError {
+    #[error("no runtime folder: XDG_RUNTIME_DIR is not set")]
+    NoRuntimeDir,
+    #[error("{}: not ours, or others may enter it (mode {mode:o}): not used", path.display())]
+    Unsafe { path: PathBuf, mode: u32 },
+    #[error("{}: {source}", path.display())]
+    Io { path: PathBuf, source: io::Error },
+}
+
+/// `$XDG_RUNTIME_DIR/rayoflight`, made if missing (mode 0700), checked to
+/// be the user's own folder that no one else may enter.
+pub fn folder() -> Result<PathBuf, LinkError> {
+    let runtime = std::env::var_os("XDG_RUNTIME_DIR")
+        .map(PathBuf::from)
+        .filter(|p| p.is_absolute())
+        .ok_or(LinkError::NoRuntimeDir)?;
+    let path = runtime.join("rayoflight");
+    folder_in(&path)
+}
+
+/// [`folder`] at `path`.
+pub fn folder_in(path: &Path) -> Result<PathBuf, LinkError> {
+    let io = |source| LinkError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    match std::fs::DirBuilder::new().mode(0o700).create(path) {
+        Ok(()) => {}
+        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => {}
+        Err(e) => return Err(io(e)),
+    }
+    let meta = std::fs::symlink_metadata(path).map_err(io)?;
+    let mode = meta.permissions().mode() & 0o7777;
+    let ours = meta.is_dir() && meta.uid() == rustix::process::geteuid().as_raw();
+    if !ours || mode & 0o077 != 0 {
+        return Err(LinkError::Unsafe {
+            path: path.to_owned(),
+            mode,
+        });
+    }
+    Ok(path.to_owned())
+}
+
+/// Whether the process at the other end of `stream` is this user's.
+pub fn peer_is_us(stream: &UnixStream) -> bool {
+    rustix::net::sockopt::socket_peercred(stream)
+        .is_ok_and(|cred| cred.uid == rustix::process::geteuid())
+}
+
+/// An app's socket: removed when dropped.
+#[derive(Debug)]
+pub struct Listener {
+    listener: UnixListener,
+    path: PathBuf,
+}
+
+impl Listener {
+    /// Listens on `app-PID.sock` in `folder`.
+    pub fn bind(folder: &Path) -> io::Result<Listener> {
+        let path = folder.join(format!("app-{}.sock", std::process::id()));
+        // A socket left by a process with the same PID long gone.
+        let _ = std::fs::remove_file(&path);
+        let listener = UnixListener::bind(&path)?;
+        std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600))?;
+        Ok(Listener { listener, path })
+    }
+
+    /// The next connection of this user's (another user's is closed
+    /// unread, and the wait goes on).
+    pub fn accept(&self) -> io::Result<UnixStream> {
+        loop {
+            let (stream, _) = self.listener.accept()?;
+            if peer_is_us(&stream) {
+                return Ok(stream);
+            }
+        }
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for Listener {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// The apps' sockets in `folder`.
+pub fn apps(folder: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(folder) else {
+        return Vec::new();
+    };
+    let mut apps: Vec<PathBuf> = entries
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| {
+            let name = p.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            name.starts_with("app-") && name.ends_with(".sock")
+        })
+        .collect();
+    apps.sort();
+    apps
+}
+
+/// Connects to the app at `socket`, checking it is this user's; a socket
+/// nobody listens on any more is removed.
+pub fn connect(socket: &Path) -> io::Result<UnixStream> {
+    match UnixStream::connect(socket) {
+        Ok(stream) if peer_is_us(&stream) => Ok(stream),
+        Ok(_) => Err(io::Error::new(
+            io::ErrorKind::PermissionDenied,
+            "the app at the other end is another user's",
+        )),
+        Err(e) => {
+            if e.kind() == io::ErrorKind::ConnectionRefused {
+                let _ = std::fs::remove_file(socket);
+            }
+            Err(e)
+        }
+    }
+}
+
+/// Writes `message`.
+pub fn send(w: &mut impl Write, message: &Message) -> io::Result<()> {
+    let path = |p: &Path| p.to_string_lossy().into_owned();
+    let (header, body) = match message {
+        Message::Buffer { path: p, text } => (
+            serde_json::json!({"kind": "buffer", "path": path(p), "bytes": text.len()}),
+            text.as_bytes(),
+        ),
+        Message::Released { path: p } => (
+            serde_json::json!({"kind": "released", "path": path(p)}),
+            &[][..],
+        ),
+        Message::Show {
+            path: p,
+            line,
+            column,
+        } => (
+            serde_json::json!({"kind": "show", "path": path(p), "line": line, "column": column}),
+            &[][..],
+        ),
+    };
+    let mut bytes = header.to_string().into_bytes();
+    bytes.push(b'\n');
+    bytes.extend_from_slice(body);
+    w.write_all(&bytes)?;
+    w.flush()
+}
+
+/// The largest buffer the link carries: the loader's largest file.
+const MAX_BYTES: u64 = crate::scene::MAX_FILE_BYTES;
+
+/// Reads the next message; `None` at the end of the stream.
+pub fn receive(r: &mut impl BufRead) -> io::Result<Option<Message>> {
+    let bad = |what: &str| io::Error::new(io::ErrorKind::InvalidData, what.to_owned());
+    let mut line = String::new();
+    if r.by_ref().take(64 * 1024).read_line(&mut line)? == 0 {
+        return Ok(None);
+    }
+    let header: serde_json::Value =
+        serde_json::from_str(line.trim_end()).map_err(|_| bad("not a message header"))?;
+    let path = header["path"]
+        .as_str()
+        .map(PathBuf::from)
+        .ok_or_else(|| bad("a message without a path"))?;
+    let number = |key: &str| {
+        header[key]
+            .as_u64()
+            .ok_or_else(|| bad("a message without its numbers"))
+    };
+    Ok(Some(match header["kind"].as_str() {
+        Some("buffer") => {
+            let bytes = number("bytes")?;
+            if bytes > MAX_BYTES {
+                return Err(bad("a buffer larger than a scene may be"));
+            }
+            let mut text = Vec::with_capacity(usize::try_from(bytes).unwrap_or(0));
+            r.by_ref().take(bytes).read_to_end(&mut text)?;
+            if text.len() as u64 != bytes {
+                return Err(bad("a buffer cut short"));
+            }
+            let text = String::from_utf8(text).map_err(|_| bad("a buffer not in UTF-8"))?;
+            Message::Buffer { path, text }
+        }
+        Some("released") => Message::Released { path },
+        Some("show") => Message::Show {
+            path,
+            line: usize::try_from(number("line")?).unwrap_or(1),
+            column: usize::try_from(number("column")?).unwrap_or(1),
+        },
+        _ => return Err(bad("an unknown message")),
+    }))
+}
+
+/// The file path of a `file:` URI (`file:///home/me/a%20b.xml`), if it is
+/// one.
+pub fn uri_path(uri: &str) -> Option<PathBuf> {
+    let rest = uri.strip_prefix("file://")?;
+    // `file://host/path`: only the local host, written empty or localhost.
+    let rest = rest.strip_prefix("localhost").unwrap_or(rest);
+    if !rest.starts_with('/') {
+        return None;
+    }
+    let bytes = rest.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len());
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i] == b'%' {
+            let hex = std::str::from_utf8(bytes.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(bytes[i]);
+            i += 1;
+        }
+    }
+    use std::os::unix::ffi::OsStringExt;
+    Some(PathBuf::from(std::ffi::OsString::from_vec(out)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn messages_read_back_as_written() {
+        let messages = [
+            Message::Buffer {
+                path: "/a b/é.xml".into(),
+                text: "<scene>\n\u{1F600}\n</scene>".into(),
+            },
+            Message::Released {
+                path: "/s.xml".into(),
+            },
+            Message::Show {
+                path: "/s.xml".into(),
+                line: 9,
+                column: 3,
+            },
+        ];
+        let mut bytes = Vec::new();
+        for m in &messages {
+            send(&mut bytes, m).unwrap();
+        }
+        let mut r = io::BufReader::new(&bytes[..]);
+        for m in &messages {
+            assert_eq!(receive(&mut r).unwrap().as_ref(), Some(m));
+        }
+        assert_eq!(receive(&mut r).unwrap(), None);
+        // The first buffer cut short, five bytes into its text.
+        let header = bytes.iter().position(|&b| b == b'\n').unwrap();
+        let mut cut = io::BufReader::new(&bytes[..header + 6]);
+        assert!(receive(&mut cut).is_err());
+    }
+
+    #[test]
+    fn file_uris_give_their_paths() {
+        assert_eq!(
+            uri_path("file:///home/me/a%20b.xml"),
+            Some("/home/me/a b.xml".into())
+        );
+        assert_eq!(uri_path("file://localhost/s.xml"), Some("/s.xml".into()));
+        assert_eq!(uri_path("file:///%C3%A9.xml"), Some("/é.xml".into()));
+        assert_eq!(uri_path("untitled:1"), None);
+        assert_eq!(uri_path("file://other/s.xml"), None);
+        assert_eq!(uri_path("file:///bad%zz"), None);
+    }
+
+    #[test]
+    fn the_folder_is_ours_alone_and_an_app_is_reached_through_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let folder = folder_in(&dir.path().join("rayoflight")).unwrap();
+        let mode = std::fs::metadata(&folder).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o700);
+        let open = dir.path().join("open");
+        std::fs::create_dir(&open).unwrap();
+        std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o755)).unwrap();
+        assert!(matches!(folder_in(&open), Err(LinkError::Unsafe { .. })));
+
+        let listener = Listener::bind(&folder).unwrap();
+        assert_eq!(apps(&folder), [listener.path().to_owned()]);
+        let sent = Message::Released {
+            path: "/s.xml".into(),
+        };
+        let writer = {
+            let socket = listener.path().to_owned();
+            let sent = sent.clone();
+            std::thread::spawn(move || {
+                let mut stream = connect(&socket).unwrap();
+                send(&mut stream, &sent).unwrap();
+            })
+        };
+        let stream = listener.accept().unwrap();
+        writer.join().unwrap();
+        let mut r = io::BufReader::new(stream);
+        assert_eq!(receive(&mut r).unwrap(), Some(sent));
+        let path = listener.path().to_owned();
+        drop(listener);
+        assert!(!path.exists());
+    }
+}
