@@ -436,6 +436,39 @@ pub const ATTRIBUTES: &[Attribute] = &[
     },
 ];
 
+impl Element {
+    /// What it is and the rules the schema cannot say: the text editors
+    /// show for it.
+    pub fn documentation(&self) -> String {
+        match self.also {
+            Some(rule) => format!("{} {rule}", self.doc),
+            None => self.doc.to_owned(),
+        }
+    }
+}
+
+impl Attribute {
+    /// What it means, its range and its default: the text editors show
+    /// for it.
+    pub fn documentation(&self) -> String {
+        let range = match self.value {
+            Value::Number { min: None, .. } => "Any finite number.".to_owned(),
+            Value::Number {
+                min: Some(min),
+                min_exclusive,
+            } => format!("A number {} {min}.", if min_exclusive { ">" } else { "≥" }),
+            Value::Integer { min, max } => format!("An integer from {min} to {max}."),
+            Value::Choice(names) => format!("One of {}.", names.join(", ")),
+        };
+        let presence = match self.presence {
+            Presence::Required => "Required.".to_owned(),
+            Presence::Default(v) => format!("Default: {v}."),
+            Presence::Optional => "Optional.".to_owned(),
+        };
+        format!("{} {range} {presence}", self.doc)
+    }
+}
+
 /// The element named `name`.
 pub fn element(name: &str) -> Option<&'static Element> {
     ELEMENTS.iter().find(|e| e.name == name)

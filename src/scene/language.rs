@@ -10,7 +10,7 @@
 //! elements open at the cursor give the parent, the tag the cursor is in
 //! gives the element and the attributes it has.
 
-use super::grammar::{self, Presence, Value};
+use super::grammar::{self, Value};
 use super::{LoadError, Position, names, splice};
 use std::ops::Range;
 use std::path::Path;
@@ -364,29 +364,7 @@ fn children_of(parent: Option<&str>) -> &'static [&'static str] {
 }
 
 fn element_doc(name: &str) -> String {
-    grammar::element(name).map_or_else(String::new, |e| match e.also {
-        Some(also) => format!("{} {also}", e.doc),
-        None => e.doc.to_owned(),
-    })
-}
-
-/// What an attribute means, its range and its default, as one text.
-pub fn attribute_doc(attribute: &grammar::Attribute) -> String {
-    let range = match attribute.value {
-        Value::Number { min: None, .. } => "Any finite number.".to_owned(),
-        Value::Number {
-            min: Some(min),
-            min_exclusive,
-        } => format!("A number {} {min}.", if min_exclusive { ">" } else { "≥" }),
-        Value::Integer { min, max } => format!("An integer from {min} to {max}."),
-        Value::Choice(names) => format!("One of {}.", names.join(", ")),
-    };
-    let presence = match attribute.presence {
-        Presence::Required => "Required.".to_owned(),
-        Presence::Default(v) => format!("Default: {v}."),
-        Presence::Optional => "Optional.".to_owned(),
-    };
-    format!("{} {range} {presence}", attribute.doc)
+    grammar::element(name).map_or_else(String::new, grammar::Element::documentation)
 }
 
 /// What may be typed at byte `offset` of `text`.
@@ -421,7 +399,7 @@ pub fn completions(text: &str, offset: usize) -> Vec<Completion> {
                 label: a.name.to_owned(),
                 insert: format!("{}=\"\"", a.name),
                 kind: CompletionKind::Attribute,
-                doc: attribute_doc(a),
+                doc: a.documentation(),
             })
             .collect(),
         Spot::AttributeValue {
@@ -468,7 +446,7 @@ pub fn hover(text: &str, offset: usize) -> Option<(String, Range<usize>)> {
     }
     match spot(text, end) {
         Spot::AttributeName { element, .. } | Spot::AttributeValue { element, .. } => {
-            grammar::attribute(element, name).map(|a| (attribute_doc(a), start..end))
+            grammar::attribute(element, name).map(|a| (a.documentation(), start..end))
         }
         _ => None,
     }

@@ -75,13 +75,6 @@ fn documentation(w: &mut String, depth: usize, text: &str) {
     line(w, depth, "</xs:annotation>");
 }
 
-fn element_doc(element: &Element) -> String {
-    match element.also {
-        Some(rule) => format!("{} {rule}", element.doc),
-        None => element.doc.to_owned(),
-    }
-}
-
 /// `<xs:element name=… type=…>` with its documentation (the element's own
 /// type has the same name).
 fn element_declaration(w: &mut String, depth: usize, element: &Element) {
@@ -97,7 +90,7 @@ fn element_occurring(w: &mut String, depth: usize, element: &Element, occurs: &s
             element.name
         ),
     );
-    documentation(w, depth + 1, &element_doc(element));
+    documentation(w, depth + 1, &element.documentation());
     line(w, depth, "</xs:element>");
 }
 
@@ -241,24 +234,12 @@ fn is_single(element: &Element, name: &str) -> bool {
 }
 
 fn attribute_declaration(w: &mut String, attribute: &Attribute) {
-    let (presence, said) = match attribute.presence {
-        Presence::Required => (r#" use="required""#.to_owned(), "Required.".to_owned()),
-        Presence::Default(value) => (
-            format!(r#" default="{value}""#),
-            format!("Default: {value}."),
-        ),
-        Presence::Optional => (String::new(), "Optional.".to_owned()),
+    let presence = match attribute.presence {
+        Presence::Required => r#" use="required""#.to_owned(),
+        Presence::Default(value) => format!(r#" default="{value}""#),
+        Presence::Optional => String::new(),
     };
-    let range = match attribute.value {
-        Value::Number { min: None, .. } => "Any finite number.".to_owned(),
-        Value::Number {
-            min: Some(min),
-            min_exclusive,
-        } => format!("A number {} {min}.", if min_exclusive { ">" } else { "≥" }),
-        Value::Integer { min, max } => format!("An integer from {min} to {max}."),
-        Value::Choice(names) => format!("One of {}.", names.join(", ")),
-    };
-    let doc = format!("{} {range} {said}", attribute.doc);
+    let doc = attribute.documentation();
     let named_type = match attribute.value {
         Value::Number { min, min_exclusive } => Some(number_type(min, min_exclusive)),
         _ => None,
