@@ -10,6 +10,26 @@ use std::fs;
 use std::path::Path;
 use std::process::Command;
 
+/// Neovim, headless, running `tests/lsp/SCRIPT` in `dir` with the server
+/// as `$ROL_BIN` and `vars`; at most a minute.
+fn neovim(dir: &Path, script: &str, vars: &[(&str, &std::ffi::OsStr)]) -> std::process::Output {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/lsp")
+        .join(script);
+    Command::new("timeout")
+        .arg("60")
+        .args(["nvim", "--headless", "--clean", "-u", "NONE", "-S"])
+        .arg(&script)
+        .current_dir(dir)
+        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
+        .env("HOME", dir)
+        .env("XDG_STATE_HOME", dir.join("state"))
+        .env("XDG_DATA_HOME", dir.join("data"))
+        .envs(vars.iter().copied())
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn neovim_gets_diagnostics_completion_hover_and_symbols() {
     if !common::tool("nvim", "neovim") {
@@ -19,19 +39,7 @@ fn neovim_gets_diagnostics_completion_hover_and_symbols() {
     let scene = dir.path().join("s.xml");
     fs::write(&scene, rayoflight::EXAMPLE_SCENE).unwrap();
     let out = dir.path().join("out.json");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/client.lua");
-    let o = Command::new("timeout")
-        .arg("60")
-        .args(["nvim", "--headless", "--clean", "-u", "NONE", "-S"])
-        .arg(&script)
-        .current_dir(dir.path())
-        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
-        .env("ROL_OUT", &out)
-        .env("HOME", dir.path())
-        .env("XDG_STATE_HOME", dir.path().join("state"))
-        .env("XDG_DATA_HOME", dir.path().join("data"))
-        .output()
-        .unwrap();
+    let o = neovim(dir.path(), "client.lua", &[("ROL_OUT", out.as_os_str())]);
     let said = format!(
         "{}{}",
         String::from_utf8_lossy(&o.stdout),
@@ -110,19 +118,11 @@ fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
             let _ = tx.send((m, fs::read_to_string(&scene).unwrap_or_default()));
         }
     });
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/link.lua");
-    let o = Command::new("timeout")
-        .arg("60")
-        .args(["nvim", "--headless", "--clean", "-u", "NONE", "-S"])
-        .arg(&script)
-        .current_dir(dir.path())
-        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
-        .env("XDG_RUNTIME_DIR", &runtime)
-        .env("HOME", dir.path())
-        .env("XDG_STATE_HOME", dir.path().join("state"))
-        .env("XDG_DATA_HOME", dir.path().join("data"))
-        .output()
-        .unwrap();
+    let o = neovim(
+        dir.path(),
+        "link.lua",
+        &[("XDG_RUNTIME_DIR", runtime.as_os_str())],
+    );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let got: Vec<(Message, String)> = rx.try_iter().collect();
     let path = fs::canonicalize(dir.path()).unwrap().join("s.xml");
