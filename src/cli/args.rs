@@ -222,8 +222,9 @@ pub enum UsageError {
     version,
     about = "A raytracer for XML scenes, with a live desktop previewer",
     long_about = "Renders an XML scene (spheres, planes, lights, one camera, an \
-             illumination model) to an image; without -out, -time or --no-gui \
-             (GUI build), opens the live previewer on it.",
+             illumination model) to an image. In the GUI build, the scene alone \
+             opens the live previewer on it; any render flag or --no-gui renders \
+             here instead.",
     override_usage = USAGE.trim_start_matches("Usage: "),
     // The usage first, as `rayoflight` alone prints it.
     help_template = "{usage-heading} {usage}\n\n{about-with-newline}\n{all-args}{after-help}",
