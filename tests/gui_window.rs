@@ -772,3 +772,83 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
     );
     screenshot(display, &shots.join("editor-2.png"));
 }
+
+/// The editor's unsaved text on screen (issue 29): Neovim with
+/// `rayoflight lsp` turns the red sphere blue without saving, and the
+/// window shows it, the file untouched and the panel read-only; a broken
+/// text keeps the blue picture with the banner; when the editor quits,
+/// the window is back to the file (red).
+#[test]
+fn the_window_follows_the_editors_unsaved_text() {
+    if !common::tool("nvim", "neovim") {
+        return;
+    }
+    let runtime = tempfile::tempdir().unwrap();
+    let run = runtime.path().to_str().unwrap().to_owned();
+    let opened = Window::open_with("two.xml", TWO_SPHERES, &[("XDG_RUNTIME_DIR", &run)]);
+    let (shots, display, path) = (&opened.shots, &opened.display, &opened.path);
+    wait_for(
+        display,
+        &shots.join("follow-0.png"),
+        Duration::from_secs(60),
+        "the first render",
+        |s| centroid(s, RED).1 > 500,
+    );
+    // The app's socket, then the editor.
+    let folder = runtime.path().join("rayoflight");
+    let start = Instant::now();
+    while rayoflight::editor_link::apps(&folder).is_empty() {
+        assert!(start.elapsed() < Duration::from_secs(10), "the app listens");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let line = TWO_SPHERES
+        .lines()
+        .position(|l| l.contains(r#"<color red="1" green="0""#))
+        .unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/follow.lua");
+    let editor = Command::new("nvim")
+        .args(["--headless", "--clean", "-u", "NONE", "-S"])
+        .arg(&script)
+        .current_dir(opened.dir.path())
+        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
+        .env("ROL_FILE", path)
+        .env("ROL_LINE", line.to_string())
+        .env("XDG_RUNTIME_DIR", &run)
+        .env("HOME", opened.dir.path())
+        .env("XDG_STATE_HOME", opened.dir.path().join("nvim-state"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut editor = Killed(editor);
+    let took = wait_for(
+        display,
+        &shots.join("follow-1-typed.png"),
+        Duration::from_secs(3),
+        "the typed colour",
+        |s| centroid(s, BLUE).1 > 500 && centroid(s, RED).1 == 0,
+    );
+    eprintln!("typed text on screen {took:?} after the first screenshot");
+    assert_eq!(
+        std::fs::read_to_string(path).unwrap(),
+        TWO_SPHERES,
+        "the file untouched"
+    );
+    wait_for(
+        display,
+        &shots.join("follow-2-broken.png"),
+        Duration::from_secs(6),
+        "the banner over the last good picture",
+        |s| count(s, BANNER) > 1000 && centroid(s, BLUE).1 > 500,
+    );
+    let status = editor.0.wait().unwrap();
+    assert!(status.success());
+    wait_for(
+        display,
+        &shots.join("follow-3-released.png"),
+        Duration::from_secs(6),
+        "the file's picture again",
+        |s| centroid(s, RED).1 > 500 && centroid(s, BLUE).1 == 0 && count(s, BANNER) == 0,
+    );
+    assert_eq!(std::fs::read_to_string(path).unwrap(), TWO_SPHERES);
+}

@@ -139,6 +139,14 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
         Box::new(move |cc| {
             let mut app = app::RayOfLightApp::new(&cc.egui_ctx, doc, persisted);
             app.end_on_signals();
+            // The user's editors' unsaved text, where a private runtime
+            // folder is there for the link.
+            if let Ok(listener) = crate::editor_link::folder()
+                .map_err(|e| e.to_string())
+                .and_then(|f| crate::editor_link::Listener::bind(&f).map_err(|e| e.to_string()))
+            {
+                app.listen_to_editors(listener);
+            }
             if let Some(path) = later {
                 app.run(app::Command::OpenFile(path));
             }

@@ -183,7 +183,36 @@ impl RayOfLightApp {
                 Background::Exported(path, result) => self.exported(&path, result),
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
                 Background::Opened(id, result) => self.opened(id, *result),
+                Background::Editor(message) => self.editor_said(message),
             }
+        }
+    }
+
+    /// The user's editor's unsaved text of the open file is shown as it
+    /// comes, and the document again when the editor saves or closes it;
+    /// messages about other files are not this window's.
+    fn editor_said(&mut self, message: crate::editor_link::Message) {
+        use crate::editor_link::Message;
+        let ours = |path: &Path| {
+            self.doc
+                .path()
+                .is_some_and(|open| crate::files::same_file(open, path))
+        };
+        match message {
+            Message::Buffer { path, text } if ours(&path) => {
+                let was = self.doc.is_following();
+                self.doc.follow(text);
+                if !was && self.doc.is_following() {
+                    self.notify("the panel waits while your editor has unsaved text".into());
+                }
+                self.after_edit();
+            }
+            Message::Released { path } if ours(&path) && self.doc.is_following() => {
+                self.doc.unfollow();
+                self.notify("your editor let go of its text: the file again".into());
+                self.after_edit();
+            }
+            _ => {}
         }
     }
 

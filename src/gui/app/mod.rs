@@ -77,6 +77,10 @@ enum Background {
     Pass((render::Pass, u64), Box<render::PassImage>),
     /// A file opened in the background (the load's number, the document).
     Opened(u64, Box<Result<Document, crate::scene::LoadError>>),
+    /// What the user's editor said over the editor link
+    /// ([`crate::editor_link`]): its unsaved text of a file, or that it
+    /// let go of it.
+    Editor(crate::editor_link::Message),
 }
 
 /// What the mouse is doing on the picture, or will do at the next click:
@@ -148,6 +152,9 @@ pub struct RayOfLightApp {
         std::sync::mpsc::Sender<String>,
         std::sync::mpsc::Receiver<String>,
     ),
+    /// The socket the editor link listens on, removed when the app ends
+    /// ([`RayOfLightApp::listen_to_editors`]).
+    editor_socket: Option<PathBuf>,
     /// The export running in the background, if any.
     export: Option<dialogs::Export>,
     /// The save under way, if any.
@@ -244,6 +251,7 @@ impl RayOfLightApp {
             study: StudyWindow::with_runs(settings.study_runs),
             notice: None,
             editor_failed: std::sync::mpsc::channel(),
+            editor_socket: None,
             export: None,
             saving: None,
             deferred_file_events: Vec::new(),
@@ -280,6 +288,47 @@ impl RayOfLightApp {
     /// journal and nothing asked.
     pub fn end_on_signals(&mut self) {
         self.signalled = hot_exit::watch_signals(&self.ctx);
+    }
+
+    /// Listens to `rayoflight lsp` in the user's editors from now on
+    /// (their unsaved text of the open file is shown as it is typed), on
+    /// threads of their own: one that accepts, one a connection.
+    pub fn listen_to_editors(&mut self, listener: crate::editor_link::Listener) {
+        self.editor_socket = Some(listener.path().to_owned());
+        let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
+        let accepting = std::thread::Builder::new()
+            .name("editor link".into())
+            .spawn(move || {
+                while let Ok(stream) = listener.accept() {
+                    let (tx, ctx) = (tx.clone(), ctx.clone());
+                    let _ = std::thread::Builder::new()
+                        .name("editor".into())
+                        .spawn(move || {
+                            use crate::editor_link::{Message, receive};
+                            let mut r = std::io::BufReader::new(stream);
+                            // An editor that goes away (quit, crashed)
+                            // lets go of what it sent.
+                            let mut sent: Vec<PathBuf> = Vec::new();
+                            while let Ok(Some(message)) = receive(&mut r) {
+                                if let Message::Buffer { path, .. } = &message
+                                    && !sent.contains(path)
+                                {
+                                    sent.push(path.clone());
+                                }
+                                if tx.send(Background::Editor(message)).is_err() {
+                                    return;
+                                }
+                                ctx.request_repaint();
+                            }
+                            for path in sent {
+                                let _ = tx.send(Background::Editor(Message::Released { path }));
+                            }
+                            ctx.request_repaint();
+                        });
+                }
+            });
+        // Without the thread the app runs, only without the link.
+        drop(accepting);
     }
 
     /// The scene changed (an edit, undo, redo, a reload): drop a selection
@@ -418,6 +467,9 @@ impl eframe::App for RayOfLightApp {
 
     fn on_exit(&mut self, _gl: Option<&eframe::glow::Context>) {
         self.settings().save();
+        if let Some(socket) = &self.editor_socket {
+            let _ = std::fs::remove_file(socket);
+        }
     }
 }
 

@@ -53,7 +53,9 @@ impl RayOfLightApp {
                     .inner_margin(6.0),
             )
             .show(ui, |ui| {
-                let what = if self.doc.is_placeholder() {
+                let what = if self.doc.is_following() {
+                    "Your editor's unsaved text does not load; showing the last good scene."
+                } else if self.doc.is_placeholder() {
                     "The file does not load yet; it will show as soon as it does."
                 } else {
                     "The last save does not load; showing the last good scene."
@@ -114,6 +116,12 @@ impl RayOfLightApp {
                 ui.label(format!("{}×{}", camera.width, camera.height));
                 ui.separator();
                 ui.label(match self.doc.state() {
+                    _ if self.doc.is_following() && self.doc.error().is_some() => {
+                        "following your editor's unsaved text: it has errors".to_owned()
+                    }
+                    _ if self.doc.is_following() => {
+                        "following your editor's unsaved text".to_owned()
+                    }
                     FileState::Builtin if self.doc.is_placeholder() => "no scene yet".to_owned(),
                     FileState::Builtin => "built-in example".to_owned(),
                     FileState::Missing => "file missing: waiting for it to come back".to_owned(),

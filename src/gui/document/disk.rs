@@ -40,6 +40,8 @@ pub enum SaveError {
     Conflict,
     #[error("no scene has loaded from the file yet: fix the file first")]
     NothingLoaded,
+    #[error("your editor has unsaved text of this file: save it there")]
+    Following,
     #[error("{0}")]
     Edit(#[from] EditError),
     #[error("{0}")]

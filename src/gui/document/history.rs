@@ -116,6 +116,12 @@ impl Document {
                 message: "no scene has loaded from the file yet".to_owned(),
             });
         }
+        if self.editor.is_some() {
+            return Err(EditError::Path {
+                path: "scene".to_owned(),
+                message: "your editor has unsaved text of this file: edit it there, or save or close it there to edit here".to_owned(),
+            });
+        }
         let mut undos = Vec::new();
         for edit in &edits {
             match self.shown.edited.apply(edit) {
@@ -154,15 +160,21 @@ impl Document {
 
     /// "Undo ka of #2 sphere", if there is anything to undo.
     pub fn undo_label(&self) -> Option<&str> {
-        self.undo.last().map(|s| s.label.as_str())
+        let step = self.undo.last().filter(|_| self.editor.is_none());
+        step.map(|s| s.label.as_str())
     }
 
     pub fn redo_label(&self) -> Option<&str> {
-        self.redo.last().map(|s| s.label.as_str())
+        let step = self.redo.last().filter(|_| self.editor.is_none());
+        step.map(|s| s.label.as_str())
     }
 
     /// Undoes the last step; returns its label.
     pub fn undo(&mut self) -> Option<String> {
+        // The editor's text is on screen: undo there.
+        if self.editor.is_some() {
+            return None;
+        }
         let step = self.undo.pop()?;
         let label = step.label.clone();
         let redo = self.replay(step);
@@ -172,6 +184,9 @@ impl Document {
 
     /// Redoes the last undone step; returns its label.
     pub fn redo(&mut self) -> Option<String> {
+        if self.editor.is_some() {
+            return None;
+        }
         let step = self.redo.pop()?;
         let label = step.label.clone();
         let undo = self.replay(step);
@@ -234,6 +249,9 @@ impl Document {
     /// Drops the unsaved edits: back to the file's text, as one undo step.
     /// Undoing the revert brings the version on screen before it back.
     pub fn revert(&mut self) {
+        if self.editor.is_some() {
+            return;
+        }
         if !self.dirty {
             return;
         }

@@ -121,6 +121,12 @@ pub struct Document {
     /// the panel is read-only and saving refuses.
     placeholder: bool,
     conflict: Option<PendingMerge>,
+    /// The user's editor's unsaved text of this file and its last scene
+    /// that loaded, shown instead of `shown` while the editor has it
+    /// ([`Document::follow`]); the file and the unsaved panel edits wait.
+    editor: Option<Version>,
+    /// Why the editor's newest text does not load, if it does not.
+    editor_error: Option<String>,
     /// Changes with every change of the scene on screen or of the labels
     /// (see [`Document::generation`]).
     generation: u64,
@@ -150,6 +156,8 @@ impl Document {
             error: None,
             placeholder: false,
             conflict: None,
+            editor: None,
+            editor_error: None,
             generation: next_generation(),
         }
     }
@@ -231,7 +239,56 @@ impl Document {
 
     /// The scene on screen.
     pub fn scene(&self) -> &Scene {
-        self.shown.edited.scene()
+        self.on_screen().edited.scene()
+    }
+
+    /// The version on screen: the editor's while it is followed.
+    fn on_screen(&self) -> &Version {
+        self.editor.as_ref().unwrap_or(&self.shown)
+    }
+
+    /// Shows the user's editor's unsaved `text` of this file instead of the
+    /// document (which waits, unsaved edits and all): what `rayoflight lsp`
+    /// hands over as it is typed. A text that does not load keeps the last
+    /// one that did on screen, with its error; the file's own text ends
+    /// the following. Nothing is written.
+    pub fn follow(&mut self, text: String) {
+        if *self.file.source == text {
+            self.unfollow();
+            return;
+        }
+        let path = self.path.clone().unwrap_or_default();
+        let like = &self.on_screen().edited.scene().objects;
+        match scene::parse_sharing(&text, &path, like) {
+            Ok(scene) => {
+                let labels = Arc::new(names::object_labels(&text));
+                self.editor = Some(Version::new(Arc::new(text), scene, labels));
+                self.editor_error = None;
+            }
+            Err(e) => {
+                // The first text that does not load: the document's on
+                // screen until one does.
+                if self.editor.is_none() {
+                    self.editor = Some(self.shown.clone());
+                }
+                self.editor_error = Some(e.to_string());
+            }
+        }
+        self.generation = next_generation();
+    }
+
+    /// Back to the document: the editor saved or closed the file.
+    pub fn unfollow(&mut self) {
+        if self.editor.take().is_some() {
+            self.editor_error = None;
+            self.generation = next_generation();
+        }
+    }
+
+    /// Whether the editor's unsaved text is on screen
+    /// ([`Document::follow`]): the panel is read-only, saving waits.
+    pub fn is_following(&self) -> bool {
+        self.editor.is_some()
     }
 
     /// A short name for the title bar.
@@ -247,7 +304,7 @@ impl Document {
     }
 
     pub fn error(&self) -> Option<&str> {
-        self.error.as_deref()
+        self.editor_error.as_deref().or(self.error.as_deref())
     }
 
     /// No scene has loaded from the file yet: nothing to edit or save.
@@ -274,8 +331,9 @@ impl Document {
     /// for an editor to open at; `None` for an object added since (it is
     /// not in the file).
     pub fn object_position(&self, n: usize) -> Option<scene::Position> {
-        let origin = self.shown.edited.object_origin(n)?;
-        scene::splice::object_position(&self.shown.source, origin)
+        let version = self.on_screen();
+        let origin = version.edited.object_origin(n)?;
+        scene::splice::object_position(&version.source, origin)
     }
 
     /// The panel's name for object `n`: `#2 RED sphere` when a comment
@@ -293,8 +351,9 @@ impl Document {
 
     /// The first words of the comment above object `n` in the file.
     fn comment_words(&self, n: usize) -> Option<&str> {
-        let k = self.shown.edited.object_origin(n)?;
-        self.shown.labels.get(k)?.as_deref()
+        let version = self.on_screen();
+        let k = version.edited.object_origin(n)?;
+        version.labels.get(k)?.as_deref()
     }
 
     /// The objects (in order) that `query` finds: each of its words, case

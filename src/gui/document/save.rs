@@ -153,6 +153,9 @@ impl Document {
         if self.placeholder {
             return Err(SaveError::NothingLoaded);
         }
+        if self.editor.is_some() {
+            return Err(SaveError::Following);
+        }
         Ok(SaveJob {
             path,
             version: self.shown.clone(),
@@ -207,6 +210,9 @@ impl Document {
     pub fn save_as(&mut self, path: &Path) -> Result<(), SaveError> {
         if self.placeholder {
             return Err(SaveError::NothingLoaded);
+        }
+        if self.editor.is_some() {
+            return Err(SaveError::Following);
         }
         let written = write_scene(path, &self.shown, None)?;
         self.path = Some(path.to_owned());

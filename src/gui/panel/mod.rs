@@ -66,7 +66,7 @@ pub fn scene_panel(ui: &mut Ui, doc: &Document, selection: &mut Selection) -> Pa
         marked: selection.field,
         reveal: selection.reveal,
     };
-    ui.add_enabled_ui(!doc.is_placeholder(), |ui| {
+    ui.add_enabled_ui(!doc.is_placeholder() && !doc.is_following(), |ui| {
         ui.heading("Illumination");
         model_editor(ui, &mut form);
         ui.separator();
