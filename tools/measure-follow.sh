@@ -4,7 +4,8 @@
 # the first light's x without saving, screenshots taken as fast as
 # ImageMagick's import goes until the picture differs. Prints one line per
 # change: the milliseconds from the change to the first screenshot that
-# shows it (the screenshot's own cost, ~50-100 ms, included).
+# shows it (the screenshot's own cost, ~50-100 ms, included), looking at
+# the picture's side of a 1280x900 screen only.
 #
 #   tools/measure-follow.sh target/release/rayoflight SCENE [CHANGES]
 #
@@ -48,7 +49,11 @@ python3 - "$work" "$changes" <<'EOF' &
 import os, subprocess, sys, time
 work, changes = sys.argv[1], int(sys.argv[2])
 def shot():
-    return subprocess.run(["import", "-window", "root", "rgb:-"], capture_output=True).stdout
+    # The picture's side of the window only: the status bar changes too.
+    return subprocess.run(
+        ["import", "-window", "root", "-crop", "860x700+330+40", "rgb:-"],
+        capture_output=True,
+    ).stdout
 def clock():
     return time.clock_gettime(time.CLOCK_MONOTONIC)
 seen = None
