@@ -20,6 +20,10 @@
 //! - A reload from disk, a merge and a revert are undo steps too: undoing
 //!   one puts the version on screen before it back whole, so its text comes
 //!   back byte for byte, as unsaved edits against the file.
+//! - While the user's editor has unsaved text of the file (handed over by
+//!   `rayoflight lsp`, [`Document::follow`]), a third version, the
+//!   editor's, is on screen; the other two wait untouched, and edits,
+//!   undo and saving wait with them until the editor lets go.
 //!
 //! Save-back splices the edits into the text of the version on screen
 //! (the source the edits' origins point into), so unchanged bytes stay as
