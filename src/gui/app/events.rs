@@ -2,7 +2,8 @@
 //! (coarse to fine, or one interactive pass at the pace's scale while the
 //! mouse moves, each waiting for the one in flight), the worker's tiles and
 //! passes, the watcher's file events, dialogs' answers, the Study window's
-//! runs.
+//! runs, and what the user's editor says over the editor link (its
+//! unsaved text of the open file, shown as it comes).
 
 use super::{Background, RayOfLightApp};
 use crate::gui::document::Reload;
