@@ -235,17 +235,24 @@ fn diagnosis_thread(
                 let text = lock(&documents).get(&key).map(|d| d.text.clone());
                 let diagnostics = match &text {
                     Some(text) => {
-                        let lines = Lines::new(text);
-                        language::diagnostics(text)
-                            .into_iter()
-                            .map(|d| Diagnostic {
-                                range: range(text, &lines, d.range),
-                                severity: Some(DiagnosticSeverity::ERROR),
-                                source: Some("rayoflight".into()),
-                                message: d.message,
-                                ..Diagnostic::default()
-                            })
-                            .collect()
+                        let found = language::diagnostics(text);
+                        if found.is_empty() {
+                            // No error to place: no line index (a scan of
+                            // the whole buffer) to build.
+                            Vec::new()
+                        } else {
+                            let lines = Lines::new(text);
+                            found
+                                .into_iter()
+                                .map(|d| Diagnostic {
+                                    range: range(text, &lines, d.range),
+                                    severity: Some(DiagnosticSeverity::ERROR),
+                                    source: Some("rayoflight".into()),
+                                    message: d.message,
+                                    ..Diagnostic::default()
+                                })
+                                .collect()
+                        }
                     }
                     None => Vec::new(),
                 };

@@ -141,9 +141,8 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
             app.end_on_signals();
             // The user's editors' unsaved text, where a private runtime
             // folder is there for the link.
-            if let Ok(listener) = crate::editor_link::folder()
-                .map_err(|e| e.to_string())
-                .and_then(|f| crate::editor_link::Listener::bind(&f).map_err(|e| e.to_string()))
+            let folder = crate::editor_link::folder().ok();
+            if let Some(listener) = folder.and_then(|f| crate::editor_link::Listener::bind(&f).ok())
             {
                 app.listen_to_editors(listener);
             }

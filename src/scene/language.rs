@@ -11,6 +11,7 @@
 //! gives the element and the attributes it has.
 
 use super::grammar::{self, Value};
+use super::xml::is_name_char;
 use super::{LoadError, Position, names, splice};
 use std::ops::Range;
 use std::path::Path;
@@ -229,10 +230,6 @@ enum Spot<'t> {
         attribute: &'t str,
         typed: &'t str,
     },
-}
-
-fn is_name_char(c: char) -> bool {
-    c.is_alphanumeric() || matches!(c, '-' | '_' | ':' | '.')
 }
 
 /// Where `offset` is in `text`, read leniently from the start.

@@ -57,20 +57,15 @@ fn line(w: &mut String, depth: usize, text: &str) {
     let _ = writeln!(w, "{:width$}{text}", "", width = 2 * depth);
 }
 
-/// `text` as XML character data.
-fn escaped(text: &str) -> String {
-    text.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
-}
-
 fn documentation(w: &mut String, depth: usize, text: &str) {
     line(w, depth, "<xs:annotation>");
     line(
         w,
         depth + 1,
-        &format!("<xs:documentation>{}</xs:documentation>", escaped(text)),
+        &format!(
+            "<xs:documentation>{}</xs:documentation>",
+            quick_xml::escape::partial_escape(text)
+        ),
     );
     line(w, depth, "</xs:annotation>");
 }

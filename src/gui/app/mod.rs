@@ -296,7 +296,8 @@ impl RayOfLightApp {
     pub fn listen_to_editors(&mut self, listener: crate::editor_link::Listener) {
         self.editor_socket = Some(listener.path().to_owned());
         let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
-        let accepting = std::thread::Builder::new()
+        // Without the thread the app runs, only without the link.
+        let _ = std::thread::Builder::new()
             .name("editor link".into())
             .spawn(move || {
                 while let Ok(stream) = listener.accept() {
@@ -327,8 +328,6 @@ impl RayOfLightApp {
                         });
                 }
             });
-        // Without the thread the app runs, only without the link.
-        drop(accepting);
     }
 
     /// The scene changed (an edit, undo, redo, a reload): drop a selection
