@@ -1,15 +1,24 @@
 //! The link between `rayoflight lsp` (in the user's editor) and the
 //! desktop app: the editor's unsaved text of a scene goes to every app of
-//! the same user, which renders it if it has that file open; an app asks
-//! the editor to show an element.
+//! the same user, which renders it if it has that file open; a click on an
+//! object in the app asks the editor to show its element, and the editor's
+//! cursor in an object's element selects that object in the app.
 //!
 //! Each app listens on a Unix socket `app-PID.sock` in the user's runtime
 //! folder, `$XDG_RUNTIME_DIR/rayoflight/` (made mode 0700; a folder that
 //! is not the user's own, or that others may enter, is refused). A
 //! connection from a process of another user is closed at once: the
 //! kernel says who is at the other end (`SO_PEERCRED`). The language
-//! server connects to every socket there and sends each change of a file
-//! it has open; sockets of apps that are gone are removed.
+//! server connects to every socket there (looking again every second, for
+//! apps started later, which then get the text of every document it has
+//! open) and sends each change of a file it has open; sockets of apps
+//! that are gone are removed. The app answers on the same connection
+//! ([`Peers`]).
+//!
+//! Objects are named by their number among the spheres and planes of the
+//! text, in file order, as the loader numbers them: the app and the
+//! editor hold the same text (the app follows the editor's), so each finds
+//! the element in its own copy, and the app's window never scans a text.
 //!
 //! A message is one line of JSON (`{"kind":"buffer","path":…,"bytes":N}`)
 //! followed by N bytes of text for a buffer.
@@ -18,6 +27,9 @@ use std::io::{self, BufRead, Read, Write};
 use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, PoisonError};
+use std::time::Duration;
 
 /// What goes over the link.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -26,13 +38,13 @@ pub enum Message {
     Buffer { path: PathBuf, text: String },
     /// The editor saved or closed `path`: the app is back to the file.
     Released { path: PathBuf },
-    /// The app asks the editor to show `path` at the element that starts
-    /// at `line` and `column` (1-based, the loader's).
-    Show {
-        path: PathBuf,
-        line: usize,
-        column: usize,
-    },
+    /// The app asks the editor to show the element of object `object`
+    /// (its number among the spheres and planes of the text, from 0): the
+    /// user clicked it.
+    Show { path: PathBuf, object: usize },
+    /// The editor's cursor is in the element of object `object`: the app
+    /// selects it.
+    Select { path: PathBuf, object: usize },
 }
 
 /// Why the runtime folder cannot be used.
@@ -126,6 +138,46 @@ impl Drop for Listener {
     }
 }
 
+/// The editors connected to an app, for the app to write to; each
+/// connection is read on a thread of its own. Cloned, it is the same list.
+#[derive(Debug, Clone, Default)]
+pub struct Peers {
+    streams: Arc<Mutex<Vec<(u64, UnixStream)>>>,
+}
+
+/// How long a write to an editor may take before that editor is dropped:
+/// a language server that stops reading never stalls the app's window.
+const WRITE_PATIENCE: Duration = Duration::from_millis(200);
+
+impl Peers {
+    fn lock(&self) -> std::sync::MutexGuard<'_, Vec<(u64, UnixStream)>> {
+        self.streams.lock().unwrap_or_else(PoisonError::into_inner)
+    }
+
+    /// Adds the editor at the other end of `stream`; the number to
+    /// [`Peers::remove`] it by when the connection ends.
+    pub fn add(&self, stream: &UnixStream) -> io::Result<u64> {
+        static NEXT: AtomicU64 = AtomicU64::new(0);
+        let writer = stream.try_clone()?;
+        writer.set_write_timeout(Some(WRITE_PATIENCE))?;
+        let id = NEXT.fetch_add(1, Ordering::Relaxed);
+        self.lock().push((id, writer));
+        Ok(id)
+    }
+
+    pub fn remove(&self, id: u64) {
+        self.lock().retain(|(n, _)| *n != id);
+    }
+
+    /// Sends `message` to every editor connected, dropping those it does
+    /// not reach; how many it reached.
+    pub fn tell(&self, message: &Message) -> usize {
+        let mut streams = self.lock();
+        streams.retain_mut(|(_, stream)| send(stream, message).is_ok());
+        streams.len()
+    }
+}
+
 /// The apps' sockets in `folder`.
 pub fn apps(folder: &Path) -> Vec<PathBuf> {
     let Ok(entries) = std::fs::read_dir(folder) else {
@@ -173,12 +225,12 @@ pub fn send(w: &mut impl Write, message: &Message) -> io::Result<()> {
             serde_json::json!({"kind": "released", "path": path(p)}),
             &[][..],
         ),
-        Message::Show {
-            path: p,
-            line,
-            column,
-        } => (
-            serde_json::json!({"kind": "show", "path": path(p), "line": line, "column": column}),
+        Message::Show { path: p, object } => (
+            serde_json::json!({"kind": "show", "path": path(p), "object": object}),
+            &[][..],
+        ),
+        Message::Select { path: p, object } => (
+            serde_json::json!({"kind": "select", "path": path(p), "object": object}),
             &[][..],
         ),
     };
@@ -225,11 +277,15 @@ pub fn receive(r: &mut impl BufRead) -> io::Result<Option<Message>> {
             Message::Buffer { path, text }
         }
         Some("released") => Message::Released { path },
-        Some("show") => Message::Show {
-            path,
-            line: usize::try_from(number("line")?).unwrap_or(1),
-            column: usize::try_from(number("column")?).unwrap_or(1),
-        },
+        Some(kind @ ("show" | "select")) => {
+            let object =
+                usize::try_from(number("object")?).map_err(|_| bad("an object out of range"))?;
+            if kind == "show" {
+                Message::Show { path, object }
+            } else {
+                Message::Select { path, object }
+            }
+        }
         _ => return Err(bad("an unknown message")),
     }))
 }
@@ -276,8 +332,11 @@ mod tests {
             },
             Message::Show {
                 path: "/s.xml".into(),
-                line: 9,
-                column: 3,
+                object: 1,
+            },
+            Message::Select {
+                path: "/s.xml".into(),
+                object: 0,
             },
         ];
         let mut bytes = Vec::new();

@@ -852,3 +852,147 @@ fn the_window_follows_the_editors_unsaved_text() {
     );
     assert_eq!(std::fs::read_to_string(path).unwrap(), TWO_SPHERES);
 }
+
+/// The selected object's outline colour (`gui::app::overlay`).
+const OUTLINE: [u8; 3] = [255, 140, 0];
+
+/// The mean x of the outline's pixels (its colour, give or take the
+/// blending at its edges), and how many there are.
+fn outline_at(image: &image::RgbImage) -> (f64, usize) {
+    let (mut sum, mut n) = (0.0, 0usize);
+    for (x, _, p) in image.enumerate_pixels() {
+        if (0..3).all(|c| p.0[c].abs_diff(OUTLINE[c]) <= 24) {
+            sum += f64::from(x);
+            n += 1;
+        }
+    }
+    (if n > 0 { sum / n as f64 } else { f64::NAN }, n)
+}
+
+/// Picture ↔ source (issue 29): Neovim with `rayoflight lsp` on the
+/// app's file puts its cursor in the red sphere's element, and the window
+/// outlines the red sphere; a click on the green sphere in the window
+/// makes the server ask Neovim to show the green sphere's element
+/// (`window/showDocument`, its whole range selected, the focus left where
+/// it is), and the outline moves to it. The file is never written.
+#[test]
+fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
+    if !common::tool("nvim", "neovim") {
+        return;
+    }
+    let runtime = tempfile::tempdir().unwrap();
+    let run = runtime.path().to_str().unwrap().to_owned();
+    let opened = Window::open_with("two.xml", TWO_SPHERES, &[("XDG_RUNTIME_DIR", &run)]);
+    let (shots, display, path) = (&opened.shots, &opened.display, &opened.path);
+    wait_for(
+        display,
+        &shots.join("source-0.png"),
+        Duration::from_secs(60),
+        "the first render",
+        |s| centroid(s, RED).1 > 500 && centroid(s, GREEN).1 > 500,
+    );
+    let shot = screenshot(display, &shots.join("source-0.png"));
+    let (red_x, green_x) = (centroid(&shot, RED).0, centroid(&shot, GREEN).0);
+    let folder = runtime.path().join("rayoflight");
+    let start = Instant::now();
+    while rayoflight::editor_link::apps(&folder).is_empty() {
+        assert!(start.elapsed() < Duration::from_secs(10), "the app listens");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let red_line = TWO_SPHERES
+        .lines()
+        .position(|l| l.contains(r#"<color red="1" green="0""#))
+        .unwrap();
+    let out = opened.dir.path().join("nvim.json");
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/show.lua");
+    let editor = Command::new("nvim")
+        .args(["--headless", "--clean", "-u", "NONE", "-S"])
+        .arg(&script)
+        .current_dir(opened.dir.path())
+        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
+        .env("ROL_FILE", path)
+        .env("ROL_OUT", &out)
+        .env("ROL_CURSOR_LINE", red_line.to_string())
+        .env("ROL_WAIT_SHOW", "30000")
+        .env("XDG_RUNTIME_DIR", &run)
+        .env("HOME", opened.dir.path())
+        .env("XDG_STATE_HOME", opened.dir.path().join("nvim-state"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let mut editor = Killed(editor);
+    let near = |x: f64, of: f64| (x - of).abs() < (green_x - red_x).abs() / 4.0;
+    wait_for(
+        display,
+        &shots.join("source-1-cursor.png"),
+        Duration::from_secs(15),
+        "the red sphere outlined for the editor's cursor",
+        |s| {
+            let (x, n) = outline_at(s);
+            n > 20 && near(x, red_x)
+        },
+    );
+    // A click on the green sphere: Neovim is asked to show its element.
+    let xdotool = |args: &[&str]| {
+        let out = Command::new("xdotool")
+            .args(args)
+            .env("DISPLAY", display)
+            .output()
+            .expect("xdotool runs (apt-get install xdotool)");
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let green_y = {
+        let ys: Vec<u32> = shot
+            .enumerate_pixels()
+            .filter(|(_, _, p)| p.0 == GREEN)
+            .map(|(_, y, _)| y)
+            .collect();
+        (ys.iter().map(|&y| f64::from(y)).sum::<f64>() / ys.len() as f64).round() as i64
+    };
+    let window = app_window(&xdotool);
+    xdotool(&["windowfocus", "--sync", &window]);
+    xdotool(&[
+        "mousemove",
+        &(green_x.round() as i64).to_string(),
+        &green_y.to_string(),
+    ]);
+    xdotool(&["click", "1"]);
+    let start = Instant::now();
+    while editor.0.try_wait().unwrap().is_none() {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "Neovim was not asked to show the element"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let got: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&out).expect("Neovim wrote what it got"))
+            .unwrap();
+    assert_eq!(got["shown"], true, "{got}");
+    let at = TWO_SPHERES.match_indices("<sphere>").nth(1).unwrap().0;
+    let line = TWO_SPHERES[..at].matches('\n').count();
+    let column = at - TWO_SPHERES[..at].rfind('\n').unwrap() - 1;
+    let show = &got["show"];
+    assert_eq!(show["selection"]["start"]["line"], line, "{got}");
+    assert_eq!(show["selection"]["start"]["character"], column, "{got}");
+    assert_eq!(show["takeFocus"], false, "{got}");
+    // Neovim's cursor on the green sphere's line, the highlight answered.
+    assert_eq!(got["cursor_after_show"][0], line + 1, "{got}");
+    assert_eq!(
+        got["highlight"][0]["range"]["start"]["line"],
+        red_line - 1,
+        "{got}"
+    );
+    wait_for(
+        display,
+        &shots.join("source-2-clicked.png"),
+        Duration::from_secs(10),
+        "the green sphere outlined after the click",
+        |s| {
+            let (x, n) = outline_at(s);
+            n > 20 && near(x, green_x)
+        },
+    );
+    assert_eq!(std::fs::read_to_string(path).unwrap(), TWO_SPHERES);
+}

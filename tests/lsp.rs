@@ -139,3 +139,116 @@ fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
         .position(|(m, _)| *m == Message::Released { path: path.clone() });
     assert!(released > unsaved, "released after the text: {got:?}");
 }
+
+/// Two spheres, the second one's start tag after non-ASCII text on its
+/// line (UTF-16 columns differ from bytes and from characters there).
+const TWO_SPHERES: &str = "<scene>\n  <sphere>\n    <color red=\"1\" green=\"0\" blue=\"0\"/>\n  </sphere>\n  <!-- é😀 --><sphere>\n    <color red=\"0\" green=\"1\" blue=\"0\"/>\n    <transformation><translate x=\"2\"/></transformation>\n  </sphere>\n  <camera width=\"8\" height=\"6\" eyeDistance=\"2\"/>\n</scene>\n";
+
+/// Picture ↔ source over the link: the editor's cursor in the second
+/// sphere's element selects it in a listening app (and the editor's
+/// answer highlights its start tag), and the app's click on it becomes a
+/// `window/showDocument` request for the element's whole range, leaving
+/// the focus where it is.
+#[test]
+fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
+    use rayoflight::editor_link::{self, Listener, Message};
+    if !common::tool("nvim", "neovim") {
+        return;
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.xml");
+    fs::write(&scene, TWO_SPHERES).unwrap();
+    let runtime = dir.path().join("run");
+    fs::create_dir(&runtime).unwrap();
+    let folder = editor_link::folder_in(&runtime.join("rayoflight")).unwrap();
+    let listener = Listener::bind(&folder).unwrap();
+    let path = fs::canonicalize(&scene).unwrap();
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        let Ok(stream) = listener.accept() else {
+            return;
+        };
+        let peers = editor_link::Peers::default();
+        peers.add(&stream).unwrap();
+        let mut r = std::io::BufReader::new(stream);
+        while let Ok(Some(m)) = editor_link::receive(&mut r) {
+            // The app's answer to the cursor: a click on the same object.
+            if let Message::Select { path, object } = &m {
+                let show = Message::Show {
+                    path: path.clone(),
+                    object: *object,
+                };
+                assert_eq!(peers.tell(&show), 1);
+            }
+            let _ = tx.send(m);
+        }
+    });
+    let out = dir.path().join("out.json");
+    let line = TWO_SPHERES
+        .lines()
+        .position(|l| l.contains("green=\"1\""))
+        .unwrap();
+    let o = neovim(
+        dir.path(),
+        "show.lua",
+        &[
+            ("XDG_RUNTIME_DIR", runtime.as_os_str()),
+            ("ROL_FILE", scene.as_os_str()),
+            ("ROL_OUT", out.as_os_str()),
+            ("ROL_CURSOR_LINE", line.to_string().as_ref()),
+        ],
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got: serde_json::Value =
+        serde_json::from_str(&fs::read_to_string(&out).expect("the client wrote its results"))
+            .unwrap();
+    let said: Vec<Message> = rx.try_iter().collect();
+    assert!(
+        said.contains(&Message::Select {
+            path: path.clone(),
+            object: 1
+        }),
+        "{said:?}"
+    );
+    // The second sphere's start tag, after "  <!-- é😀 -->": 14 UTF-16
+    // units (é is one, 😀 two; 16 bytes, 13 characters) on line 4.
+    let tag_line = 4;
+    let tag = TWO_SPHERES.lines().nth(tag_line).unwrap();
+    let column = tag[..tag.find("<sphere>").unwrap()].encode_utf16().count();
+    assert_eq!(column, 14);
+    let at =
+        |line: usize, character: usize| serde_json::json!({"line": line, "character": character});
+    assert_eq!(
+        got["highlight"],
+        serde_json::json!([{"range": {"start": at(tag_line, column), "end": at(tag_line, column + 8)}, "kind": 1}]),
+        "{got}"
+    );
+    assert_eq!(got["shown"], true, "the server asked to show it: {got}");
+    let show = &got["show"];
+    assert_eq!(show["takeFocus"], false, "{got}");
+    assert_eq!(show["external"], false, "{got}");
+    let (end_line, _) = TWO_SPHERES
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| *l == "  </sphere>")
+        .nth(1)
+        .unwrap();
+    assert_eq!(
+        show["selection"],
+        serde_json::json!({"start": at(tag_line, column), "end": at(end_line, "  </sphere>".len())}),
+        "{got}"
+    );
+    assert_eq!(
+        editor_link::uri_path(show["uri"].as_str().unwrap_or_default()).as_deref(),
+        Some(path.as_path()),
+        "{got}"
+    );
+    // Neovim put its cursor on the element (1-based line, byte column).
+    let byte_column = tag.find("<sphere>").unwrap();
+    assert_eq!(
+        got["cursor_after_show"],
+        serde_json::json!([tag_line + 1, byte_column]),
+        "{got}"
+    );
+    assert_eq!(fs::read_to_string(&scene).unwrap(), TWO_SPHERES);
+}

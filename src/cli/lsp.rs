@@ -12,27 +12,39 @@
 //! changed document and checks it at most every 100 ms: a big buffer makes
 //! its errors come later, never the typing slower. The same thread hands
 //! each newest text to the user's running apps
-//! ([`rayoflight::editor_link`]), and tells them when the editor saves or
-//! closes the document.
+//! ([`rayoflight::editor_link`]), tells them when the editor saves or
+//! closes the document, and which object the editor's cursor is in (a
+//! `textDocument/documentHighlight` request, which editors send as the
+//! cursor moves: the answer highlights that object's start tag). A click
+//! on an object in an app comes back over the link and becomes a
+//! `window/showDocument` request for its element, which leaves the focus
+//! where it is.
 
 use lsp_server::{Connection, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument,
     Notification as _, PublishDiagnostics,
 };
-use lsp_types::request::{Completion, DocumentSymbolRequest, HoverRequest, Request as _};
+use lsp_types::notification::{LogMessage, ShowMessage};
+use lsp_types::request::{
+    Completion, DocumentHighlightRequest, DocumentSymbolRequest, HoverRequest, Request as _,
+    ShowDocument,
+};
 use lsp_types::{
     CompletionItem, CompletionItemKind, CompletionOptions, CompletionParams, CompletionResponse,
     Diagnostic, DiagnosticSeverity, DidChangeTextDocumentParams, DidCloseTextDocumentParams,
-    DidOpenTextDocumentParams, DidSaveTextDocumentParams, DocumentSymbol, DocumentSymbolParams,
-    DocumentSymbolResponse, Documentation, Hover, HoverContents, HoverParams,
-    HoverProviderCapability, MarkupContent, MarkupKind, OneOf, Position, PositionEncodingKind,
-    PublishDiagnosticsParams, Range, ServerCapabilities, SymbolKind, TextDocumentSyncCapability,
-    TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
+    DidOpenTextDocumentParams, DidSaveTextDocumentParams, DocumentHighlight, DocumentHighlightKind,
+    DocumentHighlightParams, DocumentSymbol, DocumentSymbolParams, DocumentSymbolResponse,
+    Documentation, Hover, HoverContents, HoverParams, HoverProviderCapability, LogMessageParams,
+    MarkupContent, MarkupKind, MessageType, OneOf, Position, PositionEncodingKind,
+    PublishDiagnosticsParams, Range, ServerCapabilities, ShowDocumentParams, ShowMessageParams,
+    SymbolKind, TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
 };
 use rayoflight::editor_link;
 use rayoflight::scene::language::{self, Lines, Place};
 use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc;
 use std::sync::{Arc, Mutex, PoisonError};
 use std::time::{Duration, Instant};
@@ -59,7 +71,7 @@ fn lock(documents: &Documents) -> std::sync::MutexGuard<'_, HashMap<String, Docu
     documents.lock().unwrap_or_else(PoisonError::into_inner)
 }
 
-/// What a notification changed.
+/// What a notification changed, or where the cursor went.
 #[derive(Debug, Clone, PartialEq)]
 enum Changed {
     /// The text of a document (by key and URI).
@@ -68,10 +80,20 @@ enum Changed {
     Released(Uri),
     /// The editor closed it.
     Closed(String, Uri),
+    /// The editor's cursor is at this byte of the document: the request
+    /// to answer with the object there.
+    Cursor(String, Uri, usize, RequestId),
 }
+
+/// How the server sends a message to the editor, from any thread: false
+/// once the editor has gone.
+type Send = Arc<dyn Fn(Message) -> bool + std::marker::Send + Sync>;
 
 /// The least time between two checks of the documents' errors.
 const DIAGNOSE_EVERY: Duration = Duration::from_millis(100);
+
+/// How often the runtime folder is looked at for apps started since.
+const LOOK_FOR_APPS_EVERY: Duration = Duration::from_secs(1);
 
 /// Runs the server until the client says exit; an error is the protocol's.
 pub fn run() -> Result<(), String> {
@@ -92,15 +114,19 @@ pub fn run() -> Result<(), String> {
         }),
         hover_provider: Some(HoverProviderCapability::Simple(true)),
         document_symbol_provider: Some(OneOf::Left(true)),
+        document_highlight_provider: Some(OneOf::Left(true)),
         ..ServerCapabilities::default()
     };
     let capabilities = serde_json::to_value(capabilities).map_err(|e| e.to_string())?;
-    connection
+    let client = connection
         .initialize(capabilities)
         .map_err(|e| format!("lsp: {e}"))?;
     let sender = connection.sender.clone();
+    let send: Send = Arc::new(move |m| sender.send(m).is_ok());
     let documents: Documents = Arc::default();
-    let diagnose = diagnosis_thread(Arc::clone(&documents), move |m| sender.send(m).is_ok());
+    let shows = client["capabilities"]["window"]["showDocument"]["support"].as_bool() == Some(true);
+    let from_apps = from_apps(Arc::clone(&documents), Arc::clone(&send), shows);
+    let diagnose = diagnosis_thread(Arc::clone(&documents), send, from_apps);
     for message in &connection.receiver {
         match message {
             Message::Request(request) => {
@@ -109,6 +135,22 @@ pub fn run() -> Result<(), String> {
                     .map_err(|e| format!("lsp: {e}"))?
                 {
                     break;
+                }
+                if request.method == DocumentHighlightRequest::METHOD {
+                    // Answered by the thread that tells the apps.
+                    match cursor(&documents, request) {
+                        Ok(change) => {
+                            let _ = diagnose.send(change);
+                            continue;
+                        }
+                        Err(response) => {
+                            connection
+                                .sender
+                                .send(Message::Response(*response))
+                                .map_err(|e| format!("lsp: {e}"))?;
+                            continue;
+                        }
+                    }
                 }
                 let response = answer(&documents, request);
                 connection
@@ -178,6 +220,29 @@ fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
     }
 }
 
+/// Where a `textDocument/documentHighlight` request puts the cursor, for
+/// the thread that answers it; an answer at once for a document the
+/// editor has not opened or a request that does not parse.
+fn cursor(documents: &Documents, request: Request) -> Result<Changed, Box<Response>> {
+    let id = request.id.clone();
+    let p: DocumentHighlightParams = serde_json::from_value(request.params).map_err(|e| {
+        Box::new(Response::new_err(
+            id.clone(),
+            lsp_server::ErrorCode::InvalidParams as i32,
+            e.to_string(),
+        ))
+    })?;
+    let at = p.text_document_position_params;
+    let key = at.text_document.uri.to_string();
+    let offset = lock(documents)
+        .get(&key)
+        .map(|d| d.lines.offset(&d.text, place(at.position)));
+    match offset {
+        Some(offset) => Ok(Changed::Cursor(key, at.text_document.uri, offset, id)),
+        None => Err(Box::new(Response::new_ok(id, serde_json::Value::Null))),
+    }
+}
+
 fn place(p: Position) -> Place {
     Place {
         line: p.line,
@@ -202,23 +267,52 @@ fn range(text: &str, lines: &Lines, bytes: std::ops::Range<usize>) -> Range {
 /// The thread that checks the documents: told which changed, it copies
 /// the newest text of each, publishes its errors and hands it to the
 /// user's apps, at most every [`DIAGNOSE_EVERY`]; a document closed gets an
-/// empty list, and the apps are told when the editor saves or closes one.
+/// empty list, and the apps are told when the editor saves or closes one,
+/// and which object the cursor is in. Between changes it looks for apps
+/// started since, every [`LOOK_FOR_APPS_EVERY`].
 fn diagnosis_thread(
     documents: Documents,
-    send: impl Fn(Message) -> bool + Send + 'static,
+    send: Send,
+    from_apps: FromApps,
 ) -> mpsc::Sender<Changed> {
     let (tx, rx) = mpsc::channel::<Changed>();
     std::thread::spawn(move || {
-        let mut apps = Apps::default();
+        let mut apps = Apps::new(from_apps);
+        // The object each document's cursor was last in, told to the apps.
+        let mut told: HashMap<String, Option<usize>> = HashMap::new();
         let mut last = Instant::now() - DIAGNOSE_EVERY;
-        while let Ok(first) = rx.recv() {
+        loop {
+            let first = match rx.recv_timeout(LOOK_FOR_APPS_EVERY) {
+                Ok(first) => first,
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    apps.look(&documents);
+                    apps.fresh.clear();
+                    continue;
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => return,
+            };
             std::thread::sleep(DIAGNOSE_EVERY.saturating_sub(last.elapsed()));
             let mut changed = vec![first];
             for next in rx.try_iter() {
+                // The newest cursor of a document wins; the one it
+                // replaces is answered with no highlight.
+                if let Changed::Cursor(key, ..) = &next
+                    && let Some(old) = changed
+                        .iter()
+                        .position(|c| matches!(c, Changed::Cursor(k, ..) if k == key))
+                    && let Changed::Cursor(.., id) = changed.remove(old)
+                    && !send(Message::Response(Response::new_ok(
+                        id,
+                        Vec::<DocumentHighlight>::new(),
+                    )))
+                {
+                    return;
+                }
                 if !changed.contains(&next) {
                     changed.push(next);
                 }
             }
+            apps.look(&documents);
             for change in changed {
                 let (key, uri) = match change {
                     Changed::Released(uri) => {
@@ -227,9 +321,31 @@ fn diagnosis_thread(
                     }
                     Changed::Closed(key, uri) => {
                         apps.released(&uri);
+                        told.remove(&key);
                         (key, uri)
                     }
                     Changed::Text(key, uri) => (key, uri),
+                    Changed::Cursor(key, uri, offset, id) => {
+                        let answer = in_object(&documents, &key, offset);
+                        let object = answer.as_ref().map(|(object, _)| *object);
+                        if let Some(object) = object
+                            && told.get(&key) != Some(&Some(object))
+                        {
+                            apps.selected(&uri, object);
+                        }
+                        told.insert(key, object);
+                        let highlights: Vec<DocumentHighlight> = answer
+                            .map(|(_, range)| DocumentHighlight {
+                                range,
+                                kind: Some(DocumentHighlightKind::TEXT),
+                            })
+                            .into_iter()
+                            .collect();
+                        if !send(Message::Response(Response::new_ok(id, highlights))) {
+                            return;
+                        }
+                        continue;
+                    }
                 };
                 // A copy, so that the message loop goes on changing it.
                 let text = lock(&documents).get(&key).map(|d| d.text.clone());
@@ -269,41 +385,194 @@ fn diagnosis_thread(
                     return;
                 }
             }
+            apps.fresh.clear();
             last = Instant::now();
         }
     });
     tx
 }
 
+/// The object whose element holds byte `offset` of the document, and its
+/// start tag's range: scanned in a copy, the message loop going on.
+fn in_object(documents: &Documents, key: &str, offset: usize) -> Option<(usize, Range)> {
+    let (text, lines) = {
+        let all = lock(documents);
+        let document = all.get(key)?;
+        (document.text.clone(), document.lines.clone())
+    };
+    let (object, tag) = language::object_at(&text, offset)?;
+    Some((object, range(&text, &lines, tag)))
+}
+
+/// What an app says over the link, handled on that connection's thread.
+type FromApps = Arc<dyn Fn(editor_link::Message) + std::marker::Send + Sync>;
+
+/// What the apps say: a click on an object asks the editor to show its
+/// element (`window/showDocument`, the element selected, the focus left
+/// where it is) if the editor can, else says once that it cannot.
+fn from_apps(documents: Documents, send: Send, shows: bool) -> FromApps {
+    let said_cannot = AtomicBool::new(false);
+    let requests = AtomicU64::new(0);
+    Arc::new(move |message| {
+        let editor_link::Message::Show { path, object } = message else {
+            return;
+        };
+        let Some((uri, selection)) = object_element(&documents, &path, object) else {
+            return;
+        };
+        if !shows {
+            if !said_cannot.swap(true, Ordering::Relaxed) {
+                let message =
+                    "RayOfLight: this editor does not show a document when a server asks \
+                               (window/showDocument), so a click in the app cannot show you the \
+                               object's element"
+                        .to_owned();
+                let params = ShowMessageParams {
+                    typ: MessageType::INFO,
+                    message,
+                };
+                send(Message::Notification(Notification::new(
+                    ShowMessage::METHOD.to_owned(),
+                    params,
+                )));
+            }
+            let line = selection.start.line + 1;
+            let params = LogMessageParams {
+                typ: MessageType::LOG,
+                message: format!("object {} is at line {line} of {uri:?}", object + 1),
+            };
+            send(Message::Notification(Notification::new(
+                LogMessage::METHOD.to_owned(),
+                params,
+            )));
+            return;
+        }
+        let n = requests.fetch_add(1, Ordering::Relaxed);
+        let params = ShowDocumentParams {
+            uri,
+            external: Some(false),
+            take_focus: Some(false),
+            selection: Some(selection),
+        };
+        let id = RequestId::from(format!("rayoflight-show-{n}"));
+        send(Message::Request(Request::new(
+            id,
+            ShowDocument::METHOD.to_owned(),
+            params,
+        )));
+    })
+}
+
+/// The URI of the open document that is the file at `path`, and the range
+/// of its object `object`'s element.
+fn object_element(documents: &Documents, path: &Path, object: usize) -> Option<(Uri, Range)> {
+    let (key, text, lines) = {
+        let all = lock(documents);
+        let (key, document) = all.iter().find(|(key, _)| {
+            editor_link::uri_path(key).is_some_and(|p| rayoflight::files::same_file(&p, path))
+        })?;
+        (key.clone(), document.text.clone(), document.lines.clone())
+    };
+    let element = language::object_element(&text, object)?;
+    let uri = key.parse::<Uri>().ok()?;
+    Some((uri, range(&text, &lines, element)))
+}
+
 /// The user's running apps ([`rayoflight::editor_link`]), connected to as
-/// they come and dropped as they go.
-#[derive(Default)]
+/// they come and dropped as they go; what each says is read on a thread of
+/// its own.
 struct Apps {
-    connections: HashMap<std::path::PathBuf, std::os::unix::net::UnixStream>,
+    connections: HashMap<PathBuf, std::os::unix::net::UnixStream>,
+    /// Those connected since the last batch of changes: they were handed
+    /// the newest texts already.
+    fresh: Vec<PathBuf>,
+    from_apps: FromApps,
+}
+
+/// The server is ending: each app's reading thread sees its connection
+/// end (and lets go of the editor's channel, which lsp-server waits on).
+impl Drop for Apps {
+    fn drop(&mut self) {
+        for stream in self.connections.values() {
+            let _ = stream.shutdown(std::net::Shutdown::Both);
+        }
+    }
 }
 
 impl Apps {
-    /// Sends `message` to every app in the runtime folder.
-    fn tell(&mut self, message: &editor_link::Message) {
+    fn new(from_apps: FromApps) -> Apps {
+        Apps {
+            connections: HashMap::new(),
+            fresh: Vec::new(),
+            from_apps,
+        }
+    }
+
+    /// Connects to the apps started since it last looked, and hands each
+    /// the text of every open document; drops those gone.
+    fn look(&mut self, documents: &Documents) {
         let Ok(folder) = editor_link::folder() else {
             return;
         };
         let sockets = editor_link::apps(&folder);
-        self.connections
-            .retain(|socket, _| sockets.contains(socket));
-        for socket in sockets {
-            if !self.connections.contains_key(&socket)
-                && let Ok(stream) = editor_link::connect(&socket)
-            {
-                self.connections.insert(socket.clone(), stream);
+        self.connections.retain(|socket, stream| {
+            let here = sockets.contains(socket);
+            if !here {
+                let _ = stream.shutdown(std::net::Shutdown::Both);
             }
-            let Some(stream) = self.connections.get_mut(&socket) else {
+            here
+        });
+        for socket in sockets {
+            if self.connections.contains_key(&socket) {
+                continue;
+            }
+            let Ok(mut stream) = editor_link::connect(&socket) else {
                 continue;
             };
-            if editor_link::send(stream, message).is_err() {
-                self.connections.remove(&socket);
+            let Ok(reader) = stream.try_clone() else {
+                continue;
+            };
+            let from_apps = Arc::clone(&self.from_apps);
+            std::thread::spawn(move || {
+                let mut r = std::io::BufReader::new(reader);
+                while let Ok(Some(message)) = editor_link::receive(&mut r) {
+                    from_apps(message);
+                }
+            });
+            let texts: Vec<(String, String)> = lock(documents)
+                .iter()
+                .map(|(key, d)| (key.clone(), d.text.clone()))
+                .collect();
+            let sent = texts.into_iter().all(|(key, text)| {
+                editor_link::uri_path(&key).is_none_or(|path| {
+                    editor_link::send(&mut stream, &editor_link::Message::Buffer { path, text })
+                        .is_ok()
+                })
+            });
+            if sent {
+                self.fresh.push(socket.clone());
+                self.connections.insert(socket, stream);
+            } else {
+                let _ = stream.shutdown(std::net::Shutdown::Both);
             }
         }
+    }
+
+    /// Sends `message` to every app connected (but those just handed the
+    /// newest texts, for a text).
+    fn tell(&mut self, message: &editor_link::Message) {
+        let text = matches!(message, editor_link::Message::Buffer { .. });
+        let fresh = &self.fresh;
+        self.connections.retain(|socket, stream| {
+            if text && fresh.contains(socket) {
+                return true;
+            }
+            let sent = editor_link::send(stream, message).is_ok();
+            if !sent {
+                let _ = stream.shutdown(std::net::Shutdown::Both);
+            }
+            sent
+        });
     }
 
     fn buffer(&mut self, uri: &Uri, text: String) {
@@ -315,6 +584,12 @@ impl Apps {
     fn released(&mut self, uri: &Uri) {
         if let Some(path) = editor_link::uri_path(uri.as_str()) {
             self.tell(&editor_link::Message::Released { path });
+        }
+    }
+
+    fn selected(&mut self, uri: &Uri, object: usize) {
+        if let Some(path) = editor_link::uri_path(uri.as_str()) {
+            self.tell(&editor_link::Message::Select { path, object });
         }
     }
 }

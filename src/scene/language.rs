@@ -502,6 +502,32 @@ pub fn symbols(text: &str) -> Vec<Symbol> {
         .collect()
 }
 
+/// The objects' elements of `text` (spheres and planes, in file order, as
+/// the loader numbers them), each with its start tag's bytes; none when it
+/// is not well-formed XML.
+fn objects(text: &str) -> impl Iterator<Item = (Range<usize>, Range<usize>)> + '_ {
+    splice::top_level(text)
+        .into_iter()
+        .filter(|(name, ..)| matches!(*name, "sphere" | "plane"))
+        .map(|(_, range, selection)| (range, selection))
+}
+
+/// The bytes of object `index`'s element (spheres and planes in file
+/// order): what an editor shows when the app asks for that object.
+pub fn object_element(text: &str, index: usize) -> Option<Range<usize>> {
+    objects(text).nth(index).map(|(range, _)| range)
+}
+
+/// The object (its index among the spheres and planes, in file order)
+/// whose element holds byte `offset`, with its start tag's bytes: what
+/// the app outlines when the editor's cursor is there.
+pub fn object_at(text: &str, offset: usize) -> Option<(usize, Range<usize>)> {
+    objects(text)
+        .enumerate()
+        .find(|(_, (range, _))| range.contains(&offset))
+        .map(|(index, (_, selection))| (index, selection))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -634,5 +660,29 @@ mod tests {
             ["#1 RED ball sphere", "#2 plane", "light 1", "camera"]
         );
         assert_eq!(&text[s[0].range.clone()], "<sphere/>");
+    }
+
+    #[test]
+    fn objects_are_found_by_number_and_by_place() {
+        let text = "<scene>\n<light x=\"0\" y=\"0\" z=\"0\"/>\n<sphere>\n<color red=\"1\" green=\"0\" blue=\"0\"/>\n</sphere>\n<plane/>\n</scene>";
+        let sphere = object_element(text, 0).unwrap();
+        assert!(
+            text[sphere.clone()].starts_with("<sphere>")
+                && text[sphere.clone()].ends_with("</sphere>")
+        );
+        assert_eq!(&text[object_element(text, 1).unwrap()], "<plane/>");
+        assert_eq!(object_element(text, 2), None);
+        let inside = text.find("green").unwrap();
+        assert_eq!(
+            object_at(text, inside),
+            Some((0, sphere.start..sphere.start + 8))
+        );
+        assert_eq!(
+            object_at(text, text.find("<plane").unwrap()).map(|o| o.0),
+            Some(1)
+        );
+        // In a light, or a text that is not XML: no object.
+        assert_eq!(object_at(text, text.find("<light").unwrap() + 2), None);
+        assert_eq!(object_at("<scene><sphere>", 9), None);
     }
 }

@@ -8,6 +8,7 @@
 use super::{Background, RayOfLightApp};
 use crate::gui::document::Reload;
 use crate::gui::pace::Pace;
+use crate::gui::panel::Selection;
 use crate::gui::preview::RenderState;
 use crate::gui::study;
 use crate::gui::watcher::FileEvent;
@@ -191,7 +192,8 @@ impl RayOfLightApp {
 
     /// The user's editor's unsaved text of the open file is shown as it
     /// comes, and the document again when the editor saves or closes it;
-    /// messages about other files are not this window's.
+    /// the object its cursor is in is selected (and outlined). Messages
+    /// about other files are not this window's.
     fn editor_said(&mut self, message: crate::editor_link::Message) {
         use crate::editor_link::Message;
         let ours = |path: &Path| {
@@ -207,6 +209,17 @@ impl RayOfLightApp {
                     self.notify("the panel waits while your editor has unsaved text".into());
                 }
                 self.after_edit();
+            }
+            Message::Select { path, object } if ours(&path) => {
+                // The object as the panel numbers it now (objects added or
+                // deleted in the panel since the file was read move it).
+                if let Some(n) = self.doc.object_from_text(object) {
+                    self.selection = Selection {
+                        object: Some(n),
+                        reveal: true,
+                        field: None,
+                    };
+                }
             }
             Message::Released { path } if ours(&path) && self.doc.is_following() => {
                 self.doc.unfollow();

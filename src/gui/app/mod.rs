@@ -155,6 +155,9 @@ pub struct RayOfLightApp {
     /// The socket the editor link listens on, removed when the app ends
     /// ([`RayOfLightApp::listen_to_editors`]).
     editor_socket: Option<PathBuf>,
+    /// The editors connected over the link, for a click on an object to
+    /// ask them to show its element.
+    editors: crate::editor_link::Peers,
     /// The export running in the background, if any.
     export: Option<dialogs::Export>,
     /// The save under way, if any.
@@ -252,6 +255,7 @@ impl RayOfLightApp {
             notice: None,
             editor_failed: std::sync::mpsc::channel(),
             editor_socket: None,
+            editors: crate::editor_link::Peers::default(),
             export: None,
             saving: None,
             deferred_file_events: Vec::new(),
@@ -291,21 +295,26 @@ impl RayOfLightApp {
     }
 
     /// Listens to `rayoflight lsp` in the user's editors from now on
-    /// (their unsaved text of the open file is shown as it is typed), on
-    /// threads of their own: one that accepts, one a connection.
+    /// (their unsaved text of the open file is shown as it is typed, their
+    /// cursor selects objects, a click asks them to show one), on threads
+    /// of their own: one that accepts, one that reads a connection.
     pub fn listen_to_editors(&mut self, listener: crate::editor_link::Listener) {
         self.editor_socket = Some(listener.path().to_owned());
         let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
+        let editors = self.editors.clone();
         // Without the thread the app runs, only without the link.
         let _ = std::thread::Builder::new()
             .name("editor link".into())
             .spawn(move || {
                 while let Ok(stream) = listener.accept() {
-                    let (tx, ctx) = (tx.clone(), ctx.clone());
+                    let (tx, ctx, editors) = (tx.clone(), ctx.clone(), editors.clone());
                     let _ = std::thread::Builder::new()
                         .name("editor".into())
                         .spawn(move || {
                             use crate::editor_link::{Message, receive};
+                            // An editor this app cannot answer is still
+                            // followed.
+                            let peer = editors.add(&stream).ok();
                             let mut r = std::io::BufReader::new(stream);
                             // An editor that goes away (quit, crashed)
                             // lets go of what it sent.
@@ -320,6 +329,9 @@ impl RayOfLightApp {
                                     return;
                                 }
                                 ctx.request_repaint();
+                            }
+                            if let Some(peer) = peer {
+                                editors.remove(peer);
                             }
                             for path in sent {
                                 let _ = tx.send(Background::Editor(Message::Released { path }));

@@ -246,20 +246,38 @@ impl RayOfLightApp {
     }
 
     /// Selects the object seen at image position (`x`, `y`) and opens it
-    /// in the panel, once (a click in the picture). The pick is made in
-    /// the scene the worker prepared for the picture; until it has
-    /// prepared this one (it is rendering it), the pick waits for it.
+    /// in the panel, once (a click in the picture), and asks the user's
+    /// editors to show its element. The pick is made in the scene the
+    /// worker prepared for the picture; until it has prepared this one (it
+    /// is rendering it), the pick waits for it.
     pub fn pick(&mut self, x: f64, y: f64) {
         match self.worker.prepared(self.doc.scene()) {
             Some(prepared) => {
+                let object = prepared.pick(x, y);
                 self.selection = Selection {
-                    object: prepared.pick(x, y),
+                    object,
                     reveal: true,
                     field: None,
                 };
+                if let Some(n) = object {
+                    self.show_in_editors(n);
+                }
             }
             None => self.waiting = Some(Waiting::Pick(x, y)),
         }
+    }
+
+    /// Asks the editors linked to this app to show object `n`'s element,
+    /// without taking the focus from the window; an object added in the
+    /// panel since the file was read is not in their text.
+    fn show_in_editors(&mut self, n: usize) {
+        let (Some(path), Some(object)) = (self.doc.path(), self.doc.object_in_text(n)) else {
+            return;
+        };
+        self.editors.tell(&crate::editor_link::Message::Show {
+            path: path.to_owned(),
+            object,
+        });
     }
 
     /// A pick or an explain that waited for the worker to prepare the

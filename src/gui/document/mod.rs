@@ -340,6 +340,21 @@ impl Document {
         scene::splice::object_position(&version.source, origin)
     }
 
+    /// Object `n`'s number among the spheres and planes of the text on
+    /// screen (the file's, or the editor's being followed), which the
+    /// editor link names objects by; `None` for an object added since.
+    pub fn object_in_text(&self, n: usize) -> Option<usize> {
+        self.on_screen().edited.object_origin(n)
+    }
+
+    /// The object that is number `index` among the spheres and planes of
+    /// the text on screen ([`Document::object_in_text`]'s inverse), if it
+    /// is still there.
+    pub fn object_from_text(&self, index: usize) -> Option<usize> {
+        let edited = &self.on_screen().edited;
+        (0..edited.scene().objects.len()).find(|&n| edited.object_origin(n) == Some(index))
+    }
+
     /// The panel's name for object `n`: `#2 RED sphere` when a comment
     /// directly above it in the file starts with "RED", else `#2 sphere`.
     pub fn object_label(&self, n: usize) -> String {
