@@ -923,7 +923,7 @@ fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
         .unwrap();
     let mut editor = Killed(editor);
     let near = |x: f64, of: f64| (x - of).abs() < (green_x - red_x).abs() / 4.0;
-    wait_for(
+    let took = wait_for(
         display,
         &shots.join("source-1-cursor.png"),
         Duration::from_secs(15),
@@ -933,6 +933,7 @@ fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
             n > 20 && near(x, red_x)
         },
     );
+    eprintln!("the cursor's object outlined {took:?} after Neovim started");
     // A click on the green sphere: Neovim is asked to show its element.
     let xdotool = |args: &[&str]| {
         let out = Command::new("xdotool")
@@ -966,6 +967,10 @@ fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
         );
         std::thread::sleep(Duration::from_millis(50));
     }
+    eprintln!(
+        "Neovim showed the element and quit {:?} after the click",
+        start.elapsed()
+    );
     let got: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&out).expect("Neovim wrote what it got"))
             .unwrap();

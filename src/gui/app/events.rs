@@ -3,7 +3,8 @@
 //! mouse moves, each waiting for the one in flight), the worker's tiles and
 //! passes, the watcher's file events, dialogs' answers, the Study window's
 //! runs, and what the user's editor says over the editor link (its
-//! unsaved text of the open file, shown as it comes).
+//! unsaved text of the open file, shown as it comes, and the object its
+//! cursor is in, selected).
 
 use super::{Background, RayOfLightApp};
 use crate::gui::document::Reload;
