@@ -215,6 +215,16 @@ fn count(image: &image::RgbImage, rgb: [u8; 3]) -> usize {
         .count()
 }
 
+/// Runs xdotool on `display`; what it printed.
+fn xdotool_on(display: &str, args: &[&str]) -> String {
+    let out = Command::new("xdotool")
+        .args(args)
+        .env("DISPLAY", display)
+        .output()
+        .expect("xdotool runs (apt-get install xdotool)");
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// Takes screenshots until `ok` holds; returns the time it took.
 fn wait_for(
     display: &str,
@@ -310,15 +320,8 @@ fn the_window_follows_saves_of_the_scene_file() {
         app.0.try_wait().unwrap().is_none(),
         "rendering, still running"
     );
-    let xdotool = |args: &[&str]| {
-        Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", &display)
-            .output()
-            .expect("xdotool runs (apt-get install xdotool)")
-    };
-    let found = xdotool(&["search", "--name", "RayOfLight"]);
-    let window = String::from_utf8_lossy(&found.stdout)
+    let xdotool = |args: &[&str]| xdotool_on(&display, args);
+    let window = xdotool(&["search", "--name", "RayOfLight"])
         .lines()
         .next()
         .expect("the app's window is found")
@@ -373,14 +376,29 @@ const TWO_SPHERES: &str = r#"<?xml version="1.0"?>
 
 /// The mean x of the pixels of colour `rgb`, and how many there are.
 fn centroid(image: &image::RgbImage, rgb: [u8; 3]) -> (f64, usize) {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (x, _, p) in image.enumerate_pixels() {
-        if p.0 == rgb {
-            sum += f64::from(x);
+    let (x, _, n) = centre(image, rgb, 0);
+    (x, n)
+}
+
+/// The mean x and y of the pixels within `tolerance` of colour `rgb` in
+/// each channel, and how many there are.
+fn centre(image: &image::RgbImage, rgb: [u8; 3], tolerance: u8) -> (f64, f64, usize) {
+    let (mut sx, mut sy, mut n) = (0.0, 0.0, 0usize);
+    for (x, y, p) in image.enumerate_pixels() {
+        if (0..3).all(|c| p.0[c].abs_diff(rgb[c]) <= tolerance) {
+            sx += f64::from(x);
+            sy += f64::from(y);
             n += 1;
         }
     }
-    (if n > 0 { sum / n as f64 } else { f64::NAN }, n)
+    let mean = |s: f64| if n > 0 { s / n as f64 } else { f64::NAN };
+    (mean(sx), mean(sy), n)
+}
+
+/// Where the middle of the pixels of colour `rgb` is, for the mouse.
+fn middle(image: &image::RgbImage, rgb: [u8; 3]) -> (i64, i64) {
+    let (x, y, _) = centre(image, rgb, 0);
+    (x.round() as i64, y.round() as i64)
 }
 
 /// The red sphere's x seen from the green one's: what an orbit changes and
@@ -410,14 +428,7 @@ fn orbiting_with_the_mouse_moves_the_view_undoes_and_saves_what_is_shown() {
         opened.path.clone(),
     );
     let (dir, app) = (&opened.dir, &opened.app);
-    let xdotool = |args: &[&str]| {
-        let out = Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", &display)
-            .output()
-            .expect("xdotool runs (apt-get install xdotool)");
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
+    let xdotool = |args: &[&str]| xdotool_on(&display, args);
     wait_for(
         &display,
         &shots.join("orbit-0.png"),
@@ -437,14 +448,8 @@ fn orbiting_with_the_mouse_moves_the_view_undoes_and_saves_what_is_shown() {
     let before = screenshot(&display, &shots.join("orbit-1-before.png"));
     let start_spread = spread(&before);
     // The middle of the picture: between the two spheres' centroids.
-    let y = before
-        .enumerate_pixels()
-        .filter(|(_, _, p)| p.0 == RED)
-        .map(|(_, y, _)| f64::from(y))
-        .sum::<f64>()
-        / centroid(&before, RED).1 as f64;
-    let x = (centroid(&before, RED).0 + centroid(&before, GREEN).0) / 2.0;
-    let (x, y) = (x.round() as i64, y.round() as i64);
+    let y = middle(&before, RED).1;
+    let x = ((centroid(&before, RED).0 + centroid(&before, GREEN).0) / 2.0).round() as i64;
 
     // Orbit: press, move in steps, look during the drag, release.
     xdotool(&["mousemove", &x.to_string(), &y.to_string()]);
@@ -562,14 +567,7 @@ fn unsaved_edits_survive_kill_9_and_sigterm_and_come_back_on_screen() {
         opened.path.clone(),
     );
     let home = opened.dir.path().to_owned();
-    let xdotool = |args: &[&str]| {
-        let out = Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", &display)
-            .output()
-            .expect("xdotool runs (apt-get install xdotool)");
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
+    let xdotool = |args: &[&str]| xdotool_on(&display, args);
     let first = |name: &str| {
         wait_for(
             &display,
@@ -695,14 +693,7 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
     let template = format!("'{}' {{file}} {{line}} {{column}}", script.display());
     let opened = Window::open_with("two.xml", TWO_SPHERES, &[("RAYOFLIGHT_EDITOR", &template)]);
     let (shots, display, path) = (&opened.shots, &opened.display, &opened.path);
-    let xdotool = |args: &[&str]| {
-        let out = Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", display)
-            .output()
-            .expect("xdotool runs (apt-get install xdotool)");
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
+    let xdotool = |args: &[&str]| xdotool_on(display, args);
     let first = shots.join("editor-0.png");
     wait_for(
         display,
@@ -750,15 +741,7 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
 
     // Click the green sphere: its element's line and column.
     let shot = screenshot(display, &shots.join("editor-1.png"));
-    let green_x = centroid(&shot, GREEN).0.round() as i64;
-    let green_y = {
-        let ys: Vec<u32> = shot
-            .enumerate_pixels()
-            .filter(|(_, _, p)| p.0 == GREEN)
-            .map(|(_, y, _)| y)
-            .collect();
-        (ys.iter().map(|&y| f64::from(y)).sum::<f64>() / ys.len() as f64).round() as i64
-    };
+    let (green_x, green_y) = middle(&shot, GREEN);
     xdotool(&["mousemove", &green_x.to_string(), &green_y.to_string()]);
     xdotool(&["click", "1"]);
     std::thread::sleep(Duration::from_millis(800));
@@ -771,6 +754,39 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
         [file, line.to_string(), column.to_string()]
     );
     screenshot(display, &shots.join("editor-2.png"));
+}
+
+/// Waits until the app listens for editors in `folder`
+/// (`rayoflight::editor_link`).
+fn wait_for_the_link(folder: &Path) {
+    let start = Instant::now();
+    while rayoflight::editor_link::apps(folder).is_empty() {
+        assert!(start.elapsed() < Duration::from_secs(10), "the app listens");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}
+
+/// Neovim, headless, running `tests/lsp/SCRIPT` on the window's file with
+/// `rayoflight lsp` as `$ROL_BIN`, the runtime folder `run` and `vars`.
+fn neovim(opened: &Window, script: &str, run: &str, vars: &[(&str, &str)]) -> Killed {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/lsp")
+        .join(script);
+    let editor = Command::new("nvim")
+        .args(["--headless", "--clean", "-u", "NONE", "-S"])
+        .arg(&script)
+        .current_dir(opened.dir.path())
+        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
+        .env("ROL_FILE", &opened.path)
+        .envs(vars.iter().copied())
+        .env("XDG_RUNTIME_DIR", run)
+        .env("HOME", opened.dir.path())
+        .env("XDG_STATE_HOME", opened.dir.path().join("nvim-state"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    Killed(editor)
 }
 
 /// The editor's unsaved text on screen (issue 29): Neovim with
@@ -796,31 +812,17 @@ fn the_window_follows_the_editors_unsaved_text() {
     );
     // The app's socket, then the editor.
     let folder = runtime.path().join("rayoflight");
-    let start = Instant::now();
-    while rayoflight::editor_link::apps(&folder).is_empty() {
-        assert!(start.elapsed() < Duration::from_secs(10), "the app listens");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    wait_for_the_link(&folder);
     let line = TWO_SPHERES
         .lines()
         .position(|l| l.contains(r#"<color red="1" green="0""#))
         .unwrap();
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/follow.lua");
-    let editor = Command::new("nvim")
-        .args(["--headless", "--clean", "-u", "NONE", "-S"])
-        .arg(&script)
-        .current_dir(opened.dir.path())
-        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
-        .env("ROL_FILE", path)
-        .env("ROL_LINE", line.to_string())
-        .env("XDG_RUNTIME_DIR", &run)
-        .env("HOME", opened.dir.path())
-        .env("XDG_STATE_HOME", opened.dir.path().join("nvim-state"))
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut editor = Killed(editor);
+    let mut editor = neovim(
+        &opened,
+        "follow.lua",
+        &run,
+        &[("ROL_LINE", &line.to_string())],
+    );
     let took = wait_for(
         display,
         &shots.join("follow-1-typed.png"),
@@ -859,14 +861,8 @@ const OUTLINE: [u8; 3] = [255, 140, 0];
 /// The mean x of the outline's pixels (its colour, give or take the
 /// blending at its edges), and how many there are.
 fn outline_at(image: &image::RgbImage) -> (f64, usize) {
-    let (mut sum, mut n) = (0.0, 0usize);
-    for (x, _, p) in image.enumerate_pixels() {
-        if (0..3).all(|c| p.0[c].abs_diff(OUTLINE[c]) <= 24) {
-            sum += f64::from(x);
-            n += 1;
-        }
-    }
-    (if n > 0 { sum / n as f64 } else { f64::NAN }, n)
+    let (x, _, n) = centre(image, OUTLINE, 24);
+    (x, n)
 }
 
 /// Picture ↔ source (issue 29): Neovim with `rayoflight lsp` on the
@@ -894,34 +890,22 @@ fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
     let shot = screenshot(display, &shots.join("source-0.png"));
     let (red_x, green_x) = (centroid(&shot, RED).0, centroid(&shot, GREEN).0);
     let folder = runtime.path().join("rayoflight");
-    let start = Instant::now();
-    while rayoflight::editor_link::apps(&folder).is_empty() {
-        assert!(start.elapsed() < Duration::from_secs(10), "the app listens");
-        std::thread::sleep(Duration::from_millis(50));
-    }
+    wait_for_the_link(&folder);
     let red_line = TWO_SPHERES
         .lines()
         .position(|l| l.contains(r#"<color red="1" green="0""#))
         .unwrap();
     let out = opened.dir.path().join("nvim.json");
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/show.lua");
-    let editor = Command::new("nvim")
-        .args(["--headless", "--clean", "-u", "NONE", "-S"])
-        .arg(&script)
-        .current_dir(opened.dir.path())
-        .env("ROL_BIN", env!("CARGO_BIN_EXE_rayoflight"))
-        .env("ROL_FILE", path)
-        .env("ROL_OUT", &out)
-        .env("ROL_CURSOR_LINE", red_line.to_string())
-        .env("ROL_WAIT_SHOW", "30000")
-        .env("XDG_RUNTIME_DIR", &run)
-        .env("HOME", opened.dir.path())
-        .env("XDG_STATE_HOME", opened.dir.path().join("nvim-state"))
-        .stdout(Stdio::null())
-        .stderr(Stdio::null())
-        .spawn()
-        .unwrap();
-    let mut editor = Killed(editor);
+    let mut editor = neovim(
+        &opened,
+        "show.lua",
+        &run,
+        &[
+            ("ROL_OUT", out.to_str().unwrap()),
+            ("ROL_CURSOR_LINE", &red_line.to_string()),
+            ("ROL_WAIT_SHOW", "30000"),
+        ],
+    );
     let near = |x: f64, of: f64| (x - of).abs() < (green_x - red_x).abs() / 4.0;
     let took = wait_for(
         display,
@@ -935,29 +919,11 @@ fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
     );
     eprintln!("the cursor's object outlined {took:?} after Neovim started");
     // A click on the green sphere: Neovim is asked to show its element.
-    let xdotool = |args: &[&str]| {
-        let out = Command::new("xdotool")
-            .args(args)
-            .env("DISPLAY", display)
-            .output()
-            .expect("xdotool runs (apt-get install xdotool)");
-        String::from_utf8_lossy(&out.stdout).into_owned()
-    };
-    let green_y = {
-        let ys: Vec<u32> = shot
-            .enumerate_pixels()
-            .filter(|(_, _, p)| p.0 == GREEN)
-            .map(|(_, y, _)| y)
-            .collect();
-        (ys.iter().map(|&y| f64::from(y)).sum::<f64>() / ys.len() as f64).round() as i64
-    };
+    let xdotool = |args: &[&str]| xdotool_on(display, args);
     let window = app_window(&xdotool);
     xdotool(&["windowfocus", "--sync", &window]);
-    xdotool(&[
-        "mousemove",
-        &(green_x.round() as i64).to_string(),
-        &green_y.to_string(),
-    ]);
+    let (click_x, click_y) = middle(&shot, GREEN);
+    xdotool(&["mousemove", &click_x.to_string(), &click_y.to_string()]);
     xdotool(&["click", "1"]);
     let start = Instant::now();
     while editor.0.try_wait().unwrap().is_none() {

@@ -91,23 +91,30 @@ fn neovim_gets_diagnostics_completion_hover_and_symbols() {
     );
 }
 
+/// A runtime folder `run` in `dir` and an app's socket listening in it,
+/// as the app makes them (`rayoflight::editor_link`).
+fn listening_app(dir: &Path) -> (std::path::PathBuf, rayoflight::editor_link::Listener) {
+    use rayoflight::editor_link;
+    let runtime = dir.join("run");
+    fs::create_dir(&runtime).unwrap();
+    let folder = editor_link::folder_in(&runtime.join("rayoflight")).unwrap();
+    (runtime, editor_link::Listener::bind(&folder).unwrap())
+}
+
 /// The editor's unsaved text goes to the user's apps over the link
 /// (`rayoflight::editor_link`): a listener in a private runtime folder
 /// gets the typed text before any save, then "released" when the editor
 /// saves.
 #[test]
 fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
-    use rayoflight::editor_link::{self, Listener, Message};
+    use rayoflight::editor_link::{self, Message};
     if !common::tool("nvim", "neovim") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("s.xml");
     fs::write(&scene, rayoflight::EXAMPLE_SCENE).unwrap();
-    let runtime = dir.path().join("run");
-    fs::create_dir(&runtime).unwrap();
-    let folder = editor_link::folder_in(&runtime.join("rayoflight")).unwrap();
-    let listener = Listener::bind(&folder).unwrap();
+    let (runtime, listener) = listening_app(dir.path());
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
         let Ok(stream) = listener.accept() else {
@@ -151,17 +158,14 @@ const TWO_SPHERES: &str = "<scene>\n  <sphere>\n    <color red=\"1\" green=\"0\"
 /// the focus where it is.
 #[test]
 fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
-    use rayoflight::editor_link::{self, Listener, Message};
+    use rayoflight::editor_link::{self, Message};
     if !common::tool("nvim", "neovim") {
         return;
     }
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("s.xml");
     fs::write(&scene, TWO_SPHERES).unwrap();
-    let runtime = dir.path().join("run");
-    fs::create_dir(&runtime).unwrap();
-    let folder = editor_link::folder_in(&runtime.join("rayoflight")).unwrap();
-    let listener = Listener::bind(&folder).unwrap();
+    let (runtime, listener) = listening_app(dir.path());
     let path = fs::canonicalize(&scene).unwrap();
     let (tx, rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {

@@ -64,6 +64,14 @@ struct Document {
     lines: Lines,
 }
 
+impl Document {
+    /// Its text and line index, to scan with the lock let go (the message
+    /// loop goes on changing the document meanwhile).
+    fn copy(&self) -> (String, Lines) {
+        (self.text.clone(), self.lines.clone())
+    }
+}
+
 /// The open documents, by URI, shared with the thread that checks them.
 type Documents = Arc<Mutex<HashMap<String, Document>>>;
 
@@ -136,23 +144,18 @@ pub fn run() -> Result<(), String> {
                 {
                     break;
                 }
-                if request.method == DocumentHighlightRequest::METHOD {
+                let response = if request.method == DocumentHighlightRequest::METHOD {
                     // Answered by the thread that tells the apps.
                     match cursor(&documents, request) {
                         Ok(change) => {
                             let _ = diagnose.send(change);
                             continue;
                         }
-                        Err(response) => {
-                            connection
-                                .sender
-                                .send(Message::Response(*response))
-                                .map_err(|e| format!("lsp: {e}"))?;
-                            continue;
-                        }
+                        Err(response) => *response,
                     }
-                }
-                let response = answer(&documents, request);
+                } else {
+                    answer(&documents, request)
+                };
                 connection
                     .sender
                     .send(Message::Response(response))
@@ -395,11 +398,7 @@ fn diagnosis_thread(
 /// The object whose element holds byte `offset` of the document, and its
 /// start tag's range: scanned in a copy, the message loop going on.
 fn in_object(documents: &Documents, key: &str, offset: usize) -> Option<(usize, Range)> {
-    let (text, lines) = {
-        let all = lock(documents);
-        let document = all.get(key)?;
-        (document.text.clone(), document.lines.clone())
-    };
+    let (text, lines) = lock(documents).get(key)?.copy();
     let (object, tag) = language::object_at(&text, offset)?;
     Some((object, range(&text, &lines, tag)))
 }
@@ -471,7 +470,8 @@ fn object_element(documents: &Documents, path: &Path, object: usize) -> Option<(
         let (key, document) = all.iter().find(|(key, _)| {
             editor_link::uri_path(key).is_some_and(|p| rayoflight::files::same_file(&p, path))
         })?;
-        (key.clone(), document.text.clone(), document.lines.clone())
+        let (text, lines) = document.copy();
+        (key.clone(), text, lines)
     };
     let element = language::object_element(&text, object)?;
     let uri = key.parse::<Uri>().ok()?;
@@ -489,12 +489,18 @@ struct Apps {
     from_apps: FromApps,
 }
 
+/// Ends the connection both ways, for the app and for the thread that
+/// reads what it says (which holds a copy of the socket).
+fn hang_up(stream: &std::os::unix::net::UnixStream) {
+    let _ = stream.shutdown(std::net::Shutdown::Both);
+}
+
 /// The server is ending: each app's reading thread sees its connection
 /// end (and lets go of the editor's channel, which lsp-server waits on).
 impl Drop for Apps {
     fn drop(&mut self) {
         for stream in self.connections.values() {
-            let _ = stream.shutdown(std::net::Shutdown::Both);
+            hang_up(stream);
         }
     }
 }
@@ -518,7 +524,7 @@ impl Apps {
         self.connections.retain(|socket, stream| {
             let here = sockets.contains(socket);
             if !here {
-                let _ = stream.shutdown(std::net::Shutdown::Both);
+                hang_up(stream);
             }
             here
         });
@@ -553,7 +559,7 @@ impl Apps {
                 self.fresh.push(socket.clone());
                 self.connections.insert(socket, stream);
             } else {
-                let _ = stream.shutdown(std::net::Shutdown::Both);
+                hang_up(&stream);
             }
         }
     }
@@ -569,7 +575,7 @@ impl Apps {
             }
             let sent = editor_link::send(stream, message).is_ok();
             if !sent {
-                let _ = stream.shutdown(std::net::Shutdown::Both);
+                hang_up(stream);
             }
             sent
         });

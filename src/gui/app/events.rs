@@ -215,11 +215,7 @@ impl RayOfLightApp {
                 // The object as the panel numbers it now (objects added or
                 // deleted in the panel since the file was read move it).
                 if let Some(n) = self.doc.object_from_text(object) {
-                    self.selection = Selection {
-                        object: Some(n),
-                        reveal: true,
-                        field: None,
-                    };
+                    self.selection = Selection::revealed(Some(n));
                 }
             }
             Message::Released { path } if ours(&path) && self.doc.is_following() => {

@@ -254,11 +254,7 @@ impl RayOfLightApp {
         match self.worker.prepared(self.doc.scene()) {
             Some(prepared) => {
                 let object = prepared.pick(x, y);
-                self.selection = Selection {
-                    object,
-                    reveal: true,
-                    field: None,
-                };
+                self.selection = Selection::revealed(object);
                 if let Some(n) = object {
                     self.show_in_editors(n);
                 }

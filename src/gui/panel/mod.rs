@@ -40,6 +40,18 @@ pub struct Selection {
     pub field: Option<Field>,
 }
 
+impl Selection {
+    /// `object` selected and opened in the panel, once: a click in the
+    /// picture, or the editor's cursor in its element.
+    pub fn revealed(object: Option<usize>) -> Selection {
+        Selection {
+            object,
+            reveal: true,
+            field: None,
+        }
+    }
+}
+
 /// What the user did in the panel this frame.
 #[derive(Debug, Default)]
 pub struct PanelOutput {
