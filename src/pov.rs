@@ -191,7 +191,7 @@ fn write_scene(out: &mut String, scene: &Scene, header: Option<Header>) -> std::
     writeln!(out, "  direction <0, 0, {}>", num(e))?;
     writeln!(out, "  right x*{}", num(w))?;
     writeln!(out, "  up y*{}", num(h))?;
-    writeln!(out, "  {}", pov_matrix(cam.transform.to_world()))?;
+    writeln!(out, "  {}", pov_matrix(&cam.transform.to_world()))?;
     writeln!(out, "}}")?;
     writeln!(out)?;
 
@@ -219,7 +219,7 @@ fn write_object(out: &mut String, object: &Object, model: Illumination) -> std::
         Shape::Plane => "plane { z, 0",
     };
     writeln!(out, "{head}")?;
-    writeln!(out, "  {}", pov_matrix(object.transform.to_world()))?;
+    writeln!(out, "  {}", pov_matrix(&object.transform.to_world()))?;
     writeln!(out, "  pigment {{ rgb 1 }}")?;
     let mat = object.material;
     let ambient = object.color * mat.ka;
@@ -362,7 +362,7 @@ mod tests {
             TransformStep::Translate(DVec3::new(1.0, -2.0, 5.0)),
         ])
         .unwrap();
-        let n = pov_matrix_numbers(&mirror_matrix(t.to_world()));
+        let n = pov_matrix_numbers(&mirror_matrix(&t.to_world()));
         for p in [DVec3::ZERO, DVec3::X, DVec3::new(0.3, -0.7, 1.9)] {
             let ours = mirror_point(t.to_world().transform_point3(p));
             let pov = pov_apply(&n, mirror_point(p));

@@ -79,6 +79,7 @@ const CHECKS: &[(&str, Check)] = &[
     ("split: tasks", split_tasks),
     ("bench, study: runs", runs),
     ("bench: split size", split_size),
+    ("bench: big scene", big_spheres),
     ("output: the scene itself", the_scene_itself),
     ("output: folder", folder),
     ("output: read-only file", read_only),
@@ -489,6 +490,26 @@ fn split_size(dir: &Path, error: &str) -> Result<(), String> {
             1,
             "the folder gone does not exist",
             &format!("--split-size {size}"),
+        )?;
+    }
+    Ok(())
+}
+
+fn big_spheres(dir: &Path, error: &str) -> Result<(), String> {
+    for n in ["4000001", "-1", "a million"] {
+        let o = run(dir, &["bench", "--big-spheres", n]);
+        refused(&o, 2, error, &format!("--big-spheres {n}"))?;
+    }
+    for n in ["0", "4000000"] {
+        let o = run(
+            dir,
+            &["bench", "--big-spheres", n, "--csv", "gone/b.csv", "-q"],
+        );
+        refused(
+            &o,
+            1,
+            "the folder gone does not exist",
+            &format!("--big-spheres {n}"),
         )?;
     }
     Ok(())

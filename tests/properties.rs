@@ -94,7 +94,7 @@ proptest! {
     #[test]
     fn transform_times_inverse_is_identity(steps in prop::collection::vec(step(), 0..6)) {
         let t = Transform::from_steps(steps).unwrap();
-        let identity = *t.to_world() * *t.to_object();
+        let identity = t.to_world() * t.to_object();
         let scale = t.to_world().matrix3.to_cols_array().iter().fold(1.0f64, |m, v| m.max(v.abs()))
             * t.to_object().matrix3.to_cols_array().iter().fold(1.0f64, |m, v| m.max(v.abs()));
         for p in [DVec3::ZERO, DVec3::X, DVec3::new(-3.0, 2.0, 7.0)] {

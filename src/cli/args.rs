@@ -35,7 +35,7 @@ Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
        rayoflight sheet -out sheet.png [--columns N] IMAGE…
        rayoflight export-pov scene.xml [-out scene.pov]
        rayoflight plan scene.xml
-       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--split-size PIXELS]
+       rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] [--split-size PIXELS] [--big-spheres N]
                         [--quiet]
        rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]
        rayoflight new scene.xml
@@ -583,6 +583,16 @@ struct BenchFlags {
         allow_negative_numbers = true
     )]
     split_size: u32,
+    /// Spheres in the big scene loaded, checked and prepared against
+    /// `xmllint --stream --noout` (0: skip that section).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1_000_000,
+        value_parser = big_spheres,
+        allow_negative_numbers = true
+    )]
+    big_spheres: usize,
 }
 
 #[derive(Args, Debug)]
@@ -635,6 +645,20 @@ fn split_size(text: &str) -> Result<u32, String> {
         .filter(|&n| n == 0 || (min..=max).contains(&n))
         .and_then(|n| u32::try_from(n).ok())
         .ok_or_else(|| format!("expects 0 (skip the section) or a side from {min} to {max} pixels"))
+}
+
+/// The bench's big scene: 0 (skipped), or up to four million spheres
+/// (about 930 MB of XML, under the 1 GiB a scene file may take).
+fn big_spheres(text: &str) -> Result<usize, String> {
+    text.parse::<usize>()
+        .ok()
+        .filter(|&n| n <= super::bench::MAX_BIG_SPHERES)
+        .ok_or_else(|| {
+            format!(
+                "expects 0 (skip the section) or a count up to {}",
+                super::bench::MAX_BIG_SPHERES
+            )
+        })
 }
 
 fn tasks(text: &str) -> Result<usize, String> {
@@ -836,6 +860,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             pov: !b.no_pov,
             quiet: b.quiet,
             split_size: b.split_size,
+            big_spheres: b.big_spheres,
         }),
         Some(Sub::Study(s)) => Command::Study(super::study::StudyArgs {
             out: s.out,

@@ -26,7 +26,13 @@ pub struct BenchArgs {
     pub quiet: bool,
     /// The side of the split-and-assemble render (0: skip that section).
     pub split_size: u32,
+    /// Spheres in the big scene (0: skip that section).
+    pub big_spheres: usize,
 }
+
+/// Most spheres the big-scene section takes (`--big-spheres`): about
+/// 930 MB of XML, under the 1 GiB a scene file may take.
+pub const MAX_BIG_SPHERES: usize = 4_000_000;
 
 /// The split section's scene (the bench's dearest) and its task count.
 const SPLIT_SCENE: &str = "mirrors";
@@ -107,11 +113,13 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     } else {
         0
     };
+    let big_steps = if args.big_spheres > 0 { 3 } else { 0 };
     steps.set_total(
         (sets.len()
             + (sets.len() - 1) * counts.len()
             + sizes.len()
             + 1
+            + big_steps
             + formats.len()
             + split_steps) as u64,
     );
@@ -254,6 +262,10 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             });
         }
         None => out("not measurable here (needs Linux /proc)\n")?,
+    }
+
+    if args.big_spheres > 0 {
+        big_section(args.big_spheres, args.threads, &mut step, &out, &mut rows)?;
     }
 
     out("\nEncoding a 4096x4096 render of the example (ms, and against PNG)\n")?;
@@ -490,16 +502,22 @@ fn split_section(
 }
 
 /// The peak resident memory (VmHWM) of `rayoflight assemble` on `parts`
-/// in a process of its own, read from /proc while it runs (Linux; `None`
-/// elsewhere). The peak only grows, so the last reading is the peak but
-/// for the process's last milliseconds.
+/// in a process of its own ([`process_peak`]).
 fn assemble_process_peak_mb(parts: &[PathBuf], out: &Path) -> Result<Option<f64>, String> {
+    let mut args = vec!["assemble".into(), "-out".into(), out.as_os_str().to_owned()];
+    args.extend(parts.iter().map(|p| p.as_os_str().to_owned()));
+    process_peak(&args).map(|(_, peak)| peak)
+}
+
+/// Runs this program with `args` in a process of its own: its wall time
+/// and its peak resident memory (VmHWM) in MB, read from /proc while it
+/// runs (Linux; `None` elsewhere). The peak only grows, so the last
+/// reading is the peak but for the process's last milliseconds.
+fn process_peak(args: &[std::ffi::OsString]) -> Result<(Duration, Option<f64>), String> {
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let start = Instant::now();
     let mut child = Command::new(exe)
-        .arg("assemble")
-        .arg("-out")
-        .arg(out)
-        .args(parts)
+        .args(args)
         .spawn()
         .map_err(|e| e.to_string())?;
     let status_file = format!("/proc/{}/status", child.id());
@@ -517,10 +535,153 @@ fn assemble_process_peak_mb(parts: &[PathBuf], out: &Path) -> Result<Option<f64>
         }
         std::thread::sleep(Duration::from_millis(2));
     };
+    let wall = start.elapsed();
     if !status.success() {
-        return Err("rayoflight assemble failed".to_owned());
+        let command = args
+            .first()
+            .map(|a| a.to_string_lossy())
+            .unwrap_or_default();
+        return Err(format!("rayoflight {command} failed"));
     }
-    Ok(peak_kb.map(|kb| kb / 1e3))
+    Ok((wall, peak_kb.map(|kb| kb / 1e3)))
+}
+
+/// The big scene: `n` spheres on a floor ([`bench::spheres_on_floor`],
+/// 64x48) written to a file, then loaded, checked and prepared as the
+/// command line does, against `xmllint --stream --noout` reading the same
+/// file (libxml2 checking it is well-formed and building nothing), the
+/// best of two runs each; and the command line's whole run in a process
+/// of its own, for its time and its peak memory against the file's size.
+fn big_section(
+    n: usize,
+    threads: usize,
+    step: &mut impl FnMut(&str),
+    out: &impl Fn(&str) -> Result<(), String>,
+    rows: &mut Vec<Row>,
+) -> Result<(), String> {
+    const RUNS: usize = 2;
+    let error = |e: &dyn std::fmt::Display| e.to_string();
+    let dir = tempfile::tempdir().map_err(|e| error(&e))?;
+    let path = dir.path().join(format!("spheres-{n}.xml"));
+    let size = {
+        let text = bench::spheres_on_floor(n, 64, 48);
+        std::fs::write(&path, &text).map_err(|e| error(&e))?;
+        text.len()
+    };
+    let size_mb = size as f64 / 1e6;
+    out(&format!(
+        "\nA big scene: {n} spheres, {size_mb:.0} MB of XML, loaded, checked and prepared \
+         against xmllint --stream --noout (best of {RUNS}); the command line at 64x48\n"
+    ))?;
+    let row = |scene: &str, median: Duration, peak_mb: Option<f64>| Row {
+        section: "big",
+        scene: format!("spheres-{n} {scene}"),
+        width: 64,
+        height: 48,
+        threads,
+        objects: n + 1,
+        median,
+        stats: RenderStats::default(),
+        pov: None,
+        peak_mb,
+        app: None,
+    };
+    let best = |times: Vec<Duration>| times.into_iter().min().unwrap_or_default();
+
+    step("big scene: xmllint");
+    let mut xmllint = Vec::new();
+    for _ in 0..RUNS {
+        let start = Instant::now();
+        let status = Command::new("xmllint")
+            .args(["--stream", "--noout"])
+            .arg(&path)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .status();
+        match status {
+            Ok(s) if s.success() => xmllint.push(start.elapsed()),
+            Ok(s) => return Err(format!("xmllint refused the big scene ({s})")),
+            // Not installed: the anchor is left out.
+            Err(_) => break,
+        }
+    }
+    let xmllint = (!xmllint.is_empty()).then(|| best(xmllint));
+    match xmllint {
+        Some(t) => {
+            out(&format!(
+                "{:<34} {:>9.0} ms\n",
+                "xmllint --stream --noout",
+                ms(t)
+            ))?;
+            rows.push(row("xmllint", t, None));
+        }
+        None => out(
+            "xmllint --stream --noout: not installed (apt-get install libxml2-utils), no anchor\n",
+        )?,
+    }
+
+    step("big scene: load and prepare");
+    let mut runs = Vec::new();
+    for _ in 0..RUNS {
+        let start = Instant::now();
+        let scene = scene::load(&path).map_err(|e| error(&e))?;
+        let loaded = start.elapsed();
+        let options = RenderRequest::default().options(&scene);
+        let start = Instant::now();
+        let prepared = rayoflight::render::prepare(&scene, &options);
+        runs.push((loaded, start.elapsed()));
+        drop(prepared);
+    }
+    let (load, prepare) = runs
+        .into_iter()
+        .min_by_key(|(l, p)| *l + *p)
+        .unwrap_or_default();
+    let total = load + prepare;
+    out(&format!("{:<34} {:>9.0} ms\n", "load and check", ms(load)))?;
+    out(&format!("{:<34} {:>9.0} ms\n", "prepare", ms(prepare)))?;
+    let against = xmllint
+        .map(|x| {
+            format!(
+                "  {:.2}x xmllint's time (goal: 1x)",
+                total.as_secs_f64() / x.as_secs_f64()
+            )
+        })
+        .unwrap_or_default();
+    out(&format!(
+        "{:<34} {:>9.0} ms{against}\n",
+        "load, check and prepare",
+        ms(total)
+    ))?;
+    rows.push(row("load", load, None));
+    rows.push(row("prepare", prepare, None));
+
+    step("big scene: the command line");
+    let image = dir.path().join("big.png");
+    let args: Vec<std::ffi::OsString> = vec![
+        path.into_os_string(),
+        "-out".into(),
+        image.into_os_string(),
+        "--no-gui".into(),
+        "--quiet".into(),
+        "--threads".into(),
+        threads.to_string().into(),
+    ];
+    let (wall, peak) = process_peak(&args)?;
+    let memory = peak
+        .map(|p| {
+            format!(
+                ", peak {p:.0} MB: {:.2}x the file (goal: 1.5x)",
+                p / size_mb
+            )
+        })
+        .unwrap_or_else(|| ", peak memory not measurable here (needs Linux /proc)".to_owned());
+    out(&format!(
+        "{:<34} {:>9.0} ms{memory}\n",
+        "command line, whole run",
+        ms(wall)
+    ))?;
+    rows.push(row("command line", wall, peak));
+    Ok(())
 }
 
 /// The peak resident memory from now on (Linux: /proc/self/clear_refs

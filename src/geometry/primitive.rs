@@ -52,18 +52,21 @@ impl Primitive {
         match shape {
             Shape::Plane => Primitive::Plane {
                 point: m.translation,
-                normal: (*transform.normal_matrix() * DVec3::Z).normalize(),
+                normal: (transform.normal_matrix() * DVec3::Z).normalize(),
             },
             Shape::Sphere => match similarity_scale(&m.matrix3) {
                 Some(radius) => Primitive::Ball {
                     center: m.translation,
                     radius,
                 },
-                None => Primitive::Ellipsoid(Box::new(Ellipsoid {
-                    to_object: *transform.to_object(),
-                    normal: *transform.normal_matrix(),
-                    to_world: *m,
-                })),
+                None => {
+                    let matrices = transform.matrices();
+                    Primitive::Ellipsoid(Box::new(Ellipsoid {
+                        to_object: matrices.to_object,
+                        normal: matrices.normal,
+                        to_world: matrices.to_world,
+                    }))
+                }
             },
         }
     }
@@ -194,9 +197,9 @@ mod tests {
         ]);
         let ball = Primitive::new(Shape::Sphere, &t);
         let ellipsoid = Primitive::Ellipsoid(Box::new(Ellipsoid {
-            to_object: *t.to_object(),
-            normal: *t.normal_matrix(),
-            to_world: *t.to_world(),
+            to_object: t.to_object(),
+            normal: t.normal_matrix(),
+            to_world: t.to_world(),
         }));
         for k in 0..50 {
             let y = -1.5 + 0.06 * f64::from(k);

@@ -18,7 +18,7 @@ pub struct CameraRays {
 
 impl CameraRays {
     pub fn new(camera: &Camera) -> CameraRays {
-        let to_world = *camera.transform.to_world();
+        let to_world = camera.transform.to_world();
         CameraRays {
             width: camera.width,
             height: camera.height,

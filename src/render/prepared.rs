@@ -40,7 +40,7 @@ use crate::geometry::{
 };
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Scene, Shape};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, Terms, local_color};
 use glam::DVec3;
 use std::marker::PhantomData;
@@ -717,10 +717,34 @@ pub(super) fn max_local_color(scene: &Scene) -> Color {
     })
 }
 
+/// Puts `items` in `order`: `items[k]` becomes what was at `order[k]`
+/// (a permutation), in place, following each cycle of it once: no second
+/// list of a million primitives.
+fn permute<T>(items: &mut [T], order: &[u32]) {
+    let mut done = vec![false; items.len()];
+    for start in 0..items.len() {
+        let mut k = start;
+        while !done[k] {
+            done[k] = true;
+            let from = order[k] as usize;
+            if from == start {
+                break;
+            }
+            items.swap(k, from);
+            k = from;
+        }
+    }
+}
+
 /// Builds the prepared scene.
 pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
-    let mut bounded = Vec::new();
-    let mut bounded_objects = Vec::new();
+    let bounded_count = scene
+        .objects
+        .iter()
+        .filter(|o| o.shape != Shape::Plane)
+        .count();
+    let mut bounded = Vec::with_capacity(bounded_count);
+    let mut bounded_objects = Vec::with_capacity(bounded_count);
     let mut planes = Vec::new();
     let mut plane_objects = Vec::new();
     for (index, object) in scene.objects.iter().enumerate() {
@@ -734,22 +758,10 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         }
     }
     let bvh = (options.accelerate && bounded.len() >= BVH_THRESHOLD).then(|| {
-        let boxes: Vec<Aabb> = bounded
-            .iter()
-            .map(|p| p.bounds().unwrap_or(Aabb::EMPTY))
-            .collect();
-        let bvh = Bvh::build(&boxes);
+        let bvh = Bvh::build_from(bounded.iter().map(|p| p.bounds().unwrap_or(Aabb::EMPTY)));
         // Lay the primitives out in leaf order: leaves read them in a row.
-        bounded = bvh
-            .order()
-            .iter()
-            .map(|&i| bounded[i as usize].clone())
-            .collect();
-        bounded_objects = bvh
-            .order()
-            .iter()
-            .map(|&i| bounded_objects[i as usize])
-            .collect();
+        permute(&mut bounded, bvh.order());
+        permute(&mut bounded_objects, bvh.order());
         bvh
     });
 
@@ -1504,5 +1516,35 @@ impl Prepared {
     /// app's pick ray.
     pub fn pick(&self, x: f64, y: f64) -> Option<usize> {
         self.nearest_hit(&self.camera.ray(x, y)).map(|h| h.object)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::permute;
+
+    #[test]
+    fn permute_puts_each_item_where_the_order_says() {
+        // Fixed points, a 2-cycle and a 4-cycle, and every order of 5.
+        let order = [0u32, 2, 1, 6, 4, 3, 5, 7];
+        let mut items: Vec<u32> = (10..18).collect();
+        permute(&mut items, &order);
+        assert_eq!(items, order.map(|i| i + 10));
+        let mut orders = vec![vec![0u32, 1, 2, 3, 4]];
+        for _ in 0..119 {
+            // The next permutation in lexicographic order.
+            let mut o = orders.last().unwrap().clone();
+            let i = (0..4).rev().find(|&i| o[i] < o[i + 1]).unwrap();
+            let j = (i + 1..5).rev().find(|&j| o[j] > o[i]).unwrap();
+            o.swap(i, j);
+            o[i + 1..].reverse();
+            orders.push(o);
+        }
+        for order in orders {
+            let mut items = vec!['a', 'b', 'c', 'd', 'e'];
+            let want: Vec<char> = order.iter().map(|&i| items[i as usize]).collect();
+            permute(&mut items, &order);
+            assert_eq!(items, want, "{order:?}");
+        }
     }
 }

@@ -16,6 +16,12 @@
 //! refused on purpose (scene files declare no entities). A file libxml2
 //! finds not well-formed is refused, with its line and column.
 //!
+//! A big text (8 MiB or more, on a machine of two cores or more) is parsed
+//! in pieces at once, cut before the start tags of the root's children;
+//! the cuts are guesses that the pieces' own checks confirm, and any doubt
+//! or error parses it again in one ([`in_pieces`]), so what is accepted and
+//! every error are those of a parse in one.
+//!
 //! Nothing here panics on any input, and every count the file controls is
 //! checked against its limit before anything is allocated for it.
 
@@ -38,7 +44,8 @@ use super::grammar::{
 };
 use super::xml;
 use super::{Camera, Color, Illumination, Light, Material, Model, Object, Scene, Shape};
-use crate::math::{Transform, TransformError, TransformStep, Vec3};
+use crate::math::{Steps, Transform, TransformError, TransformStep, Vec3};
+use smallvec::SmallVec;
 
 /// Largest scene file [`load`] reads: 1 GiB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
@@ -96,6 +103,12 @@ impl LoadProgress {
         use std::sync::atomic::Ordering::Relaxed;
         self.total.store(total, Relaxed);
         self.done.store(done, Relaxed);
+    }
+
+    /// `bytes` more parsed (by any of the pieces parsed at once).
+    fn add(&self, bytes: usize) {
+        use std::sync::atomic::Ordering::Relaxed;
+        self.done.fetch_add(bytes as u64, Relaxed);
     }
 }
 
@@ -170,10 +183,7 @@ pub fn load_counting(
         )
     })?;
     let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    let mut parser = Parser::new(body, path);
-    parser.like = like;
-    parser.progress = progress;
-    let scene = parser.document()?;
+    let scene = parse_body(body, path, like, progress)?;
     if let Some(progress) = progress {
         let total = 2 * text.len() as u64;
         progress.set(total, total);
@@ -193,9 +203,172 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, LoadError> {
 /// new object, not a million (and compares equal to `like` at once).
 pub fn parse_sharing(text: &str, path: &Path, like: &[Arc<Object>]) -> Result<Scene, LoadError> {
     let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+    parse_body(body, path, like, None)
+}
+
+/// Parses `body`, the text after its byte-order mark: in pieces on every
+/// core ([`in_pieces`]) where it is big enough and cuts cleanly, else in
+/// one, which is also what gives any error.
+fn parse_body(
+    body: &str,
+    path: &Path,
+    like: &[Arc<Object>],
+    progress: Option<&LoadProgress>,
+) -> Result<Scene, LoadError> {
+    // One or two pieces per core, none under PIECE_BYTES.
+    let pieces = (2 * rayon::current_num_threads()).min(body.len() / PIECE_BYTES);
+    if rayon::current_num_threads() > 1
+        && pieces > 1
+        && let Some(scene) = in_pieces(body, path, like, progress, pieces)
+    {
+        return Ok(scene);
+    }
+    if let Some(progress) = progress {
+        let len = body.len() as u64;
+        progress.set(len, 2 * len);
+    }
     let mut parser = Parser::new(body, path);
     parser.like = like;
+    parser.progress = progress;
     parser.document()
+}
+
+/// Smallest text parsed in pieces, and smallest piece: below it one core
+/// is quick enough (a few milliseconds).
+const PIECE_BYTES: usize = 1 << 22;
+
+/// Parses `body` in `count` pieces (or fewer), cut just before the `<`
+/// of an element that starts a line inside the root: each piece is parsed
+/// on its own with every check of a parse in one (the first one from the
+/// file's start, through the root's start tag; the last one up to the
+/// root's end tag, after which only whitespace may follow), and the
+/// pieces' objects and lights joined in order.
+///
+/// A cut is a guess, made without reading what comes before it: it might
+/// fall inside a comment or an attribute value. The guess is checked: a
+/// piece that does not end exactly at the next one's start, with nothing
+/// left open, fails as an error, and so does anything the pieces would
+/// only see whole (a second camera or model, one object or light over the
+/// limit). Any failure gives `None`, and the text is parsed again in one
+/// piece, which gives the error of a parse in one, at its line and column:
+/// what is accepted, and what it makes, is what a parse in one accepts and
+/// makes.
+fn in_pieces(
+    body: &str,
+    path: &Path,
+    like: &[Arc<Object>],
+    progress: Option<&LoadProgress>,
+    count: usize,
+) -> Option<Scene> {
+    use rayon::prelude::*;
+    let end = root_end(body)?;
+    let mut cuts = vec![0];
+    for k in 1..count {
+        let from = (end / count * k).max(cuts.last().copied().unwrap_or(0) + 1);
+        if let Some(cut) = cut_after(body, from, end) {
+            cuts.push(cut);
+        }
+    }
+    cuts.push(end);
+    if let Some(progress) = progress {
+        let len = body.len() as u64;
+        progress.set(len, 2 * len);
+    }
+    let pieces: Vec<Gathered> = cuts
+        .par_windows(2)
+        .enumerate()
+        .map(|(k, cut)| {
+            let text = body.get(cut[0]..cut[1])?;
+            let mut parser = Parser::new(text, path);
+            parser.whole = body;
+            parser.progress = progress;
+            parser.piece(k == 0).ok()
+        })
+        .collect::<Option<_>>()?;
+
+    let objects = pieces.iter().map(|p| p.objects.len()).sum::<usize>();
+    let lights = pieces.iter().map(|p| p.lights.len()).sum::<usize>();
+    if objects > MAX_OBJECTS || lights > MAX_LIGHTS {
+        return None;
+    }
+    let mut scene = Gathered {
+        objects: Vec::with_capacity(objects),
+        lights: Vec::with_capacity(lights),
+        ..Gathered::default()
+    };
+    for piece in pieces {
+        scene.objects.extend(piece.objects);
+        scene.lights.extend(piece.lights);
+        for (one, found) in [
+            (scene.camera.is_some(), piece.camera.is_some()),
+            (scene.model.is_some(), piece.model.is_some()),
+        ] {
+            if one && found {
+                return None;
+            }
+        }
+        scene.camera = scene.camera.or(piece.camera);
+        scene.model = scene.model.or(piece.model);
+    }
+    // Shared as a parse in one shares them.
+    for (object, same) in scene.objects.iter_mut().zip(like) {
+        if **object == **same {
+            *object = Arc::clone(same);
+        }
+    }
+    scene.finish(path).ok()
+}
+
+/// Is XML whitespace.
+fn is_space(b: u8) -> bool {
+    matches!(b, b' ' | b'\t' | b'\r' | b'\n')
+}
+
+/// The offset of the `<` of `</scene>` where it ends the file (followed by
+/// nothing but whitespace); `None` where anything else follows the root.
+fn root_end(body: &str) -> Option<usize> {
+    let end = body.rfind("</scene")?;
+    let rest = body.get(end + "</scene".len()..)?.as_bytes();
+    let rest = rest.trim_ascii_start();
+    let after = rest.strip_prefix(b">")?;
+    after.iter().all(|&b| is_space(b)).then_some(end)
+}
+
+/// The first offset at or after `from` and before `end` of the `<` of a
+/// start tag of the root's children (`<sphere`, `<light`, …), which the
+/// grammar allows nowhere else: outside a comment, a processing
+/// instruction or a CDATA section it is a cut between two of them. One
+/// after a `<!--` with no `-->` since, in the 4 KiB before it, is passed
+/// over (an object commented out).
+fn cut_after(body: &str, from: usize, end: usize) -> Option<usize> {
+    let in_comment = |tag: usize| {
+        let before = body
+            .as_bytes()
+            .get(tag.saturating_sub(4096)..tag)
+            .unwrap_or_default();
+        let last = |what: &[u8]| before.windows(what.len()).rposition(|w| w == what);
+        match (last(b"<!--"), last(b"-->")) {
+            (Some(open), Some(close)) => open > close,
+            (open, _) => open.is_some(),
+        }
+    };
+    let bytes = body.as_bytes().get(..end)?;
+    let mut at = from;
+    loop {
+        let tag = at + bytes.get(at..)?.iter().position(|&b| b == b'<')?;
+        let name = bytes.get(tag + 1..).unwrap_or_default();
+        let child = SCENE_CHILDREN.iter().any(|child| {
+            name.strip_prefix(child.as_bytes()).is_some_and(|after| {
+                after
+                    .first()
+                    .is_some_and(|&b| is_space(b) || b == b'/' || b == b'>')
+            })
+        });
+        if child && !in_comment(tag) {
+            return Some(tag);
+        }
+        at = tag + 1;
+    }
 }
 
 /// Why a number attribute was refused.
@@ -268,7 +441,8 @@ struct Attrs<'b> {
     element: &'static str,
     /// Byte offset of the element's `<`.
     at: usize,
-    list: Vec<Attr<'b>>,
+    /// In place: no element of the format has more than four.
+    list: SmallVec<[Attr<'b>; 4]>,
 }
 
 impl<'b> Attrs<'b> {
@@ -286,8 +460,27 @@ struct Gathered {
     model: Option<Model>,
 }
 
+impl Gathered {
+    /// The scene, once it is known to have a camera.
+    fn finish(self, path: &Path) -> Result<Scene, LoadError> {
+        let Some(camera) = self.camera else {
+            return Err(LoadError::new(path, None, LoadErrorKind::MissingCamera));
+        };
+        Ok(Scene {
+            objects: self.objects,
+            lights: self.lights,
+            camera,
+            model: self.model.unwrap_or_default(),
+        })
+    }
+}
+
 struct Parser<'a> {
+    /// What is parsed: the file's text, or a piece of it ([`in_pieces`]).
     text: &'a str,
+    /// The whole text (after its byte-order mark), for what is checked of
+    /// the file as a whole.
+    whole: &'a str,
     path: &'a Path,
     reader: Reader<&'a [u8]>,
     /// No event seen yet (an XML declaration must come first).
@@ -305,6 +498,8 @@ struct Parser<'a> {
     progress: Option<&'a LoadProgress>,
     /// Events read, to update `progress` every so many.
     events: u32,
+    /// How far into `text` `progress` has been told.
+    reported: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -317,6 +512,7 @@ impl<'a> Parser<'a> {
         config.trim_text(false);
         Parser {
             text,
+            whole: text,
             path,
             reader,
             at_start: true,
@@ -327,6 +523,7 @@ impl<'a> Parser<'a> {
             like: &[],
             progress: None,
             events: 0,
+            reported: 0,
         }
     }
 
@@ -374,8 +571,8 @@ impl<'a> Parser<'a> {
             if self.events.is_multiple_of(4096)
                 && let Some(progress) = self.progress
             {
-                let len = self.text.len() as u64;
-                progress.set(len + before as u64, 2 * len);
+                progress.add(before.saturating_sub(self.reported));
+                self.reported = before;
             }
             let event = match self.reader.read_event() {
                 Ok(event) => event,
@@ -449,7 +646,7 @@ impl<'a> Parser<'a> {
                                 .to_owned(),
                         ));
                     }
-                    let ascii = || self.text.is_ascii();
+                    let ascii = || self.whole.is_ascii();
                     inside(5, 2, &|s| xml::declaration(s, &ascii))?;
                 }
                 Event::DocType(_) => return Err(self.error_at(before, LoadErrorKind::Doctype)),
@@ -516,21 +713,7 @@ impl<'a> Parser<'a> {
         loop {
             match self.next()? {
                 Node::Open(child) => {
-                    let name = child.start.name();
-                    let found = allowed
-                        .iter()
-                        .enumerate()
-                        .find(|(_, a)| a.as_bytes() == name.as_ref());
-                    let Some((index, &known)) = found else {
-                        return Err(self.error_at(
-                            child.at,
-                            LoadErrorKind::UnknownElement {
-                                element: String::from_utf8_lossy(name.as_ref()).into_owned(),
-                                parent,
-                                allowed,
-                            },
-                        ));
-                    };
+                    let (index, known) = self.known_child(&child, parent, allowed)?;
                     let bit = 1u64
                         .checked_shl(u32::try_from(index).unwrap_or(u32::MAX))
                         .unwrap_or(0);
@@ -554,6 +737,31 @@ impl<'a> Parser<'a> {
         }
     }
 
+    /// The name of `child` as one of `allowed`, with its index there.
+    fn known_child(
+        &self,
+        child: &Elem<'a>,
+        parent: &'static str,
+        allowed: &'static [&'static str],
+    ) -> Result<(usize, &'static str), LoadError> {
+        let name = child.start.name();
+        let found = allowed
+            .iter()
+            .enumerate()
+            .find(|(_, a)| a.as_bytes() == name.as_ref());
+        match found {
+            Some((index, &known)) => Ok((index, known)),
+            None => Err(self.error_at(
+                child.at,
+                LoadErrorKind::UnknownElement {
+                    element: String::from_utf8_lossy(name.as_ref()).into_owned(),
+                    parent,
+                    allowed,
+                },
+            )),
+        }
+    }
+
     /// A leaf element: no children allowed.
     fn leaf(&mut self, e: &Elem<'a>, name: &'static str) -> Result<(), LoadError> {
         self.children(e, name, NONE, false, |_, _, _| Ok(()))
@@ -569,7 +777,7 @@ impl<'a> Parser<'a> {
         element: &'static str,
         allowed: &'static [&'static str],
     ) -> Result<Attrs<'b>, LoadError> {
-        let mut list: Vec<Attr<'b>> = Vec::new();
+        let mut list: SmallVec<[Attr<'b>; 4]> = SmallVec::new();
         let mut iter = e.start.attributes();
         iter.with_checks(false);
         for attr in iter {
@@ -777,6 +985,18 @@ impl<'a> Parser<'a> {
     // ----- the grammar -----
 
     fn document(mut self) -> Result<Scene, LoadError> {
+        let root = self.root()?;
+        let mut scene = Gathered::default();
+        self.children(&root, "scene", SCENE_CHILDREN, false, |p, e, name| {
+            p.scene_child(e, name, &mut scene)
+        })?;
+        self.epilogue()?;
+        scene.finish(self.path)
+    }
+
+    /// The `<scene>` start tag and its attributes, after at most what may
+    /// come before it.
+    fn root(&mut self) -> Result<Elem<'a>, LoadError> {
         // One byte-order mark is skipped before the parser sees the text
         // (and quick-xml would skip another).
         if self.text.starts_with('\u{feff}') {
@@ -802,27 +1022,28 @@ impl<'a> Parser<'a> {
             ));
         }
         // A scene may name its schema, as editors write it, and nothing else.
-        let attrs = self.attrs(&root, "scene", SCENE_ATTRS)?;
-        match (
-            attrs.get("xmlns:xsi"),
-            attrs.get("xsi:noNamespaceSchemaLocation"),
-        ) {
-            (Some(ns), _) if ns.value != XSI_NAMESPACE => {
-                let value = Some(Box::from(ns.value.as_ref()));
-                return Err(self.error_at(ns.at, LoadErrorKind::SchemaNamespace { value }));
+        {
+            let attrs = self.attrs(&root, "scene", SCENE_ATTRS)?;
+            match (
+                attrs.get("xmlns:xsi"),
+                attrs.get("xsi:noNamespaceSchemaLocation"),
+            ) {
+                (Some(ns), _) if ns.value != XSI_NAMESPACE => {
+                    let value = Some(Box::from(ns.value.as_ref()));
+                    return Err(self.error_at(ns.at, LoadErrorKind::SchemaNamespace { value }));
+                }
+                (None, Some(location)) => {
+                    let kind = LoadErrorKind::SchemaNamespace { value: None };
+                    return Err(self.error_at(location.at, kind));
+                }
+                _ => {}
             }
-            (None, Some(location)) => {
-                let kind = LoadErrorKind::SchemaNamespace { value: None };
-                return Err(self.error_at(location.at, kind));
-            }
-            _ => {}
         }
+        Ok(root)
+    }
 
-        let mut scene = Gathered::default();
-        self.children(&root, "scene", SCENE_CHILDREN, false, |p, e, name| {
-            p.scene_child(e, name, &mut scene)
-        })?;
-
+    /// After `</scene>`: nothing but what may follow the root.
+    fn epilogue(&mut self) -> Result<(), LoadError> {
         self.after_root = true;
         match self.next()? {
             Node::Open(e) => {
@@ -830,27 +1051,40 @@ impl<'a> Parser<'a> {
                     "element <{}>",
                     String::from_utf8_lossy(e.start.name().as_ref())
                 );
-                return Err(self.error_at(e.at, LoadErrorKind::ContentAfterRoot { what }));
+                Err(self.error_at(e.at, LoadErrorKind::ContentAfterRoot { what }))
             }
-            Node::Close(at) => {
-                return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
-            }
-            Node::Eof => {}
+            Node::Close(at) => Err(self.xml_at(at, "end tag without a start tag".to_owned())),
+            Node::Eof => Ok(()),
         }
+    }
 
-        let Some(camera) = scene.camera else {
-            return Err(LoadError::new(
-                self.path,
-                None,
-                LoadErrorKind::MissingCamera,
-            ));
-        };
-        Ok(Scene {
-            objects: scene.objects,
-            lights: scene.lights,
-            camera,
-            model: scene.model.unwrap_or_default(),
-        })
+    /// One piece of the scene's children ([`in_pieces`]): its whole text,
+    /// from the root's start tag for the first piece, from inside the root
+    /// for the others. An end tag of the root, or anything left open at
+    /// the piece's end, is an error (and the text is parsed in one piece).
+    fn piece(mut self, first: bool) -> Result<Gathered, LoadError> {
+        if first {
+            let root = self.root()?;
+            if root.empty {
+                return Err(self.xml_at(root.at, "an empty root in a piece".to_owned()));
+            }
+        } else {
+            self.at_start = false;
+            self.depth = 1;
+        }
+        let mut scene = Gathered::default();
+        loop {
+            match self.next()? {
+                Node::Open(child) => {
+                    let (_, name) = self.known_child(&child, "scene", SCENE_CHILDREN)?;
+                    self.scene_child(&child, name, &mut scene)?;
+                }
+                Node::Close(at) => {
+                    return Err(self.xml_at(at, "the root ends inside a piece".to_owned()));
+                }
+                Node::Eof => return Ok(scene),
+            }
+        }
     }
 
     fn scene_child(
@@ -1044,9 +1278,9 @@ impl<'a> Parser<'a> {
 
     fn transformation(&mut self, e: &Elem<'a>) -> Result<Transform, LoadError> {
         self.attrs(e, "transformation", NONE)?;
-        let mut steps = Vec::new();
+        let mut steps = Steps::new();
         // Each step's `<` and name, for an overflow's message.
-        let mut places = Vec::new();
+        let mut places: SmallVec<[(usize, &'static str); 2]> = SmallVec::new();
         self.children(
             e,
             "transformation",
@@ -1144,6 +1378,185 @@ fn reference_message(err: &quick_xml::Error) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The parse in one piece, which gives every error.
+    fn in_one(text: &str) -> Result<Scene, LoadError> {
+        Parser::new(text, Path::new("t.xml")).document()
+    }
+
+    /// A scene with every kind of element, spread over lines and nested
+    /// as people write them, with comments and processing instructions
+    /// between the root's children.
+    fn varied(n: usize) -> String {
+        let mut text =
+            String::from("<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n<!-- a scene -->\n<scene>\n");
+        for i in 0..n {
+            let x = i as f64 * 0.37 - 11.0;
+            text.push_str(&match i % 7 {
+                0 => format!(
+                    "  <sphere>\n    <color red=\"{}\" green=\"0.5\" blue=\"1e-3\"/>\n    \
+                     <material ka=\"0.1\" m=\"{i}\"/>\n    <transformation>\n      \
+                     <scale factor=\"0.25\"/>\n      <translate x=\"{x}\" z=\"7\"/>\n    \
+                     </transformation>\n  </sphere>\n",
+                    (i % 10) as f64 / 10.0
+                ),
+                1 => format!(
+                    "  <plane><transformation><rotate-x angle=\"{x}\"/><rotate-y angle=\"0.1\"/>\
+                     <rotate-z angle=\"-0.2\"/><translate y=\"{i}\"/></transformation></plane>"
+                ),
+                2 => format!("\t<light x=\"{x}\" y=\"-1\" z=\"-2\"><color red=\"0.5\" green=\"0.5\" blue=\"0.5\"/></light>\n"),
+                3 => format!("  <!-- object {i}: <sphere> -->\n  <?pi {i}?>\n"),
+                4 => format!(
+                    "  <sphere><transformation><scale x=\"1\" y=\"{}\" z=\"3\"/></transformation></sphere>\r\n",
+                    1.0 + i as f64
+                ),
+                5 => format!("  <light x=\"{i}\" y=\"0\" z=\"0\"/>  "),
+                _ => "  <sphere/>\n".to_owned(),
+            });
+            if i == n / 2 {
+                text.push_str(
+                    "  <camera width=\"8\" height=\"6\" eyeDistance=\"2\">\n    \
+                     <transformation><translate z=\"-3\"/></transformation>\n  </camera>\n  \
+                     <model type=\"phong\" depth=\"3\"/>\n",
+                );
+            }
+        }
+        text.push_str("</scene>\n\n");
+        text
+    }
+
+    /// A parse in pieces either makes what the parse in one makes, to the
+    /// bit, or gives way to it.
+    fn agrees(text: &str, count: usize) -> Result<bool, String> {
+        let one = in_one(text);
+        match in_pieces(text, Path::new("t.xml"), &[], None, count) {
+            None => Ok(false),
+            Some(pieces) => match one {
+                Ok(one) if format!("{one:?}") == format!("{pieces:?}") => Ok(true),
+                Ok(_) => Err(format!("{count} pieces made another scene")),
+                Err(e) => Err(format!("{count} pieces accepted what one refuses: {e}")),
+            },
+        }
+    }
+
+    #[test]
+    fn pieces_make_what_one_piece_makes() {
+        let text = varied(700);
+        for count in [2, 3, 7, 16, 64, 500] {
+            assert_eq!(agrees(&text, count), Ok(true), "{count} pieces");
+        }
+        // The objects come back shared as a parse in one shares them.
+        let like = in_one(&text).unwrap().objects;
+        let again = in_pieces(&text, Path::new("t.xml"), &like, None, 5).unwrap();
+        assert!(
+            again
+                .objects
+                .iter()
+                .zip(&like)
+                .all(|(a, b)| Arc::ptr_eq(a, b))
+        );
+    }
+
+    #[test]
+    fn a_text_the_pieces_misread_is_parsed_in_one() {
+        // Bits of markup put where a cut may fall: whatever the pieces
+        // then make must be what one piece makes, and anything refused is
+        // refused by the pieces too.
+        let base = varied(120);
+        let inserts = [
+            "</scene>",
+            "<camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>",
+            "<model type=\"lambert\"/>",
+            "<!--",
+            "-->",
+            "<!-- <sphere/> -->",
+            "<sphere>",
+            "</sphere>",
+            "<![CDATA[",
+            "]]>",
+            "<?xml version=\"1.0\"?>",
+            "<?",
+            "x",
+            "&amp;",
+            "\"",
+            "<scene>",
+            "<light x=\"1\" y=\"2\" z=\"3\"/>",
+            "\u{feff}",
+        ];
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let mut next = move |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        let mut clean = 0;
+        for round in 0..400 {
+            let mut text = base.clone();
+            for _ in 0..1 + round % 3 {
+                let mut at = next(text.len());
+                while !text.is_char_boundary(at) {
+                    at -= 1;
+                }
+                if round % 5 == 4 {
+                    // A cut out instead.
+                    let mut to = (at + next(40)).min(text.len());
+                    while !text.is_char_boundary(to) {
+                        to -= 1;
+                    }
+                    text.replace_range(at..to, "");
+                } else {
+                    text.insert_str(at, inserts[next(inserts.len())]);
+                }
+            }
+            for count in [2, 5, 13] {
+                match agrees(&text, count) {
+                    Ok(true) => clean += 1,
+                    Ok(false) => {}
+                    Err(e) => panic!("round {round}: {e}\n{text}"),
+                }
+            }
+        }
+        // Most changes fall inside a piece that then fails, or leave the
+        // scene valid; some of the valid ones are cut cleanly.
+        assert!(clean > 0, "no mutated text was parsed in pieces");
+    }
+
+    #[test]
+    fn cuts_fall_before_the_roots_children_only() {
+        let text = "<scene> <sphere/><spheres/><light\tx=\"1\"/> <!-- <plane> --></scene>";
+        let end = root_end(text).unwrap();
+        assert_eq!(&text[end..], "</scene>");
+        assert_eq!(cut_after(text, 1, end), Some(8));
+        assert_eq!(cut_after(text, 9, end), Some(27));
+        // Inside a comment: passed over.
+        assert_eq!(cut_after(text, 28, end), None);
+        let text = "<scene><!-- --> <plane/></scene>";
+        assert_eq!(cut_after(text, 1, root_end(text).unwrap()), Some(16));
+        assert_eq!(root_end("<scene/>"), None);
+        assert_eq!(root_end("<scene></scene> <!-- -->"), None);
+        assert_eq!(root_end("<scene></scene >\n\t"), Some(7));
+    }
+
+    #[test]
+    fn a_big_text_is_read_in_pieces_with_the_errors_of_one() {
+        // Big enough for pieces on a machine of two cores or more.
+        let text = varied(100_000);
+        assert!(text.len() > 2 * PIECE_BYTES, "{}", text.len());
+        let path = Path::new("t.xml");
+        assert_eq!(
+            format!("{:?}", parse(&text, path)),
+            format!("{:?}", in_one(&text))
+        );
+        // An error three quarters in: the same message, line and column.
+        let at = text.len() * 3 / 4;
+        let at = at + text[at..].find("<light").unwrap();
+        let mut bad = text.clone();
+        bad.insert_str(at, "<light x=\"1\" y=\"nope\" z=\"0\"/>");
+        let error = parse(&bad, path).unwrap_err().to_string();
+        assert_eq!(error, in_one(&bad).unwrap_err().to_string());
+        assert!(error.contains("nope"), "{error}");
+    }
 
     fn parse_with_limits(text: &str, objects: usize, lights: usize) -> Result<Scene, LoadError> {
         let mut parser = Parser::new(text, Path::new("t.xml"));
