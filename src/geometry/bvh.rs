@@ -106,6 +106,12 @@ const BINS: usize = 16;
 /// Below this depth splits follow the SAH; deeper, the median, which keeps
 /// the depth (and the traversal stack) bounded whatever the input.
 const SAH_DEPTH: usize = 48;
+/// A big build splits on the cores ([`rayon::join`]) this many times along
+/// each path (16 subtrees at most, each node copied as many times into
+/// its parent's list), never into halves of fewer items than
+/// `PARALLEL_ITEMS`.
+const FORKS: usize = 4;
+const PARALLEL_ITEMS: usize = 1 << 14;
 /// Traversal stack size: at most one pending node per level.
 const STACK: usize = 128;
 
@@ -118,15 +124,23 @@ struct Item {
 impl Bvh {
     /// Builds the hierarchy over `boxes` (primitive i has box i).
     pub fn build(boxes: &[Aabb]) -> Bvh {
-        Bvh::build_from(boxes.iter().copied())
+        Bvh::build_with(boxes.len(), |i| boxes[i])
     }
 
-    /// [`Bvh::build`] over boxes made as they are read, with no list of
-    /// them beside the build's own (a million primitives: 48 MB less).
-    pub fn build_from(boxes: impl ExactSizeIterator<Item = Aabb>) -> Bvh {
-        let mut items: Vec<Item> = boxes
-            .enumerate()
-            .map(|(i, ref b)| {
+    /// [`Bvh::build`] over `count` boxes made as they are asked for, on
+    /// every core, `bounds(i)` the box of primitive `i`: no list of them
+    /// beside the build's own (a million primitives: 48 MB less).
+    pub fn build_with(count: usize, bounds: impl Fn(usize) -> Aabb + Sync) -> Bvh {
+        Bvh::build_split(count, bounds, FORKS)
+    }
+
+    /// [`Bvh::build_with`], forking `forks` times at most ([`FORKS`]).
+    fn build_split(count: usize, bounds: impl Fn(usize) -> Aabb + Sync, forks: usize) -> Bvh {
+        use rayon::prelude::*;
+        let mut items: Vec<Item> = (0..count)
+            .into_par_iter()
+            .map(|i| {
+                let b = &bounds(i);
                 // Pad by a relative hair so rounding in the slab test never
                 // loses a grazing hit on the primitive's own extent.
                 let pad = 1e-9
@@ -151,7 +165,7 @@ impl Bvh {
             first: 0,
             count: 0,
         });
-        build_node(&mut nodes, 0, &mut items, 0, 0);
+        build_node(&mut nodes, 0, &mut items, 0, 0, forks);
         Bvh {
             nodes,
             order: items.iter().map(|i| i.index).collect(),
@@ -298,7 +312,16 @@ impl Bvh {
     }
 }
 
-fn build_node(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usize, depth: usize) {
+/// Builds the subtree of `items` at `nodes[at]`; `forks` more times along
+/// each path down, a split of two big halves builds them on two cores.
+fn build_node(
+    nodes: &mut Vec<Node>,
+    at: usize,
+    items: &mut [Item],
+    offset: usize,
+    depth: usize,
+    forks: usize,
+) {
     let bounds = items.iter().fold(Aabb::EMPTY, |b, i| b.union(&i.bounds));
     let leaf = Node {
         bounds,
@@ -353,8 +376,33 @@ fn build_node(nodes: &mut Vec<Node>, at: usize, items: &mut [Item], offset: usiz
         count: 0,
     };
     let (a, b) = items.split_at_mut(mid);
-    build_node(nodes, left, a, offset, depth + 1);
-    build_node(nodes, left + 1, b, offset + mid, depth + 1);
+    if forks > 0 && a.len().min(b.len()) >= PARALLEL_ITEMS {
+        // The two halves on two cores, each in a list of its own (its
+        // root first), appended after: the list one core would write.
+        let subtree = |items: &mut [Item], offset| {
+            let mut own = vec![placeholder];
+            build_node(&mut own, 0, items, offset, depth + 1, forks - 1);
+            own
+        };
+        let (left_tree, right_tree) =
+            rayon::join(|| subtree(a, offset), || subtree(b, offset + mid));
+        for (slot, tree) in [(left, left_tree), (left + 1, right_tree)] {
+            // Node k ≥ 1 of `tree` goes to `base + k - 1`.
+            let base = nodes.len();
+            let moved = |node: Node| match node.count {
+                0 => Node {
+                    first: (base + node.first as usize - 1) as u32,
+                    ..node
+                },
+                _ => node,
+            };
+            nodes[slot] = moved(tree[0]);
+            nodes.extend(tree[1..].iter().map(|&node| moved(node)));
+        }
+        return;
+    }
+    build_node(nodes, left, a, offset, depth + 1, forks);
+    build_node(nodes, left + 1, b, offset + mid, depth + 1, forks);
 }
 
 enum SahSplit {
@@ -433,6 +481,37 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    #[test]
+    fn a_build_on_the_cores_makes_the_tree_of_one_core() {
+        // Scattered boxes of varied sizes, some equal, many of them.
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let boxes: Vec<Aabb> = (0..200_000)
+            .map(|i| {
+                let c = DVec3::new(next() * 100.0, next() * 10.0, (i % 1000) as f64);
+                let r = 0.01 + next();
+                Aabb {
+                    min: c - r,
+                    max: c + r,
+                }
+            })
+            .collect();
+        let one = Bvh::build_split(boxes.len(), |i| boxes[i], 0);
+        let many = Bvh::build_split(boxes.len(), |i| boxes[i], FORKS);
+        // Each subtree's list is in the order one core writes it: the
+        // whole list is the same, node for node.
+        assert!(one.order == many.order, "primitives in another order");
+        assert!(
+            format!("{:?}", one.nodes) == format!("{:?}", many.nodes),
+            "another tree"
+        );
     }
 
     /// A search by "hit" functions, one per lane: the nearest t, ties to

@@ -43,6 +43,7 @@ use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
 use crate::scene::{Camera, Scene, Shape};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, Terms, local_color};
 use glam::DVec3;
+use rayon::prelude::*;
 use std::marker::PhantomData;
 use std::ops::ControlFlow;
 use std::sync::Arc;
@@ -738,37 +739,45 @@ fn permute<T>(items: &mut [T], order: &[u32]) {
 
 /// Builds the prepared scene.
 pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
-    let bounded_count = scene
-        .objects
-        .iter()
-        .filter(|o| o.shape != Shape::Plane)
-        .count();
-    let mut bounded = Vec::with_capacity(bounded_count);
-    let mut bounded_objects = Vec::with_capacity(bounded_count);
+    // Spheres are bounded, planes are not.
+    let mut bounded_objects = Vec::with_capacity(
+        scene
+            .objects
+            .iter()
+            .filter(|o| o.shape == Shape::Sphere)
+            .count(),
+    );
     let mut planes = Vec::new();
     let mut plane_objects = Vec::new();
     for (index, object) in scene.objects.iter().enumerate() {
-        let primitive = Primitive::new(object.shape, &object.transform);
-        if primitive.bounds().is_some() {
-            bounded.push(primitive);
-            bounded_objects.push(index);
-        } else {
-            planes.push(primitive);
-            plane_objects.push(index);
+        match object.shape {
+            Shape::Sphere => bounded_objects.push(index),
+            Shape::Plane => {
+                planes.push(Primitive::new(object.shape, &object.transform));
+                plane_objects.push(index);
+            }
         }
     }
-    let bvh = (options.accelerate && bounded.len() >= BVH_THRESHOLD).then(|| {
-        let bvh = Bvh::build_from(bounded.iter().map(|p| p.bounds().unwrap_or(Aabb::EMPTY)));
-        // Lay the primitives out in leaf order: leaves read them in a row.
-        permute(&mut bounded, bvh.order());
+    let sphere = |&index: &usize| {
+        let object = &scene.objects[index];
+        Primitive::new(object.shape, &object.transform)
+    };
+    let bvh = (options.accelerate && bounded_objects.len() >= BVH_THRESHOLD).then(|| {
+        let bvh = Bvh::build_with(bounded_objects.len(), |k| {
+            sphere(&bounded_objects[k]).bounds().unwrap_or(Aabb::EMPTY)
+        });
+        // The primitives are made in leaf order, after the hierarchy
+        // (leaves read them in a row): the build's own list and theirs
+        // are never held at once.
         permute(&mut bounded_objects, bvh.order());
         bvh
     });
+    let bounded: Vec<Primitive> = bounded_objects.par_iter().map(sphere).collect();
 
     let illumination = scene.model.illumination;
     let surfaces: Vec<Surface> = scene
         .objects
-        .iter()
+        .par_iter()
         .map(|o| Surface {
             color: o.color,
             material: o.material,

@@ -63,8 +63,114 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// refused. A directory, a special file (FIFO, device, socket: refused
 /// before opening it) or an unreadable file gives an error without a
 /// position; one that is not UTF-8 is refused at its first bad byte.
+///
+/// A big file is read and parsed a piece at a time ([`streamed`]): its
+/// text is never in memory whole, only the scene it makes.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
+    if rayon::current_num_threads() > 1
+        && let Some(scene) = streamed(path)
+    {
+        return Ok(scene);
+    }
     load_with_text(path).map(|(_, scene)| scene)
+}
+
+/// Pieces of a streamed text being parsed at once, per core: enough to
+/// keep every core busy while the next is read.
+const STREAM_AHEAD: usize = 2;
+
+/// A streamed text's pieces ([`streamed`]): small, so that the few held at
+/// once are little beside the scene, big enough that each is some
+/// thousands of objects.
+const STREAM_PIECE_BYTES: usize = 1 << 20;
+
+/// Reads the file at `path` a piece of about [`STREAM_PIECE_BYTES`] at a time,
+/// cut as [`in_pieces`] cuts a text, each piece parsed on the cores while
+/// the next is read, and at most [`STREAM_AHEAD`] per core held: the
+/// memory of a load is the scene's and a few pieces', not the file's.
+///
+/// As [`in_pieces`], `None` at the least doubt (and then the file is read
+/// whole and parsed in one, which gives any error): a file small enough to
+/// read at once, a call from a thread of the pool that parses the pieces
+/// (it would wait on itself), a read that fails, a text that is not UTF-8,
+/// a cut that does not fall between two of the root's children, a text
+/// that declares an ASCII encoding (checked of the whole text only).
+fn streamed(path: &Path) -> Option<Scene> {
+    let threads = rayon::current_num_threads();
+    if rayon::current_thread_index().is_some() {
+        return None;
+    }
+    let meta = fs::metadata(path).ok()?;
+    if !meta.is_file() || meta.len() < 2 * PIECE_BYTES as u64 || meta.len() > MAX_FILE_BYTES {
+        return None;
+    }
+    let mut file = fs::File::open(path).ok()?.take(MAX_FILE_BYTES + 1);
+    let (done, results) = std::sync::mpsc::channel();
+    let path: Arc<Path> = Arc::from(path);
+    let mut pieces: Vec<Option<Gathered>> = Vec::new();
+    let mut in_flight = 0;
+    let mut carry: Vec<u8> = Vec::new();
+    let mut total = 0u64;
+    let mut first = true;
+    loop {
+        let mut buf = std::mem::take(&mut carry);
+        let wanted = buf.len() + STREAM_PIECE_BYTES;
+        buf.reserve(STREAM_PIECE_BYTES);
+        let read = (&mut file)
+            .take((wanted - buf.len()) as u64)
+            .read_to_end(&mut buf)
+            .ok()?;
+        total += read as u64;
+        if total > MAX_FILE_BYTES {
+            return None;
+        }
+        let last = read == 0 || buf.len() < wanted;
+        let skip = if first && buf.starts_with("\u{feff}".as_bytes()) {
+            3
+        } else {
+            0
+        };
+        let end = if last {
+            root_end(std::str::from_utf8(&buf).ok()?)?
+        } else {
+            // The last cut in the piece's second half; none: read on.
+            match last_cut(&buf, skip.max(buf.len() / 2), buf.len()) {
+                Some(cut) => cut,
+                None => {
+                    carry = buf;
+                    continue;
+                }
+            }
+        };
+        carry = buf.get(end..)?.to_vec();
+        buf.truncate(end);
+        let k = pieces.len();
+        pieces.push(None);
+        let (done, path, is_first) = (done.clone(), Arc::clone(&path), first);
+        rayon::spawn(move || {
+            let gathered = std::str::from_utf8(buf.get(skip..).unwrap_or_default())
+                .ok()
+                .and_then(|text| {
+                    let mut parser = Parser::new(text, &path);
+                    parser.whole = None;
+                    parser.piece(is_first).ok()
+                });
+            // The loader stops listening only once it has given up.
+            let _ = done.send((k, gathered));
+        });
+        first = false;
+        in_flight += 1;
+        while in_flight >= STREAM_AHEAD * threads || (last && in_flight > 0) {
+            let (k, gathered) = results.recv().ok()?;
+            *pieces.get_mut(k)? = Some(gathered?);
+            in_flight -= 1;
+        }
+        if last {
+            break;
+        }
+    }
+    let pieces = pieces.into_iter().collect::<Option<Vec<_>>>()?;
+    join(pieces, &[], &path)
 }
 
 /// Like [`load`], and also returns the file's text (the app keeps it to
@@ -265,7 +371,7 @@ fn in_pieces(
     let mut cuts = vec![0];
     for k in 1..count {
         let from = (end / count * k).max(cuts.last().copied().unwrap_or(0) + 1);
-        if let Some(cut) = cut_after(body, from, end) {
+        if let Some(cut) = cut_after(body.as_bytes(), from, end) {
             cuts.push(cut);
         }
     }
@@ -280,12 +386,19 @@ fn in_pieces(
         .map(|(k, cut)| {
             let text = body.get(cut[0]..cut[1])?;
             let mut parser = Parser::new(text, path);
-            parser.whole = body;
+            parser.whole = Some(body);
             parser.progress = progress;
             parser.piece(k == 0).ok()
         })
         .collect::<Option<_>>()?;
 
+    join(pieces, like, path)
+}
+
+/// The scene the `pieces` of a text make, joined in order; `None` where
+/// only a parse in one can tell (a second camera or model, objects or
+/// lights over the limit, no camera).
+fn join(pieces: Vec<Gathered>, like: &[Arc<Object>], path: &Path) -> Option<Scene> {
     let objects = pieces.iter().map(|p| p.objects.len()).sum::<usize>();
     let lights = pieces.iter().map(|p| p.lights.len()).sum::<usize>();
     if objects > MAX_OBJECTS || lights > MAX_LIGHTS {
@@ -334,40 +447,53 @@ fn root_end(body: &str) -> Option<usize> {
     after.iter().all(|&b| is_space(b)).then_some(end)
 }
 
-/// The first offset at or after `from` and before `end` of the `<` of a
-/// start tag of the root's children (`<sphere`, `<light`, …), which the
-/// grammar allows nowhere else: outside a comment, a processing
-/// instruction or a CDATA section it is a cut between two of them. One
-/// after a `<!--` with no `-->` since, in the 4 KiB before it, is passed
-/// over (an object commented out).
-fn cut_after(body: &str, from: usize, end: usize) -> Option<usize> {
-    let in_comment = |tag: usize| {
-        let before = body
-            .as_bytes()
-            .get(tag.saturating_sub(4096)..tag)
-            .unwrap_or_default();
+/// Whether the `<` at `tag` starts a start tag of one of the root's
+/// children (`<sphere`, `<light`, …) before `end`: the grammar allows them
+/// nowhere else, so outside a comment, a processing instruction or a CDATA
+/// section it is a cut between two of them. One after a `<!--` with no
+/// `-->` since, in the 4 KiB before it, is passed over (an object
+/// commented out).
+fn is_cut(body: &[u8], tag: usize, end: usize) -> bool {
+    let name = body.get(tag + 1..end).unwrap_or_default();
+    let child = SCENE_CHILDREN.iter().any(|child| {
+        name.strip_prefix(child.as_bytes()).is_some_and(|after| {
+            after
+                .first()
+                .is_some_and(|&b| is_space(b) || b == b'/' || b == b'>')
+        })
+    });
+    let in_comment = || {
+        let before = body.get(tag.saturating_sub(4096)..tag).unwrap_or_default();
         let last = |what: &[u8]| before.windows(what.len()).rposition(|w| w == what);
         match (last(b"<!--"), last(b"-->")) {
             (Some(open), Some(close)) => open > close,
             (open, _) => open.is_some(),
         }
     };
-    let bytes = body.as_bytes().get(..end)?;
+    child && !in_comment()
+}
+
+/// The first cut ([`is_cut`]) at or after `from` and before `end`.
+fn cut_after(body: &[u8], from: usize, end: usize) -> Option<usize> {
     let mut at = from;
     loop {
-        let tag = at + bytes.get(at..)?.iter().position(|&b| b == b'<')?;
-        let name = bytes.get(tag + 1..).unwrap_or_default();
-        let child = SCENE_CHILDREN.iter().any(|child| {
-            name.strip_prefix(child.as_bytes()).is_some_and(|after| {
-                after
-                    .first()
-                    .is_some_and(|&b| is_space(b) || b == b'/' || b == b'>')
-            })
-        });
-        if child && !in_comment(tag) {
+        let tag = at + body.get(at..end)?.iter().position(|&b| b == b'<')?;
+        if is_cut(body, tag, end) {
             return Some(tag);
         }
         at = tag + 1;
+    }
+}
+
+/// The last cut ([`is_cut`]) at or after `from` and before `end`.
+fn last_cut(body: &[u8], from: usize, end: usize) -> Option<usize> {
+    let mut before = end;
+    loop {
+        let tag = from + body.get(from..before)?.iter().rposition(|&b| b == b'<')?;
+        if is_cut(body, tag, end) {
+            return Some(tag);
+        }
+        before = tag;
     }
 }
 
@@ -479,8 +605,9 @@ struct Parser<'a> {
     /// What is parsed: the file's text, or a piece of it ([`in_pieces`]).
     text: &'a str,
     /// The whole text (after its byte-order mark), for what is checked of
-    /// the file as a whole.
-    whole: &'a str,
+    /// the file as a whole; `None` where it is not at hand ([`streamed`]),
+    /// and such a check fails (the text is then read whole).
+    whole: Option<&'a str>,
     path: &'a Path,
     reader: Reader<&'a [u8]>,
     /// No event seen yet (an XML declaration must come first).
@@ -512,7 +639,7 @@ impl<'a> Parser<'a> {
         config.trim_text(false);
         Parser {
             text,
-            whole: text,
+            whole: Some(text),
             path,
             reader,
             at_start: true,
@@ -646,7 +773,7 @@ impl<'a> Parser<'a> {
                                 .to_owned(),
                         ));
                     }
-                    let ascii = || self.whole.is_ascii();
+                    let ascii = || self.whole.is_some_and(str::is_ascii);
                     inside(5, 2, &|s| xml::declaration(s, &ascii))?;
                 }
                 Event::DocType(_) => return Err(self.error_at(before, LoadErrorKind::Doctype)),
@@ -1525,17 +1652,81 @@ mod tests {
     #[test]
     fn cuts_fall_before_the_roots_children_only() {
         let text = "<scene> <sphere/><spheres/><light\tx=\"1\"/> <!-- <plane> --></scene>";
-        let end = root_end(text).unwrap();
-        assert_eq!(&text[end..], "</scene>");
-        assert_eq!(cut_after(text, 1, end), Some(8));
-        assert_eq!(cut_after(text, 9, end), Some(27));
+        assert_eq!(&text[root_end(text).unwrap()..], "</scene>");
+        let cut = |text: &str, from| cut_after(text.as_bytes(), from, root_end(text).unwrap());
+        assert_eq!(cut(text, 1), Some(8));
+        assert_eq!(cut(text, 9), Some(27));
         // Inside a comment: passed over.
-        assert_eq!(cut_after(text, 28, end), None);
-        let text = "<scene><!-- --> <plane/></scene>";
-        assert_eq!(cut_after(text, 1, root_end(text).unwrap()), Some(16));
+        assert_eq!(cut(text, 28), None);
+        let bytes = text.as_bytes();
+        assert_eq!(last_cut(bytes, 0, bytes.len()), Some(27));
+        assert_eq!(last_cut(bytes, 0, 27), Some(8));
+        assert_eq!(last_cut(bytes, 9, 27), None);
+        assert_eq!(cut("<scene><!-- --> <plane/></scene>", 1), Some(16));
         assert_eq!(root_end("<scene/>"), None);
         assert_eq!(root_end("<scene></scene> <!-- -->"), None);
         assert_eq!(root_end("<scene></scene >\n\t"), Some(7));
+    }
+
+    #[test]
+    fn a_big_file_is_streamed_with_the_errors_of_one() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.xml");
+        let text = varied(100_000);
+        let check = |text: &str, streams: bool| {
+            fs::write(&path, text).unwrap();
+            let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+            let one = format!("{:?}", in_one(body).map_err(|e| e.to_string()));
+            let loaded = format!("{:?}", load(&path).map_err(|e| e.to_string()));
+            let read = format!(
+                "{:?}",
+                load_with_text(&path)
+                    .map(|(_, s)| s)
+                    .map_err(|e| e.to_string())
+            );
+            assert_eq!(loaded.replace(&path.display().to_string(), "t.xml"), one);
+            assert_eq!(loaded, read);
+            let streamed = streamed(&path);
+            assert_eq!(streamed.is_some(), streams, "{}", &text[..60]);
+            if let Some(scene) = streamed {
+                assert_eq!(format!("{:?}", Ok::<_, String>(scene)), one);
+            }
+        };
+        check(&text, true);
+        check(&format!("\u{feff}{text}"), true);
+        // Objects commented out, a comment at every line start.
+        check(&text.replace("  <sphere/>", "  <!-- <sphere/> -->"), true);
+        check(&text.replace("\n  <", "\n<!---->  <"), true);
+        // Checked of the whole text: read whole.
+        check(
+            &text.replace("encoding=\"UTF-8\"", "encoding=\"US-ASCII\""),
+            false,
+        );
+        // Errors anywhere: read whole, the error of a parse in one.
+        for at in [0.1, 0.5, 0.99] {
+            let at = (text.len() as f64 * at) as usize;
+            let at = at + text[at..].find("<light").unwrap();
+            for insert in [
+                "<light x=\"1\" y=\"no\" z=\"0\"/>",
+                "<camera width=\"1\" height=\"1\" eyeDistance=\"1\"/>",
+                "<!--",
+                "</scene>",
+                "\u{0}",
+            ] {
+                let mut bad = text.clone();
+                bad.insert_str(at, insert);
+                check(&bad, false);
+            }
+        }
+        let mut not_utf8 = text.clone().into_bytes();
+        not_utf8[text.len() / 2] = 0xff;
+        fs::write(&path, &not_utf8).unwrap();
+        assert!(streamed(&path).is_none());
+        assert!(matches!(
+            load(&path).unwrap_err().kind,
+            LoadErrorKind::NotUtf8 { .. }
+        ));
+        check(&text.replace("</scene>", "</scene><!-- after -->"), false);
     }
 
     #[test]
