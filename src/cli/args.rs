@@ -584,7 +584,7 @@ struct BenchFlags {
     )]
     split_size: u32,
     /// Spheres in the big scene loaded, checked and prepared against
-    /// `xmllint --stream --noout` (0: skip that section).
+    /// xmllint's streaming parse of the same file (0: skip that section).
     #[arg(
         long,
         value_name = "N",
