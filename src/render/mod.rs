@@ -297,9 +297,12 @@ fn render_all(
     cancel: &Cancel,
     progress: &Progress,
 ) -> Result<Option<(RgbImage, RenderStats)>, RenderError> {
-    let prepared = prepare(scene, options);
     let (width, height) = (region.width(), region.height());
     // Taken, not assumed: a size the system cannot give is an error.
+    // Taken before preparing, which may start the thread pool: each of
+    // its threads reserves a malloc arena (64 MiB of address space) as it
+    // first allocates, and under `ulimit -v` the image asked for after
+    // them may no longer fit where it fitted before them.
     let bytes = (width as usize)
         .saturating_mul(height as usize)
         .saturating_mul(3);
@@ -308,6 +311,7 @@ fn render_all(
         source,
     })?;
     let mut image = RgbImage::from_raw(width, height, pixels).expect("3 bytes a pixel");
+    let prepared = prepare(scene, options);
     let Some(rays) = trace_tiles(
         &prepared,
         region,

@@ -419,18 +419,21 @@ pub fn render_pass_as(
 ) -> Result<Option<(KeptPass, RenderStats)>, RenderError> {
     let region = options.region_of(scene)?;
     super::in_pool(options, || {
-        let prepared = prepare(scene, options);
-        let prepared = if pass.is_geometric() {
-            prepared.with_view(&scene.camera, 1)
-        } else {
-            prepared
-        }
-        .for_pass(pass);
+        // Prepared once its buffer is had (see `render_all`).
+        let view = || {
+            let prepared = prepare(scene, options);
+            if pass.is_geometric() {
+                prepared.with_view(&scene.camera, 1)
+            } else {
+                prepared
+            }
+            .for_pass(pass)
+        };
         let (width, height) = (region.width(), region.height());
         let done = match form {
             PassForm::Floats => {
                 let buffer = pass_buffer(width, height, 3, 0f32, pass, "its f32 values")?;
-                keep_tiles(&prepared, region, cancel, progress, buffer, 3, |v, out| {
+                keep_tiles(&view(), region, cancel, progress, buffer, 3, |v, out| {
                     for c in 0..3 {
                         out[c] = in_exr(pass, v[c]);
                     }
@@ -445,7 +448,7 @@ pub fn render_pass_as(
                 // t in f64, little-endian, 8 bytes a pixel: the range is
                 // known only at the end.
                 let buffer = pass_buffer(width, height, 8, 0u8, pass, "t in f64")?;
-                keep_tiles(&prepared, region, cancel, progress, buffer, 8, |v, out| {
+                keep_tiles(&view(), region, cancel, progress, buffer, 8, |v, out| {
                     out.copy_from_slice(&v.x.to_le_bytes());
                 })
                 .map(|(mut bytes, range, rays)| {
@@ -468,7 +471,7 @@ pub fn render_pass_as(
             }
             PassForm::Picture => {
                 let buffer = pass_buffer(width, height, 3, 0u8, pass, "its 8-bit picture")?;
-                keep_tiles(&prepared, region, cancel, progress, buffer, 3, |v, out| {
+                keep_tiles(&view(), region, cancel, progress, buffer, 3, |v, out| {
                     out.copy_from_slice(&shown(pass, v, None));
                 })
                 .map(|(bytes, range, rays)| {

@@ -67,12 +67,22 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// A big file is read and parsed a piece at a time ([`streamed`]): its
 /// text is never in memory whole, only the scene it makes.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
-    if rayon::current_num_threads() > 1
-        && let Some(scene) = streamed(path)
-    {
+    if let Some(scene) = streamed(path) {
         return Ok(scene);
     }
     load_with_text(path).map(|(_, scene)| scene)
+}
+
+/// The cores a text of `bytes` is parsed on: 1 below two pieces' worth
+/// ([`PIECE_BYTES`]), without asking rayon, whose first call starts its
+/// threads: each takes a malloc arena of 64 MiB of address space, which a
+/// small scene loaded under `ulimit -v` should not pay for.
+fn parsing_threads(bytes: u64) -> usize {
+    if bytes < 2 * PIECE_BYTES as u64 {
+        1
+    } else {
+        rayon::current_num_threads()
+    }
 }
 
 /// Pieces of a streamed text being parsed at once, per core: enough to
@@ -96,12 +106,12 @@ const STREAM_PIECE_BYTES: usize = 1 << 20;
 /// a cut that does not fall between two of the root's children, a text
 /// that declares an ASCII encoding (checked of the whole text only).
 fn streamed(path: &Path) -> Option<Scene> {
-    let threads = rayon::current_num_threads();
-    if rayon::current_thread_index().is_some() {
+    let meta = fs::metadata(path).ok()?;
+    if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
         return None;
     }
-    let meta = fs::metadata(path).ok()?;
-    if !meta.is_file() || meta.len() < 2 * PIECE_BYTES as u64 || meta.len() > MAX_FILE_BYTES {
+    let threads = parsing_threads(meta.len());
+    if threads < 2 || rayon::current_thread_index().is_some() {
         return None;
     }
     let mut file = fs::File::open(path).ok()?.take(MAX_FILE_BYTES + 1);
@@ -322,8 +332,9 @@ fn parse_body(
     progress: Option<&LoadProgress>,
 ) -> Result<Scene, LoadError> {
     // One or two pieces per core, none under PIECE_BYTES.
-    let pieces = (2 * rayon::current_num_threads()).min(body.len() / PIECE_BYTES);
-    if rayon::current_num_threads() > 1
+    let threads = parsing_threads(body.len() as u64);
+    let pieces = (2 * threads).min(body.len() / PIECE_BYTES);
+    if threads > 1
         && pieces > 1
         && let Some(scene) = in_pieces(body, path, like, progress, pieces)
     {
