@@ -16,7 +16,8 @@
 //!   the scalar one per lane, so the image is the same bit for bit; a lane
 //!   leaves the packet when its chain ends. The f32 study method traces
 //!   one ray at a time.
-//! - Shading data (colour, material) sits apart, read once per hit.
+//! - Shading data (colour, material) is read once per hit from the
+//!   scene's object, shared with the scene, not copied.
 //! - Whitted chains stop as soon as nothing the rest of the chain could add
 //!   can change the pixel's 8-bit value (exact: the image is unchanged).
 //! - The trace keeps the camera ray's terms and the reflected colour apart
@@ -40,7 +41,7 @@ use crate::geometry::{
 };
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
-use crate::scene::{Camera, Scene, Shape};
+use crate::scene::{Camera, Object, Scene, Shape};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, Terms, local_color};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -56,13 +57,6 @@ pub(super) const CULL_LIMIT: usize = 64;
 /// With a BVH, a tile whose frustum reaches at most this many primitives
 /// tests just those for its primary rays; more, and it uses the BVH.
 pub(super) const TILE_CANDIDATES: usize = 24;
-
-/// What shading needs of an object.
-#[derive(Debug, Clone, Copy)]
-struct Surface {
-    color: Color,
-    material: Material,
-}
 
 /// The nearest hit of a ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -104,7 +98,10 @@ struct World {
     bvh: Option<Bvh>,
     planes: Vec<Primitive>,
     plane_objects: Vec<usize>,
-    surfaces: Vec<Surface>,
+    /// The scene's objects, shared with it: shading reads each hit's
+    /// colour and material from its object (a copy of them would be 56
+    /// bytes an object more, 56 MB for a million spheres).
+    objects: Vec<Arc<Object>>,
     lights: Vec<Light>,
     illumination: Illumination,
     /// Reflected rays followed per primary ray (0 unless whitted).
@@ -775,16 +772,12 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
     let bounded: Vec<Primitive> = bounded_objects.par_iter().map(sphere).collect();
 
     let illumination = scene.model.illumination;
-    let surfaces: Vec<Surface> = scene
-        .objects
-        .par_iter()
-        .map(|o| Surface {
-            color: o.color,
-            material: o.material,
-        })
-        .collect();
     let max_local = max_local_color(scene);
-    let max_ks = surfaces.iter().map(|s| s.material.ks).fold(0.0, f64::max);
+    let max_ks = scene
+        .objects
+        .iter()
+        .map(|o| o.material.ks)
+        .fold(0.0, f64::max);
     let depth = scene.model.reflection_depth();
     let depth = if options.depth_cut {
         depth.saturating_sub(1)
@@ -845,7 +838,7 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
         bvh,
         planes,
         plane_objects,
-        surfaces,
+        objects: scene.objects.clone(),
         lights: scene.lights.clone(),
         illumination,
         depth,
@@ -1025,10 +1018,10 @@ impl Prepared {
             // The surface each lane hit.
             // (A plain loop: a closure here could be left out of line,
             // and the lanes' instructions in it with it.)
-            let mut surfaces = [&world.surfaces[0]; MAX_LANES];
+            let mut surfaces: [&Object; MAX_LANES] = [&world.objects[0]; MAX_LANES];
             for (i, surface) in surfaces.iter_mut().enumerate().take(K::L::WIDTH) {
                 if alive.lane(i) {
-                    *surface = &world.surfaces[hits.object.lane(i) as usize];
+                    *surface = &world.objects[hits.object.lane(i) as usize];
                 }
             }
             let c = K::L::vector_from_fn(|i| surfaces[i].color);
