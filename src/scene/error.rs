@@ -67,6 +67,10 @@ pub enum LoadErrorKind {
     /// The path names a directory.
     #[error("is a directory, not a scene file")]
     IsDirectory,
+    /// The load was stopped ([`LoadProgress::stop`](super::LoadProgress::stop))
+    /// before it ended.
+    #[error("the load was stopped")]
+    Stopped,
     /// The path names a FIFO, a device or a socket.
     #[error("is {kind}, not a scene file")]
     NotAFile { kind: &'static str },

@@ -197,14 +197,28 @@ pub fn load_sharing(path: &Path, like: &[Arc<Object>]) -> Result<(String, Scene)
 
 /// How far a load has got, for a progress bar: bytes of the file read and
 /// then parsed, out of twice its size (set by [`load_counting`], read from
-/// any thread).
+/// any thread); and its stop switch ([`LoadProgress::stop`]).
 #[derive(Debug, Default)]
 pub struct LoadProgress {
     done: std::sync::atomic::AtomicU64,
     total: std::sync::atomic::AtomicU64,
+    stopped: std::sync::atomic::AtomicBool,
 }
 
 impl LoadProgress {
+    /// Asks the load to stop: it ends with [`LoadErrorKind::Stopped`] at
+    /// its next megabyte read or its next few thousand elements parsed,
+    /// and frees what it had made (a million spheres are seconds of work
+    /// and hundreds of megabytes nobody waits for any more).
+    pub fn stop(&self) {
+        self.stopped
+            .store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+
+    fn is_stopped(&self) -> bool {
+        self.stopped.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
     /// The fraction done, 0 to 1 (0 before the size is known).
     pub fn fraction(&self) -> f64 {
         use std::sync::atomic::Ordering::Relaxed;
@@ -273,6 +287,9 @@ pub fn load_counting(
             let total = 2 * meta.len();
             let mut piece = vec![0; 1 << 20];
             loop {
+                if progress.is_stopped() {
+                    return Err(fail(LoadErrorKind::Stopped));
+                }
                 let n = limited.read(&mut piece).map_err(io)?;
                 if n == 0 {
                     break;
@@ -709,6 +726,9 @@ impl<'a> Parser<'a> {
             if self.events.is_multiple_of(4096)
                 && let Some(progress) = self.progress
             {
+                if progress.is_stopped() {
+                    return Err(LoadError::new(self.path, None, LoadErrorKind::Stopped));
+                }
                 progress.add(before.saturating_sub(self.reported));
                 self.reported = before;
             }
@@ -1677,6 +1697,55 @@ mod tests {
         assert_eq!(root_end("<scene/>"), None);
         assert_eq!(root_end("<scene></scene> <!-- -->"), None);
         assert_eq!(root_end("<scene></scene >\n\t"), Some(7));
+    }
+
+    /// A stopped load ends with `Stopped`, whether it was stopped before
+    /// it began or while it read or parsed, in one piece or in several;
+    /// left alone, the same file loads.
+    #[test]
+    fn a_stopped_load_ends_and_says_so() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.xml");
+        fs::write(&path, varied(300_000)).unwrap();
+        let stopped = |progress: &LoadProgress| {
+            let e = load_counting(&path, &[], Some(progress)).unwrap_err();
+            assert_eq!(e.kind, LoadErrorKind::Stopped, "{e}");
+            assert_eq!(e.to_string().matches("stopped").count(), 1, "{e}");
+        };
+        let before = LoadProgress::default();
+        before.stop();
+        stopped(&before);
+        // Parsing in one: a file small enough not to be cut.
+        let small = dir.path().join("small.xml");
+        fs::write(&small, varied(20_000)).unwrap();
+        let e = parse_body(
+            &fs::read_to_string(&small).unwrap(),
+            &small,
+            &[],
+            Some(&before),
+        )
+        .unwrap_err();
+        assert_eq!(e.kind, LoadErrorKind::Stopped);
+        // Stopped while it reads or parses: it ends well before a whole load.
+        let progress = LoadProgress::default();
+        let start = std::time::Instant::now();
+        std::thread::scope(|s| {
+            s.spawn(|| stopped(&progress));
+            while progress.fraction() < 0.3 {
+                std::thread::yield_now();
+            }
+            progress.stop();
+        });
+        let stopped_after = start.elapsed();
+        let start = std::time::Instant::now();
+        let whole = LoadProgress::default();
+        let (_, scene) = load_counting(&path, &[], Some(&whole)).unwrap();
+        assert!(!scene.objects.is_empty());
+        assert!(
+            stopped_after < start.elapsed(),
+            "stopped after {stopped_after:?}, a whole load {:?}",
+            start.elapsed()
+        );
     }
 
     #[test]

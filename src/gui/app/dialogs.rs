@@ -72,6 +72,10 @@ impl RayOfLightApp {
             }
             return;
         }
+        // An open still under way is stopped: this one replaces it.
+        if let Some(earlier) = &self.loading {
+            earlier.progress.stop();
+        }
         let id = self.loading.as_ref().map_or(1, |l| l.id + 1);
         let progress = Arc::new(crate::scene::LoadProgress::default());
         self.loading = Some(Loading {
@@ -108,11 +112,13 @@ impl RayOfLightApp {
         }
     }
 
-    /// Esc while a file is being opened: stop waiting for it.
+    /// Esc while a file is being opened: stop waiting for it, and stop
+    /// the load itself (its thread frees what it made and ends).
     pub(super) fn cancel_loading(&mut self) -> bool {
         let Some(loading) = self.loading.take() else {
             return false;
         };
+        loading.progress.stop();
         self.notify(format!(
             "stopped opening {} (File › Open opens it)",
             loading.path.display()
