@@ -94,10 +94,11 @@ struct World {
     /// Spheres, in the BVH's order when there is one.
     bounded: Vec<Primitive>,
     /// Scene object index of each bounded primitive.
-    bounded_objects: Vec<usize>,
+    /// (u32: at most `MAX_OBJECTS`, 4 MB less a million.)
+    bounded_objects: Vec<u32>,
     bvh: Option<Bvh>,
     planes: Vec<Primitive>,
-    plane_objects: Vec<usize>,
+    plane_objects: Vec<u32>,
     /// The scene's objects, shared with it: shading reads each hit's
     /// colour and material from its object (a copy of them would be 56
     /// bytes an object more, 56 MB for a million spheres).
@@ -163,11 +164,11 @@ impl<L: Lanes> Hits<L> {
     /// Keeps `hit` of `object`'s primitive where it is nearer; ties go to
     /// the object listed first in the scene.
     #[inline(always)]
-    fn consider(&mut self, hit: Found<L>, object: usize, primitive: f64) {
+    fn consider(&mut self, hit: Found<L>, object: u32, primitive: f64) {
         if !hit.found.any() {
             return;
         }
-        let rank = L::splat(object as f64);
+        let rank = L::splat(f64::from(object));
         let nearer = hit.t.lt(self.t) | (hit.t.eq(self.t) & rank.lt(self.object));
         let better = hit.found & (!self.found | nearer);
         if better.any() {
@@ -308,7 +309,7 @@ impl<const TEXTBOOK: bool> Test<Primitive32, f64> for TestSingle<'_, TEXTBOOK> {
 struct BvhSearch<'a, L: Lanes, P, I: Test<P, L>> {
     hits: &'a mut Hits<L>,
     bounded: &'a [P],
-    objects: &'a [usize],
+    objects: &'a [u32],
     intersect: &'a I,
 }
 
@@ -746,7 +747,8 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
     );
     let mut planes = Vec::new();
     let mut plane_objects = Vec::new();
-    for (index, object) in scene.objects.iter().enumerate() {
+    // Object numbers fit in u32: the loader takes at most MAX_OBJECTS.
+    for (index, object) in (0u32..).zip(scene.objects.iter()) {
         match object.shape {
             Shape::Sphere => bounded_objects.push(index),
             Shape::Plane => {
@@ -755,8 +757,8 @@ pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
             }
         }
     }
-    let sphere = |&index: &usize| {
-        let object = &scene.objects[index];
+    let sphere = |&index: &u32| {
+        let object = &scene.objects[index as usize];
         Primitive::new(object.shape, &object.transform)
     };
     let bvh = (options.accelerate && bounded_objects.len() >= BVH_THRESHOLD).then(|| {
