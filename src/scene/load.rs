@@ -964,18 +964,29 @@ impl<'a> Parser<'a> {
                     },
                 ));
             }
-            let value = attr
-                .decode_and_unescape_value(self.reader.decoder())
-                .map_err(|err| {
-                    self.error_at(
-                        at,
-                        LoadErrorKind::BadReference {
-                            element,
-                            attribute: name,
-                            message: reference_message(&err),
-                        },
-                    )
-                })?;
+            // Without a reference, the value is the text's own slice
+            // (what decoding and unescaping would give, without checking
+            // the UTF-8 of a text that is a `str` already).
+            let plain = match &attr.value {
+                Cow::Borrowed(raw) if !raw.contains(&b'&') => self
+                    .offset_of(raw)
+                    .and_then(|start| self.text.get(start..start + raw.len())),
+                _ => None,
+            };
+            let value = match plain {
+                Some(plain) => Ok(Cow::Borrowed(plain)),
+                None => attr.decode_and_unescape_value(self.reader.decoder()),
+            }
+            .map_err(|err| {
+                self.error_at(
+                    at,
+                    LoadErrorKind::BadReference {
+                        element,
+                        attribute: name,
+                        message: reference_message(&err),
+                    },
+                )
+            })?;
             // A literal non-Char was refused with the tag (`xml::start_tag`):
             // one in the unescaped value came from a character reference.
             if let Cow::Owned(unescaped) = &value

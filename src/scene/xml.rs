@@ -81,6 +81,11 @@ fn char_at(s: &str, at: usize) -> Option<char> {
     s.get(at..).and_then(|r| r.chars().next())
 }
 
+/// [`is_name_char`] of an ASCII byte: what it says of the same character.
+fn is_ascii_name_char(b: u8) -> bool {
+    b.is_ascii_alphanumeric() || matches!(b, b':' | b'_' | b'-' | b'.')
+}
+
 /// The end of the Name that starts at `at`, or a fault there.
 fn name_end(s: &str, at: usize, what: &str) -> Result<usize, Fault> {
     let rest = s.get(at..).unwrap_or_default();
@@ -89,16 +94,39 @@ fn name_end(s: &str, at: usize, what: &str) -> Result<usize, Fault> {
         Some(c) => return fault(at, format!("expected {what}, found {}", shown(c))),
         None => return fault(at, format!("expected {what}")),
     }
-    let len = rest
+    // A byte at a time while the name is ASCII (every name of the
+    // format); from its first other character on, a character at a time.
+    let ascii = rest
+        .bytes()
+        .position(|b| !is_ascii_name_char(b))
+        .unwrap_or(rest.len());
+    let tail = rest.get(ascii..).unwrap_or_default();
+    if tail.as_bytes().first().is_none_or(u8::is_ascii) {
+        return Ok(at + ascii);
+    }
+    let len = tail
         .char_indices()
         .find(|&(_, c)| !is_name_char(c))
-        .map_or(rest.len(), |(i, _)| i);
-    Ok(at + len)
+        .map_or(tail.len(), |(i, _)| i);
+    Ok(at + ascii + len)
 }
 
 fn skip_space(s: &str, at: usize) -> usize {
-    let rest = s.get(at..).unwrap_or_default();
-    at + rest.len() - rest.trim_start_matches(is_space).len()
+    let rest = s.get(at..).unwrap_or_default().as_bytes();
+    at + rest
+        .iter()
+        .position(|&b| !matches!(b, b' ' | b'\t' | b'\r' | b'\n'))
+        .unwrap_or(rest.len())
+}
+
+/// Whether an attribute value may hold a fault [`start_tag`] reports: a
+/// `<`, a C0 control other than tab, LF and CR, or the first byte of
+/// U+FFFE or U+FFFF. One pass over the bytes; the exact fault, where
+/// there is one, is found by the checks themselves.
+fn suspect_value(value: &[u8]) -> bool {
+    value
+        .iter()
+        .any(|&b| b == b'<' || (b < 0x20 && !matches!(b, b'\t' | b'\n' | b'\r')) || b == 0xef)
 }
 
 /// A start tag or empty-element tag between `<` and `>` (an empty one
@@ -144,13 +172,18 @@ pub(super) fn start_tag(s: &str) -> Result<(), Fault> {
         };
         let start = at + 1;
         let rest = s.get(start..).unwrap_or_default();
-        let Some(len) = rest.find(quote) else {
+        // The quote is ASCII: a byte search finds the character.
+        let Some(len) = rest.bytes().position(|b| char::from(b) == quote) else {
             return fault(
                 at,
                 format!("in <{element}>: attribute {attribute}: value not closed: missing {quote}"),
             );
         };
         let value = rest.get(..len).unwrap_or_default();
+        if !suspect_value(value.as_bytes()) {
+            at = start + len + 1;
+            continue;
+        }
         if let Some(lt) = value.find('<') {
             return fault(
                 start + lt,
@@ -364,6 +397,24 @@ mod tests {
         assert_eq!(at(start_tag("1light")), Some(0));
         assert_eq!(at(start_tag("light/")), Some(5));
         assert_eq!(at(start_tag("sphère")), None);
+        // Names that leave ASCII midway, values with a fault after clean
+        // bytes: the byte-at-a-time paths hand over at the right place.
+        assert_eq!(at(start_tag("sph\u{b7}re a\u{300}b=\"1\"")), None);
+        assert_eq!(at(start_tag("sph\u{d7}re")), Some(3));
+        assert_eq!(at(start_tag("light x\u{d7}=\"1\"")), Some(7));
+        assert_eq!(at(start_tag("light x=\"12\u{ffff}\"")), Some(11));
+        assert_eq!(at(start_tag("light x=\"é\u{fffe}\" y=\"<\"")), Some(11));
+        assert_eq!(at(start_tag("light x=\"é\" y=\"a<\"")), Some(17));
+        assert_eq!(at(start_tag("light x=\"1\"\u{a0}y=\"2\"")), Some(11));
+    }
+
+    /// The byte-at-a-time name test says what the character test says of
+    /// every ASCII character.
+    #[test]
+    fn ascii_name_bytes_are_name_characters() {
+        for b in 0..0x80u8 {
+            assert_eq!(is_ascii_name_char(b), is_name_char(char::from(b)), "{b:#x}");
+        }
     }
 
     #[test]
