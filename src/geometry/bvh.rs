@@ -3,7 +3,8 @@
 //!
 //! Nodes live in one flat array; an interior node's children are adjacent
 //! (`first`, `first + 1`), a leaf holds `count` primitives from `first` in
-//! the hierarchy's own primitive order ([`Bvh::order`]).
+//! leaf order: the build puts the caller's items in that order, in place
+//! ([`Bvh::build_over`]).
 
 use super::{Lanes, Mask, Ray};
 use glam::DVec3;
@@ -91,12 +92,11 @@ struct Node {
     count: u32,
 }
 
-/// The hierarchy. Build it with [`Bvh::build`] over the primitives'
-/// boxes, then ask [`Bvh::nearest`].
+/// The hierarchy. Build it with [`Bvh::build_over`] over the primitives,
+/// then ask [`Bvh::nearest`].
 #[derive(Debug, Clone)]
 pub struct Bvh {
     nodes: Vec<Node>,
-    order: Vec<u32>,
 }
 
 /// Primitives in a leaf at most, unless they cannot be told apart.
@@ -115,79 +115,48 @@ const PARALLEL_ITEMS: usize = 1 << 14;
 /// Traversal stack size: at most one pending node per level.
 const STACK: usize = 128;
 
-/// A primitive being placed: its own box and its index, 56 bytes (a
-/// million of them are the build's biggest list). The padded box and the
-/// centroid the build reads are computed from the box each time, not
-/// kept: 24 MB less for a million, the same values bit for bit.
-struct Item {
-    own: Aabb,
-    index: u32,
-}
-
-impl Item {
-    /// The box the hierarchy holds: the primitive's own, padded by a
-    /// relative hair so rounding in the slab test never loses a grazing
-    /// hit on the primitive's own extent.
-    #[inline(always)]
-    fn bounds(&self) -> Aabb {
-        let b = &self.own;
-        let pad = 1e-9
-            * (b.max - b.min)
-                .max_element()
-                .max(b.centroid().abs().max_element())
-            + 1e-300;
-        Aabb {
-            min: b.min - DVec3::splat(pad),
-            max: b.max + DVec3::splat(pad),
-        }
-    }
-
-    /// The centroid of the primitive's own box (binned by the SAH).
-    #[inline(always)]
-    fn centroid(&self) -> DVec3 {
-        self.own.centroid()
+/// The box the hierarchy holds for an item whose own box is `b`: padded
+/// by a relative hair so rounding in the slab test never loses a grazing
+/// hit on the primitive's own extent. Computed from the own box each time
+/// it is read, never kept (the build's list is the caller's items).
+#[inline(always)]
+fn padded(b: &Aabb) -> Aabb {
+    let pad = 1e-9
+        * (b.max - b.min)
+            .max_element()
+            .max(b.centroid().abs().max_element())
+        + 1e-300;
+    Aabb {
+        min: b.min - DVec3::splat(pad),
+        max: b.max + DVec3::splat(pad),
     }
 }
 
 impl Bvh {
-    /// Builds the hierarchy over `boxes` (primitive i has box i).
-    pub fn build(boxes: &[Aabb]) -> Bvh {
-        Bvh::build_with(boxes.len(), |i| boxes[i])
+    /// Builds the hierarchy over `items`, `own(item)` the item's box, on
+    /// every core, and puts the items in leaf order, in place: leaf ranges
+    /// index into them. The items carry what the caller needs in that
+    /// order (the primitives themselves, with their object numbers), so
+    /// nothing is looked up again in another order and no second list is
+    /// made.
+    pub fn build_over<T: Send>(items: &mut [T], own: impl Fn(&T) -> Aabb + Sync) -> Bvh {
+        Bvh::build_split(items, &own, FORKS)
     }
 
-    /// [`Bvh::build`] over `count` boxes made as they are asked for, on
-    /// every core, `bounds(i)` the box of primitive `i`: no list of them
-    /// beside the build's own (a million primitives: 48 MB less).
-    pub fn build_with(count: usize, bounds: impl Fn(usize) -> Aabb + Sync) -> Bvh {
-        Bvh::build_split(count, bounds, FORKS)
-    }
-
-    /// [`Bvh::build_with`], forking `forks` times at most ([`FORKS`]).
-    fn build_split(count: usize, bounds: impl Fn(usize) -> Aabb + Sync, forks: usize) -> Bvh {
-        use rayon::prelude::*;
-        let mut items: Vec<Item> = (0..count)
-            .into_par_iter()
-            .map(|i| Item {
-                own: bounds(i),
-                index: i as u32,
-            })
-            .collect();
+    /// [`Bvh::build_over`], forking `forks` times at most ([`FORKS`]).
+    fn build_split<T: Send, F: Fn(&T) -> Aabb + Sync>(
+        items: &mut [T],
+        own: &F,
+        forks: usize,
+    ) -> Bvh {
         let mut nodes = Vec::with_capacity(2 * items.len().max(1));
         nodes.push(Node {
             bounds: Aabb::EMPTY,
             first: 0,
             count: 0,
         });
-        build_node(&mut nodes, 0, &mut items, 0, 0, forks);
-        Bvh {
-            nodes,
-            order: items.iter().map(|i| i.index).collect(),
-        }
-    }
-
-    /// Primitive indices in leaf order: leaf ranges index into this.
-    pub fn order(&self) -> &[u32] {
-        &self.order
+        build_node(&mut nodes, 0, items, own, 0, 0, forks);
+        Bvh { nodes }
     }
 
     /// Walks the hierarchy front to back for the `alive` lanes of `ray`,
@@ -327,15 +296,18 @@ impl Bvh {
 
 /// Builds the subtree of `items` at `nodes[at]`; `forks` more times along
 /// each path down, a split of two big halves builds them on two cores.
-fn build_node(
+fn build_node<T: Send, F: Fn(&T) -> Aabb + Sync>(
     nodes: &mut Vec<Node>,
     at: usize,
-    items: &mut [Item],
+    items: &mut [T],
+    own: &F,
     offset: usize,
     depth: usize,
     forks: usize,
 ) {
-    let bounds = items.iter().fold(Aabb::EMPTY, |b, i| b.union(&i.bounds()));
+    let bounds = items
+        .iter()
+        .fold(Aabb::EMPTY, |b, i| b.union(&padded(&own(i))));
     let leaf = Node {
         bounds,
         first: offset as u32,
@@ -346,8 +318,8 @@ fn build_node(
         return;
     }
     let centroids = items.iter().fold(Aabb::EMPTY, |b, i| Aabb {
-        min: b.min.min(i.centroid()),
-        max: b.max.max(i.centroid()),
+        min: b.min.min(own(i).centroid()),
+        max: b.max.max(own(i).centroid()),
     });
     let extent = centroids.max - centroids.min;
     let axis = if extent.x >= extent.y && extent.x >= extent.z {
@@ -358,7 +330,7 @@ fn build_node(
         2
     };
     let split = if extent[axis] > 0.0 && depth < SAH_DEPTH {
-        sah_split(items, axis, centroids.min[axis], extent[axis], &bounds)
+        sah_split(items, own, axis, centroids.min[axis], extent[axis], &bounds)
     } else {
         None
     };
@@ -372,7 +344,7 @@ fn build_node(
             // Centroids all equal (or too deep): halve by the median.
             let mid = items.len() / 2;
             items.select_nth_unstable_by(mid, |a, b| {
-                a.centroid()[axis].total_cmp(&b.centroid()[axis])
+                own(a).centroid()[axis].total_cmp(&own(b).centroid()[axis])
             });
             mid
         }
@@ -394,10 +366,10 @@ fn build_node(
     if forks > 0 && a.len().min(b.len()) >= PARALLEL_ITEMS {
         // The two halves on two cores, each in a list of its own (its
         // root first), appended after: the list one core would write.
-        let subtree = |items: &mut [Item], offset| {
-            let mut own = vec![placeholder];
-            build_node(&mut own, 0, items, offset, depth + 1, forks - 1);
-            own
+        let subtree = |items: &mut [T], offset| {
+            let mut tree = vec![placeholder];
+            build_node(&mut tree, 0, items, own, offset, depth + 1, forks - 1);
+            tree
         };
         let (left_tree, right_tree) =
             rayon::join(|| subtree(a, offset), || subtree(b, offset + mid));
@@ -416,8 +388,8 @@ fn build_node(
         }
         return;
     }
-    build_node(nodes, left, a, offset, depth + 1, forks);
-    build_node(nodes, left + 1, b, offset + mid, depth + 1, forks);
+    build_node(nodes, left, a, own, offset, depth + 1, forks);
+    build_node(nodes, left + 1, b, own, offset + mid, depth + 1, forks);
 }
 
 enum SahSplit {
@@ -427,8 +399,9 @@ enum SahSplit {
     At(usize),
 }
 
-fn sah_split(
-    items: &mut [Item],
+fn sah_split<T>(
+    items: &mut [T],
+    own: &impl Fn(&T) -> Aabb,
     axis: usize,
     lo: f64,
     extent: f64,
@@ -438,8 +411,9 @@ fn sah_split(
     let bin_of = |c: DVec3| (((c[axis] - lo) * scale) as usize).min(BINS - 1);
     let mut bins = [(Aabb::EMPTY, 0usize); BINS];
     for item in items.iter() {
+        let item = own(item);
         let b = &mut bins[bin_of(item.centroid())];
-        b.0 = b.0.union(&item.bounds());
+        b.0 = b.0.union(&padded(&item));
         b.1 += 1;
     }
     // Sweep from the right, then from the left: cost of each of the
@@ -472,7 +446,7 @@ fn sah_split(
     }
     let mut mid = 0;
     for i in 0..items.len() {
-        if bin_of(items[i].centroid()) <= plane {
+        if bin_of(own(&items[i]).centroid()) <= plane {
             items.swap(i, mid);
             mid += 1;
         }
@@ -484,6 +458,18 @@ fn sah_split(
 mod tests {
     use super::*;
     use crate::geometry::{F64x4, Mask4};
+
+    fn indices(n: usize) -> Vec<u32> {
+        (0..n as u32).collect()
+    }
+
+    /// The hierarchy over `boxes` (primitive i has box i), and the
+    /// primitives' indices in leaf order.
+    fn build(boxes: &[Aabb]) -> (Bvh, Vec<u32>) {
+        let mut order = indices(boxes.len());
+        let bvh = Bvh::build_over(&mut order, |&i| boxes[i as usize]);
+        (bvh, order)
+    }
 
     /// Unit boxes along a diagonal; "hit" is the box's entry distance.
     fn boxes(n: usize) -> Vec<Aabb> {
@@ -518,11 +504,13 @@ mod tests {
                 }
             })
             .collect();
-        let one = Bvh::build_split(boxes.len(), |i| boxes[i], 0);
-        let many = Bvh::build_split(boxes.len(), |i| boxes[i], FORKS);
+        let own = |&i: &u32| boxes[i as usize];
+        let (mut one_order, mut many_order) = (indices(boxes.len()), indices(boxes.len()));
+        let one = Bvh::build_split(&mut one_order, &own, 0);
+        let many = Bvh::build_split(&mut many_order, &own, FORKS);
         // Each subtree's list is in the order one core writes it: the
         // whole list is the same, node for node.
-        assert!(one.order == many.order, "primitives in another order");
+        assert!(one_order == many_order, "primitives in another order");
         assert!(
             format!("{:?}", one.nodes) == format!("{:?}", many.nodes),
             "another tree"
@@ -613,8 +601,8 @@ mod tests {
     #[test]
     fn nearest_equals_brute_force() {
         let b = boxes(500);
-        let bvh = Bvh::build(&b);
-        let mut sorted = bvh.order().to_vec();
+        let (bvh, order) = build(&b);
+        let mut sorted = order.clone();
         sorted.sort();
         assert_eq!(sorted, (0..500).collect::<Vec<u32>>());
         for k in 0..200 {
@@ -622,9 +610,9 @@ mod tests {
             let brute = (0..b.len())
                 .filter_map(|i| entry(&b[i], &ray).map(|t| (t, i)))
                 .min_by(|x, y| x.0.total_cmp(&y.0));
-            let mut scan = Scan::new(|_, k| entry(&b[bvh.order()[k] as usize], &ray), |k| k);
+            let mut scan = Scan::new(|_, k| entry(&b[order[k] as usize], &ray), |k| k);
             bvh.nearest::<f64>(&ray, true, &mut scan);
-            let fast = scan.best[0].map(|(t, k)| (t, bvh.order()[k] as usize));
+            let fast = scan.best[0].map(|(t, k)| (t, order[k] as usize));
             assert_eq!(brute.map(|x| x.0), fast.map(|x| x.0), "ray {k}");
         }
     }
@@ -634,19 +622,19 @@ mod tests {
     #[test]
     fn lanes_find_what_each_ray_finds_alone() {
         let b = boxes(500);
-        let bvh = Bvh::build(&b);
+        let (bvh, order) = build(&b);
         for k in 0..100 {
             let rays: [Ray; 4] = std::array::from_fn(|i| diagonal_ray(4 * k + i as u32));
             let lanes = Ray::new(
                 F64x4::vector_from_fn(|i| rays[i].origin),
                 F64x4::vector_from_fn(|i| rays[i].dir),
             );
-            let hit = |lane: usize, k: usize| entry(&b[bvh.order()[k] as usize], &rays[lane]);
+            let hit = |lane: usize, k: usize| entry(&b[order[k] as usize], &rays[lane]);
             let mut together = Scan::new(hit, |k| k);
             let alive = Mask4::from_fn(|i| i != 2);
             bvh.nearest::<F64x4>(&lanes, alive, &mut together);
             for (i, ray) in rays.iter().enumerate() {
-                let mut alone = Scan::new(|_, k| entry(&b[bvh.order()[k] as usize], ray), |k| k);
+                let mut alone = Scan::new(|_, k| entry(&b[order[k] as usize], ray), |k| k);
                 bvh.nearest::<f64>(ray, true, &mut alone);
                 let expected = if i == 2 { None } else { alone.best[0] };
                 assert_eq!(together.best[i], expected, "rays {k}, lane {i}");
@@ -663,15 +651,15 @@ mod tests {
             };
             10_000
         ];
-        let bvh = Bvh::build(&b);
+        let (bvh, order) = build(&b);
         assert!(bvh.nodes.iter().all(|n| n.count as usize <= MAX_LEAF));
         let ray = Ray::new(DVec3::splat(-1.0), DVec3::ONE.normalize());
         // Every primitive "hit" beyond the boxes: nothing can be pruned.
-        let mut scan = Scan::new(|_, _| Some(100.0), |k| bvh.order()[k] as usize);
+        let mut scan = Scan::new(|_, _| Some(100.0), |k| order[k] as usize);
         bvh.nearest::<f64>(&ray, true, &mut scan);
         // The tie goes to the smallest rank: primitive 0, wherever the
         // build put it.
-        let at = bvh.order().iter().position(|&i| i == 0);
+        let at = order.iter().position(|&i| i == 0);
         assert_eq!(scan.best[0], Some((100.0, at.unwrap())));
         assert_eq!(scan.tested, 10_000, "all overlap, so all are tested");
     }

@@ -54,9 +54,9 @@ impl Primitive32 {
                 to_object: e.to_object.as_affine3a(),
                 normal: e.normal.as_mat3(),
             },
-            Primitive::Plane { point, normal } => Primitive32::Plane {
-                point: point.as_vec3(),
-                normal: normal.as_vec3(),
+            Primitive::Plane(plane) => Primitive32::Plane {
+                point: plane.point.as_vec3(),
+                normal: plane.normal.as_vec3(),
             },
         }
     }
