@@ -11,7 +11,7 @@
 
 mod common;
 
-use rayoflight::gui::document::Reload;
+use rayoflight::gui::document::{Reload, SaveStep};
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::request::RenderRequest;
@@ -93,6 +93,51 @@ fn a_save_is_read_back_sharing_the_objects_on_screen() {
     assert_eq!(doc.file_read(*back), Reload::Unchanged);
     // What the file holds now is what was saved: every object shared.
     assert!(unshared(doc.file_scene(), doc.scene()).is_empty());
+}
+
+/// The app's own save of a large file is not read back by the watcher
+/// (the document knows those bytes: a million objects would be read and
+/// parsed again for nothing); another program's change to it still is.
+#[test]
+fn a_large_file_the_app_saved_is_not_read_back() {
+    let text = spheres_text(30_000);
+    assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
+    let (_dir, path, mut doc) = common::document_on(&text);
+    let (tx, rx) = mpsc::channel();
+    let watcher = SceneWatcher::new(&path, doc.disk_fingerprint(), move |e| {
+        let _ = tx.send(e);
+    })
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    doc.apply(set("object[4].color.red", 0.75)).unwrap();
+    let job = doc.save_job().unwrap().announcing(watcher.own_writes());
+    let outcome = job.run();
+    assert_eq!(
+        doc.save_done(job, outcome).unwrap(),
+        SaveStep::Done(Reload::Unchanged)
+    );
+    assert!(!doc.has_unsaved_edits());
+    // Past the debounce and a poll or two: nothing read, nothing said.
+    if let Ok(event) = rx.recv_timeout(Duration::from_secs(3)) {
+        panic!("the app's own save was read back: {event:?}");
+    }
+    // Another program's bytes are read.
+    let theirs =
+        std::fs::read_to_string(&path)
+            .unwrap()
+            .replacen("blue=\"0.25\"", "blue=\"0.5\"", 1);
+    std::fs::write(&path, &theirs).unwrap();
+    let back = loop {
+        match rx
+            .recv_timeout(Duration::from_secs(10))
+            .expect("another program's change is seen")
+        {
+            FileEvent::Loaded(read) => break read,
+            FileEvent::Broken(e) => panic!("{e}"),
+            FileEvent::Missing | FileEvent::Reading => {}
+        }
+    };
+    assert_eq!(doc.file_read(*back), Reload::Replaced);
 }
 
 #[test]

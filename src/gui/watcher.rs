@@ -26,7 +26,7 @@
 //! watcher cannot know.
 
 use crate::files::through_links;
-use crate::gui::document::{FileRead, fingerprint_file};
+use crate::gui::document::{FileRead, OwnWrites, fingerprint_file};
 use crate::scene::{self, LoadError, Object};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
@@ -64,6 +64,8 @@ pub struct SceneWatcher {
     stop: Arc<AtomicBool>,
     /// The objects the next read shares where equal.
     known: Arc<Mutex<Vec<Arc<Object>>>>,
+    /// What the app's own saves wrote: not read back.
+    own: OwnWrites,
 }
 
 impl Drop for SceneWatcher {
@@ -208,10 +210,12 @@ impl SceneWatcher {
         // still has.
         let known = Arc::new(Mutex::new(Vec::new()));
         let last = known.clone();
+        let own = OwnWrites::default();
         let report = {
             let on_event = on_event.clone();
             let target = path.clone();
             let seen = seen.clone();
+            let own = own.clone();
             // `missed`: called by the poll, for a change no report saw.
             move |missed: bool| {
                 // One read at a time (a gigabyte file takes a second).
@@ -225,6 +229,19 @@ impl SceneWatcher {
                 // always say how it ended.
                 let large = std::fs::metadata(&target)
                     .is_ok_and(|m| m.len() >= crate::gui::BACKGROUND_BYTES);
+                // The bytes the app's own save just wrote: the document
+                // knows them (it would find the read unchanged). Only a
+                // large file is fingerprinted first: a small one is read
+                // at once, and the fingerprint costs a read of its own.
+                if large
+                    && let Ok(fingerprint) = fingerprint_file(&target)
+                    && own.is_own(fingerprint)
+                {
+                    if let Ok(mut seen) = seen.lock() {
+                        *seen = (now, Some(hash(&("loaded", fingerprint))));
+                    }
+                    return;
+                }
                 if large {
                     on_event(FileEvent::Reading);
                 }
@@ -289,7 +306,12 @@ impl SceneWatcher {
                 poll(&poll_path, &watched, &seen, &poll_stop, report);
             })
             .map_err(|e| error(notify::Error::io(e)))?;
-        Ok(SceneWatcher { path, stop, known })
+        Ok(SceneWatcher {
+            path,
+            stop,
+            known,
+            own,
+        })
     }
 
     /// The next read of the file shares with `objects` those equal to
@@ -299,6 +321,13 @@ impl SceneWatcher {
         if let Ok(mut known) = self.known.lock() {
             *known = objects.to_vec();
         }
+    }
+
+    /// Where a save tells the fingerprint of what it writes
+    /// ([`SaveJob::announcing`](crate::gui::document::SaveJob::announcing)):
+    /// a large file with those bytes is not read back.
+    pub fn own_writes(&self) -> OwnWrites {
+        self.own.clone()
     }
 
     pub fn path(&self) -> &Path {

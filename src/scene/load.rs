@@ -67,10 +67,17 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// A big file is read and parsed a piece at a time ([`streamed`]): its
 /// text is never in memory whole, only the scene it makes.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
-    if let Some(scene) = streamed(path) {
+    load_like(path, &[])
+}
+
+/// [`load`], sharing with `like` each object equal to the one at the same
+/// place in it, as [`parse_sharing`] does; the text is not kept (a save
+/// checking the file it wrote).
+pub fn load_like(path: &Path, like: &[Arc<Object>]) -> Result<Scene, LoadError> {
+    if let Some(scene) = streamed(path, like) {
         return Ok(scene);
     }
-    load_with_text(path).map(|(_, scene)| scene)
+    load_sharing(path, like).map(|(_, scene)| scene)
 }
 
 /// The cores a text of `bytes` is parsed on: 1 below two pieces' worth
@@ -105,7 +112,7 @@ const STREAM_PIECE_BYTES: usize = 1 << 20;
 /// (it would wait on itself), a read that fails, a text that is not UTF-8,
 /// a cut that does not fall between two of the root's children, a text
 /// that declares an ASCII encoding (checked of the whole text only).
-fn streamed(path: &Path) -> Option<Scene> {
+fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
     let meta = fs::metadata(path).ok()?;
     if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
         return None;
@@ -180,7 +187,7 @@ fn streamed(path: &Path) -> Option<Scene> {
         }
     }
     let pieces = pieces.into_iter().collect::<Option<Vec<_>>>()?;
-    join(pieces, &[], &path)
+    join(pieces, like, &path)
 }
 
 /// Like [`load`], and also returns the file's text (the app keeps it to
@@ -1777,7 +1784,7 @@ mod tests {
             );
             assert_eq!(loaded.replace(&path.display().to_string(), "t.xml"), one);
             assert_eq!(loaded, read);
-            let streamed = streamed(&path);
+            let streamed = streamed(&path, &[]);
             assert_eq!(streamed.is_some(), streams, "{}", &text[..60]);
             if let Some(scene) = streamed {
                 assert_eq!(format!("{:?}", Ok::<_, String>(scene)), one);
@@ -1812,7 +1819,7 @@ mod tests {
         let mut not_utf8 = text.clone().into_bytes();
         not_utf8[text.len() / 2] = 0xff;
         fs::write(&path, &not_utf8).unwrap();
-        assert!(streamed(&path).is_none());
+        assert!(streamed(&path, &[]).is_none());
         assert!(matches!(
             load(&path).unwrap_err().kind,
             LoadErrorKind::NotUtf8 { .. }

@@ -33,7 +33,7 @@ use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 
 use super::edit::{EditError, Edited, ObjectOrigin, number_text as num};
-use super::{Color, Illumination, Material, Model, Object, Scene, parse};
+use super::{Color, Illumination, LoadError, Material, Model, Object, Scene, parse};
 use crate::math::{TransformStep, Vec3};
 use crate::shading::Light;
 
@@ -92,7 +92,23 @@ pub fn plan<'t>(
 /// scene: nothing is saved that would load differently.
 pub fn check(out: &str, path: &Path, edited: &Edited) -> Result<(), EditError> {
     let scene = edited.scene();
-    match super::parse_sharing(out, path, &scene.objects) {
+    loads_as(super::parse_sharing(out, path, &scene.objects), scene)
+}
+
+/// [`check`] of the file `written`, a text written by a [`Rewrite`] for
+/// `path` (which names it in errors): read a piece at a time where it is
+/// big, its objects shared with `edited`'s, the text never held whole.
+pub fn check_file(written: &Path, path: &Path, edited: &Edited) -> Result<(), EditError> {
+    let scene = edited.scene();
+    let loaded = super::load_like(written, &scene.objects).map_err(|e| LoadError {
+        path: path.to_owned(),
+        ..e
+    });
+    loads_as(loaded, scene)
+}
+
+fn loads_as(loaded: Result<Scene, LoadError>, scene: &Scene) -> Result<(), EditError> {
+    match loaded {
         Ok(back) if &back == scene => Ok(()),
         Ok(_) => Err(internal(
             "the rewritten text does not load as the edited scene",

@@ -158,9 +158,14 @@ impl RayOfLightApp {
             Err(e) => return self.save_failed(e),
         };
         // The watcher reads the saved file back: it shares what is shown.
-        if let Some(watcher) = &self.watcher {
-            watcher.share(&self.doc.scene().objects);
-        }
+        // A large one it does not read back: the job tells it the bytes.
+        let job = match &self.watcher {
+            Some(watcher) => {
+                watcher.share(&self.doc.scene().objects);
+                job.announcing(watcher.own_writes())
+            }
+            None => job,
+        };
         self.saving = Some(Saving {
             then,
             merged: false,

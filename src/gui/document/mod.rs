@@ -43,7 +43,7 @@ use disk::fingerprint;
 pub use disk::{FileRead, FingerprintError, PendingMerge, Reload, SaveError, fingerprint_file};
 use history::Step;
 pub use restore::{TextWriter, fingerprint_text};
-pub use save::{SaveJob, SaveOutcome, SaveStep};
+pub use save::{OwnWrites, SaveJob, SaveOutcome, SaveStep};
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
