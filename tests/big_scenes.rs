@@ -11,7 +11,7 @@
 
 mod common;
 
-use rayoflight::gui::document::{Reload, SaveStep};
+use rayoflight::gui::document::{FileRead, Reload, SaveStep};
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::request::RenderRequest;
@@ -79,16 +79,7 @@ fn a_save_is_read_back_sharing_the_objects_on_screen() {
     doc.apply(set("object[4].color.red", 0.75)).unwrap();
     watcher.share(&doc.scene().objects);
     doc.save().unwrap();
-    let back = loop {
-        match rx
-            .recv_timeout(Duration::from_secs(5))
-            .expect("the save is seen")
-        {
-            FileEvent::Loaded(read) => break read,
-            FileEvent::Broken(e) => panic!("{e}"),
-            FileEvent::Missing | FileEvent::Reading => {}
-        }
-    };
+    let back = next_loaded(&rx);
     assert!(unshared(&back.scene, doc.scene()).is_empty());
     assert_eq!(doc.file_read(*back), Reload::Unchanged);
     // What the file holds now is what was saved: every object shared.
@@ -122,22 +113,29 @@ fn a_large_file_the_app_saved_is_not_read_back() {
         panic!("the app's own save was read back: {event:?}");
     }
     // Another program's bytes are read.
-    let theirs =
-        std::fs::read_to_string(&path)
-            .unwrap()
-            .replacen("blue=\"0.25\"", "blue=\"0.5\"", 1);
+    let saved = std::fs::read_to_string(&path).unwrap();
+    let theirs = saved.replacen("blue=\"0.25\"", "blue=\"0.5\"", 1);
     std::fs::write(&path, &theirs).unwrap();
-    let back = loop {
+    assert_eq!(doc.file_read(*next_loaded(&rx)), Reload::Replaced);
+    // And so are the app's saved bytes when another program writes them
+    // back: the document last read other ones.
+    std::thread::sleep(Duration::from_millis(300));
+    std::fs::write(&path, &saved).unwrap();
+    assert_eq!(doc.file_read(*next_loaded(&rx)), Reload::Replaced);
+}
+
+/// The next file the watcher read and loaded.
+fn next_loaded(rx: &mpsc::Receiver<FileEvent>) -> Box<FileRead> {
+    loop {
         match rx
             .recv_timeout(Duration::from_secs(10))
-            .expect("another program's change is seen")
+            .expect("the change is seen")
         {
-            FileEvent::Loaded(read) => break read,
+            FileEvent::Loaded(read) => return read,
             FileEvent::Broken(e) => panic!("{e}"),
             FileEvent::Missing | FileEvent::Reading => {}
         }
-    };
-    assert_eq!(doc.file_read(*back), Reload::Replaced);
+    }
 }
 
 #[test]

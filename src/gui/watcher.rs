@@ -242,6 +242,9 @@ impl SceneWatcher {
                     }
                     return;
                 }
+                // Other bytes: should the app's own come back, the
+                // document will have read these meanwhile.
+                own.forget();
                 if large {
                     on_event(FileEvent::Reading);
                 }

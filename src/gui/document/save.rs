@@ -53,6 +53,14 @@ impl OwnWrites {
     pub fn is_own(&self, fingerprint: u64) -> bool {
         self.0.lock().is_ok_and(|last| *last == Some(fingerprint))
     }
+
+    /// The file was seen holding other bytes since: the same bytes coming
+    /// back later are another program's, to be read.
+    pub fn forget(&self) {
+        if let Ok(mut last) = self.0.lock() {
+            *last = None;
+        }
+    }
 }
 
 /// What a [`SaveJob`] did.
