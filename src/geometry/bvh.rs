@@ -79,7 +79,8 @@ fn max<L: Lanes>(a: L, b: L) -> L {
 pub trait Search<L: Lanes> {
     /// Per lane, the nearest hit so far (infinity before any).
     fn t_max(&self) -> L;
-    /// Tests the primitive at position `k` of [`Bvh::order`] for `lanes`.
+    /// Tests the primitive at position `k` in leaf order (where
+    /// [`Bvh::build_over`] left the items) for `lanes`.
     fn test(&mut self, k: usize, lanes: L::Mask);
 }
 
@@ -243,7 +244,7 @@ impl Bvh {
 }
 
 impl Bvh {
-    /// Collects into `out` the positions (in [`Bvh::order`]) of the
+    /// Collects into `out` the positions (in leaf order) of the
     /// primitives whose boxes reach into the convex cone from `apex`
     /// bounded by the planes through it with inward unit `normals`, with a
     /// slack of `relative` per unit of distance for the normals' own
