@@ -11,7 +11,7 @@
 
 mod common;
 
-use rayoflight::gui::document::{FileRead, Reload, SaveStep};
+use rayoflight::gui::document::{Document, FileRead, Reload, SaveStep};
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::request::RenderRequest;
@@ -70,12 +70,7 @@ fn the_edited_scene_shares_every_object_but_the_one_edited() {
 #[test]
 fn a_save_is_read_back_sharing_the_objects_on_screen() {
     let (_dir, path, mut doc) = common::document_on(&spheres_text(1000));
-    let (tx, rx) = mpsc::channel();
-    let watcher = SceneWatcher::new(&path, doc.disk_fingerprint(), move |e| {
-        let _ = tx.send(e);
-    })
-    .unwrap();
-    std::thread::sleep(Duration::from_millis(100));
+    let (rx, watcher) = watched(&path, &doc);
     doc.apply(set("object[4].color.red", 0.75)).unwrap();
     watcher.share(&doc.scene().objects);
     doc.save().unwrap();
@@ -94,12 +89,7 @@ fn a_large_file_the_app_saved_is_not_read_back() {
     let text = spheres_text(30_000);
     assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
     let (_dir, path, mut doc) = common::document_on(&text);
-    let (tx, rx) = mpsc::channel();
-    let watcher = SceneWatcher::new(&path, doc.disk_fingerprint(), move |e| {
-        let _ = tx.send(e);
-    })
-    .unwrap();
-    std::thread::sleep(Duration::from_millis(100));
+    let (rx, watcher) = watched(&path, &doc);
     doc.apply(set("object[4].color.red", 0.75)).unwrap();
     let job = doc.save_job().unwrap().announcing(watcher.own_writes());
     let outcome = job.run();
@@ -122,6 +112,18 @@ fn a_large_file_the_app_saved_is_not_read_back() {
     std::thread::sleep(Duration::from_millis(300));
     std::fs::write(&path, &saved).unwrap();
     assert_eq!(doc.file_read(*next_loaded(&rx)), Reload::Replaced);
+}
+
+/// A watcher on `path`, which `doc` read, and the events it sends, once
+/// it has settled.
+fn watched(path: &Path, doc: &Document) -> (mpsc::Receiver<FileEvent>, SceneWatcher) {
+    let (tx, rx) = mpsc::channel();
+    let watcher = SceneWatcher::new(path, doc.disk_fingerprint(), move |e| {
+        let _ = tx.send(e);
+    })
+    .unwrap();
+    std::thread::sleep(Duration::from_millis(100));
+    (rx, watcher)
 }
 
 /// The next file the watcher read and loaded.

@@ -231,11 +231,12 @@ impl SceneWatcher {
                     .is_ok_and(|m| m.len() >= crate::gui::BACKGROUND_BYTES);
                 // The bytes the app's own save just wrote: the document
                 // knows them (it would find the read unchanged). Only a
-                // large file is fingerprinted first: a small one is read
-                // at once, and the fingerprint costs a read of its own.
+                // large file after such a save is fingerprinted first: a
+                // small one is read at once, and the fingerprint costs a
+                // read of its own.
                 if large
-                    && let Ok(fingerprint) = fingerprint_file(&target)
-                    && own.is_own(fingerprint)
+                    && let Some(fingerprint) = own.last()
+                    && fingerprint_file(&target).ok() == Some(fingerprint)
                 {
                     if let Ok(mut seen) = seen.lock() {
                         *seen = (now, Some(hash(&("loaded", fingerprint))));

@@ -49,9 +49,10 @@ impl OwnWrites {
         }
     }
 
-    /// Whether `fingerprint` is that of the last file written.
-    pub fn is_own(&self, fingerprint: u64) -> bool {
-        self.0.lock().is_ok_and(|last| *last == Some(fingerprint))
+    /// The fingerprint of the last file written, if the file has not been
+    /// seen holding other bytes since.
+    pub fn last(&self) -> Option<u64> {
+        self.0.lock().ok().and_then(|last| *last)
     }
 
     /// The file was seen holding other bytes since: the same bytes coming
