@@ -14,7 +14,8 @@
 //! is); every finished tile is sent to the UI at once, with a wake-up call
 //! at most once a [`FRAME`] so that the window draws only as often as it
 //! can show something new. The next request reuses the prepared scene when
-//! only the camera or the anti-aliasing changed, and the app picks objects
+//! only the camera or the anti-aliasing changed, and its geometry when only
+//! colours, materials, lights or the model changed; the app picks objects
 //! in it ([`Worker::prepared`]).
 //!
 //! A render uses every core ([`Worker::default_threads`]); one asked for

@@ -28,6 +28,9 @@
 //! - All of it but the camera is one shared [`World`]: another view of the
 //!   same scene ([`Prepared::with_view`]: a coarse pass, a moved camera, a
 //!   pick) prepares nothing again.
+//!   Its geometry (the primitives and their hierarchy, [`Shapes`]) is
+//!   shared in turn with the next version of the scene when only colours,
+//!   materials, lights or the model changed ([`Prepared::with_surfaces`]).
 
 use super::explain::{Explanation, PixelValue, Recorder, Sample};
 use super::observer::{Ended, Observer};
@@ -91,14 +94,11 @@ pub struct Prepared {
 /// The part of a prepared scene that does not depend on the view.
 #[derive(Debug)]
 struct World {
-    /// Spheres, in the BVH's order when there is one.
-    bounded: Vec<Primitive>,
-    /// Scene object index of each bounded primitive.
-    /// (u32: at most `MAX_OBJECTS`, 4 MB less a million.)
-    bounded_objects: Vec<u32>,
-    bvh: Option<Bvh>,
-    planes: Vec<Primitive>,
-    plane_objects: Vec<u32>,
+    /// What the objects' shapes and transformations prepare to, shared
+    /// with the world of an earlier version of the scene that had the same
+    /// ones (an edit of a colour, a material, a light or the model prepares
+    /// no geometry again: [`Prepared::with_surfaces`]).
+    shapes: Arc<Shapes>,
     /// The scene's objects, shared with it: shading reads each hit's
     /// colour and material from its object (a copy of them would be 56
     /// bytes an object more, 56 MB for a million spheres).
@@ -114,18 +114,34 @@ struct World {
     /// add per unit of weight and of `max_local` (empty when max_ks ≥ 1:
     /// no bound).
     tail: Vec<f64>,
-    /// Bounding sphere (centre, radius) of each bounded primitive, for the
-    /// tile frustum test; empty when there are too many to cull.
-    cull_spheres: Vec<(DVec3, f64)>,
     early_stop: bool,
-    /// Primary rays of a tile test only what its frustum reaches.
-    cull: bool,
     /// The study's method choices (see [`RenderOptions`]); the defaults
     /// are the reference path.
-    precision: Precision,
     sphere: SphereTest,
     offset: Offset,
     draft: bool,
+}
+
+/// The geometry of a world: the primitives, their hierarchy and what
+/// culls them, made from the objects' shapes and transformations alone
+/// (and the options `accelerate` and `precision`).
+#[derive(Debug)]
+struct Shapes {
+    /// Spheres, in the BVH's order when there is one.
+    bounded: Vec<Primitive>,
+    /// Scene object index of each bounded primitive.
+    /// (u32: at most `MAX_OBJECTS`, 4 MB less a million.)
+    bounded_objects: Vec<u32>,
+    bvh: Option<Bvh>,
+    planes: Vec<Primitive>,
+    plane_objects: Vec<u32>,
+    /// Bounding sphere (centre, radius) of each bounded primitive, for the
+    /// tile frustum test; empty when there are too many to cull.
+    cull_spheres: Vec<(DVec3, f64)>,
+    /// Primary rays of a tile test only what its frustum reaches (and the
+    /// BVH is built): `options.accelerate`.
+    cull: bool,
+    precision: Precision,
     /// `bounded` and `planes` in f32, built only for [`Precision::F32`].
     bounded32: Vec<Primitive32>,
     planes32: Vec<Primitive32>,
@@ -566,8 +582,8 @@ impl<const TEXTBOOK: bool, L: Lanes> Kernel for Exact<TEXTBOOK, L> {
             rays,
             alive,
             among,
-            &p.world.bounded,
-            &p.world.planes,
+            &p.world.shapes.bounded,
+            &p.world.shapes.planes,
             &TestExact::<TEXTBOOK, L>(rays),
         )
     }
@@ -593,8 +609,8 @@ impl<const TEXTBOOK: bool, L: Lanes> Kernel for Exact<TEXTBOOK, L> {
             }
             let hit = hits.lane(i);
             let primitive = match hit.primitive {
-                PrimitiveRef::Bounded(k) => &p.world.bounded[k],
-                PrimitiveRef::Plane(k) => &p.world.planes[k],
+                PrimitiveRef::Bounded(k) => &p.world.shapes.bounded[k],
+                PrimitiveRef::Plane(k) => &p.world.shapes.planes[k],
             };
             match primitive {
                 Primitive::Ball { center, .. } => (centers[i], ball[i]) = (*center, true),
@@ -649,8 +665,8 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
             &ray.to_f64(),
             alive,
             among,
-            &p.world.bounded32,
-            &p.world.planes32,
+            &p.world.shapes.bounded32,
+            &p.world.shapes.planes32,
             &TestSingle::<TEXTBOOK>(ray),
         )
     }
@@ -662,8 +678,8 @@ impl<const TEXTBOOK: bool> Kernel for Single<TEXTBOOK> {
         let t = hit.t as f32;
         let m = ray.at(t);
         let mut n = match hit.primitive {
-            PrimitiveRef::Bounded(k) => p.world.bounded32[k].normal_at(ray, t),
-            PrimitiveRef::Plane(k) => p.world.planes32[k].normal_at(ray, t),
+            PrimitiveRef::Bounded(k) => p.world.shapes.bounded32[k].normal_at(ray, t),
+            PrimitiveRef::Plane(k) => p.world.shapes.planes32[k].normal_at(ray, t),
         };
         if n.dot(ray.dir) > 0.0 {
             n = -n;
@@ -718,132 +734,164 @@ pub(super) fn max_local_color(scene: &Scene) -> Color {
 
 /// Builds the prepared scene.
 pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
-    // Spheres are bounded, planes are not.
-    let mut bounded_objects = Vec::with_capacity(
-        scene
-            .objects
-            .iter()
-            .filter(|o| o.shape == Shape::Sphere)
-            .count(),
-    );
-    let mut planes = Vec::new();
-    let mut plane_objects = Vec::new();
-    // Object numbers fit in u32: the loader takes at most MAX_OBJECTS.
-    for (index, object) in (0u32..).zip(scene.objects.iter()) {
-        match object.shape {
-            Shape::Sphere => bounded_objects.push(index),
-            Shape::Plane => {
-                planes.push(Primitive::new(object.shape, &object.transform));
-                plane_objects.push(index);
+    let shapes = Arc::new(Shapes::new(scene, options));
+    Prepared::over(shapes, scene, options)
+}
+
+impl Shapes {
+    /// The primitives of `scene`'s objects, their hierarchy and culling.
+    fn new(scene: &Scene, options: &RenderOptions) -> Shapes {
+        // Spheres are bounded, planes are not.
+        let mut bounded_objects = Vec::with_capacity(
+            scene
+                .objects
+                .iter()
+                .filter(|o| o.shape == Shape::Sphere)
+                .count(),
+        );
+        let mut planes = Vec::new();
+        let mut plane_objects = Vec::new();
+        // Object numbers fit in u32: the loader takes at most MAX_OBJECTS.
+        for (index, object) in (0u32..).zip(scene.objects.iter()) {
+            match object.shape {
+                Shape::Sphere => bounded_objects.push(index),
+                Shape::Plane => {
+                    planes.push(Primitive::new(object.shape, &object.transform));
+                    plane_objects.push(index);
+                }
             }
         }
-    }
-    // The primitives with their object numbers, made in the scene's order
-    // (its objects read in a row), then put in leaf order by the build
-    // itself: leaves read them in a row, and no object is read again in
-    // the hierarchy's order (a million scattered reads).
-    let mut placed: Vec<(Primitive, u32)> = bounded_objects
-        .par_iter()
-        .map(|&index| {
-            let object = &scene.objects[index as usize];
-            (Primitive::new(object.shape, &object.transform), index)
-        })
-        .collect();
-    drop(bounded_objects);
-    let bvh = (options.accelerate && placed.len() >= BVH_THRESHOLD).then(|| {
-        Bvh::build_over(&mut placed, |(primitive, _)| {
-            primitive.bounds().unwrap_or(Aabb::EMPTY)
-        })
-    });
-    let bounded_objects: Vec<u32> = placed.iter().map(|&(_, index)| index).collect();
-    // In place: the pairs' memory becomes the primitives' (40 bytes of 48).
-    let bounded: Vec<Primitive> = placed.into_iter().map(|(primitive, _)| primitive).collect();
-
-    let illumination = scene.model.illumination;
-    let max_local = max_local_color(scene);
-    let max_ks = scene
-        .objects
-        .iter()
-        .map(|o| o.material.ks)
-        .fold(0.0, f64::max);
-    let depth = scene.model.reflection_depth();
-    let depth = if options.depth_cut {
-        depth.saturating_sub(1)
-    } else {
-        depth
-    };
-    let tail = if max_ks < 1.0 && depth > 0 {
-        let mut tail = Vec::with_capacity(depth as usize + 1);
-        let (mut sum, mut power) = (0.0, 1.0);
-        tail.push(0.0);
-        for _ in 0..depth {
-            sum += power;
-            power *= max_ks;
-            tail.push(sum);
-        }
-        tail
-    } else {
-        Vec::new()
-    };
-
-    let cull_spheres = if options.accelerate && bounded.len() <= CULL_LIMIT {
-        bounded
-            .iter()
-            .filter_map(|p| p.bounds())
-            .map(|b| {
-                let (centre, radius) = (b.centroid(), 0.5 * (b.max - b.min).length());
-                // A box that overflows (a sphere stretched by 1e308) has
-                // no finite centre: it may be anywhere, every tile keeps it.
-                if centre.is_finite() && radius.is_finite() {
-                    (centre, radius)
-                } else {
-                    (DVec3::ZERO, f64::INFINITY)
-                }
+        // The primitives with their object numbers, made in the scene's
+        // order (its objects read in a row), then put in leaf order by the
+        // build itself: leaves read them in a row, and no object is read
+        // again in the hierarchy's order (a million scattered reads).
+        let mut placed: Vec<(Primitive, u32)> = bounded_objects
+            .par_iter()
+            .map(|&index| {
+                let object = &scene.objects[index as usize];
+                (Primitive::new(object.shape, &object.transform), index)
             })
-            .collect()
-    } else {
-        Vec::new()
-    };
+            .collect();
+        drop(bounded_objects);
+        let bvh = (options.accelerate && placed.len() >= BVH_THRESHOLD).then(|| {
+            Bvh::build_over(&mut placed, |(primitive, _)| {
+                primitive.bounds().unwrap_or(Aabb::EMPTY)
+            })
+        });
+        let bounded_objects: Vec<u32> = placed.iter().map(|&(_, index)| index).collect();
+        // In place: the pairs' memory becomes the primitives' (40 bytes of 48).
+        let bounded: Vec<Primitive> = placed.into_iter().map(|(primitive, _)| primitive).collect();
 
-    let (bounded32, planes32) = match options.precision {
-        Precision::F64 => (Vec::new(), Vec::new()),
-        Precision::F32 => (
-            bounded.iter().map(Primitive32::new).collect(),
-            planes.iter().map(Primitive32::new).collect(),
-        ),
-    };
+        let cull_spheres = if options.accelerate && bounded.len() <= CULL_LIMIT {
+            bounded
+                .iter()
+                .filter_map(|p| p.bounds())
+                .map(|b| {
+                    let (centre, radius) = (b.centroid(), 0.5 * (b.max - b.min).length());
+                    // A box that overflows (a sphere stretched by 1e308)
+                    // has no finite centre: it may be anywhere, every tile
+                    // keeps it.
+                    if centre.is_finite() && radius.is_finite() {
+                        (centre, radius)
+                    } else {
+                        (DVec3::ZERO, f64::INFINITY)
+                    }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
 
-    let world = World {
-        bounded32,
-        planes32,
-        precision: options.precision,
-        sphere: options.sphere,
-        offset: options.offset,
-        draft: options.draft,
-        bounded,
-        bounded_objects,
-        cull_spheres,
-        bvh,
-        planes,
-        plane_objects,
-        objects: scene.objects.clone(),
-        lights: scene.lights.clone(),
-        illumination,
-        depth,
-        max_local,
-        tail,
-        early_stop: options.early_stop,
-        cull: options.accelerate,
-    };
-    Prepared {
-        world: Arc::new(world),
-        camera: CameraRays::new(&scene.camera),
-        aa: options.aa.max(1),
-        pass: Pass::Final,
+        let (bounded32, planes32) = match options.precision {
+            Precision::F64 => (Vec::new(), Vec::new()),
+            Precision::F32 => (
+                bounded.iter().map(Primitive32::new).collect(),
+                planes.iter().map(Primitive32::new).collect(),
+            ),
+        };
+        Shapes {
+            bounded,
+            bounded_objects,
+            bvh,
+            planes,
+            plane_objects,
+            cull_spheres,
+            cull: options.accelerate,
+            precision: options.precision,
+            bounded32,
+            planes32,
+        }
     }
 }
 
 impl Prepared {
+    /// `scene` prepared over `shapes`, the geometry of its objects' shapes
+    /// and transformations with `options`.
+    fn over(shapes: Arc<Shapes>, scene: &Scene, options: &RenderOptions) -> Prepared {
+        let illumination = scene.model.illumination;
+        let max_local = max_local_color(scene);
+        let max_ks = scene
+            .objects
+            .iter()
+            .map(|o| o.material.ks)
+            .fold(0.0, f64::max);
+        let depth = scene.model.reflection_depth();
+        let depth = if options.depth_cut {
+            depth.saturating_sub(1)
+        } else {
+            depth
+        };
+        let tail = if max_ks < 1.0 && depth > 0 {
+            let mut tail = Vec::with_capacity(depth as usize + 1);
+            let (mut sum, mut power) = (0.0, 1.0);
+            tail.push(0.0);
+            for _ in 0..depth {
+                sum += power;
+                power *= max_ks;
+                tail.push(sum);
+            }
+            tail
+        } else {
+            Vec::new()
+        };
+
+        let world = World {
+            shapes,
+            objects: scene.objects.clone(),
+            lights: scene.lights.clone(),
+            illumination,
+            depth,
+            max_local,
+            tail,
+            early_stop: options.early_stop,
+            sphere: options.sphere,
+            offset: options.offset,
+            draft: options.draft,
+        };
+        Prepared {
+            world: Arc::new(world),
+            camera: CameraRays::new(&scene.camera),
+            aa: options.aa.max(1),
+            pass: Pass::Final,
+        }
+    }
+
+    /// `scene` prepared with `options`, over this one's geometry when
+    /// `scene`'s objects have the shapes and transformations of the scene
+    /// this was prepared from, with the same `accelerate` and `precision`
+    /// (only colours, materials, lights, the model or the camera changed);
+    /// `None` when they do not. The image is the one [`prepare`] gives.
+    pub fn with_surfaces(&self, scene: &Scene, options: &RenderOptions) -> Option<Prepared> {
+        let world = &self.world;
+        let same = world.shapes.cull == options.accelerate
+            && world.shapes.precision == options.precision
+            && world.objects.len() == scene.objects.len()
+            && world.objects.iter().zip(&scene.objects).all(|(a, b)| {
+                Arc::ptr_eq(a, b) || (a.shape == b.shape && a.transform == b.transform)
+            });
+        same.then(|| Prepared::over(Arc::clone(&world.shapes), scene, options))
+    }
+
     /// The same scene seen through `camera` (its size may differ from the
     /// scene's: the coarse passes of a preview) with `aa` × `aa` rays per
     /// pixel. Nothing of the scene is prepared again or copied.
@@ -874,6 +922,12 @@ impl Prepared {
         Arc::ptr_eq(&self.world, &other.world)
     }
 
+    /// Both share one geometry (the later one was prepared over the
+    /// other's: [`Prepared::with_surfaces`]).
+    pub fn same_shapes(&self, other: &Prepared) -> bool {
+        Arc::ptr_eq(&self.world.shapes, &other.world.shapes)
+    }
+
     pub fn width(&self) -> u32 {
         self.camera.width()
     }
@@ -898,8 +952,8 @@ impl Prepared {
             ray,
             true,
             Candidates::All,
-            &self.world.bounded,
-            &self.world.planes,
+            &self.world.shapes.bounded,
+            &self.world.shapes.planes,
             &TestExact::<false, f64>(ray),
         );
         hits.found.then(|| hits.lane(0))
@@ -923,16 +977,16 @@ impl Prepared {
         for (k, plane) in planes.iter().enumerate() {
             hits.consider(
                 intersect.test(plane).of(alive),
-                self.world.plane_objects[k],
+                self.world.shapes.plane_objects[k],
                 -1.0 - k as f64,
             );
         }
-        match (&self.world.bvh, candidates) {
+        match (&self.world.shapes.bvh, candidates) {
             (_, Candidates::Only(list)) => {
                 for &k in list {
                     hits.consider(
                         intersect.test(&bounded[k]).of(alive),
-                        self.world.bounded_objects[k],
+                        self.world.shapes.bounded_objects[k],
                         k as f64,
                     );
                 }
@@ -941,7 +995,7 @@ impl Prepared {
                 let mut search = BvhSearch {
                     hits: &mut hits,
                     bounded,
-                    objects: &self.world.bounded_objects,
+                    objects: &self.world.shapes.bounded_objects,
                     intersect,
                 };
                 bvh.nearest(rays, alive, &mut search);
@@ -950,7 +1004,7 @@ impl Prepared {
                 for (k, primitive) in bounded.iter().enumerate() {
                     hits.consider(
                         intersect.test(primitive).of(alive),
-                        self.world.bounded_objects[k],
+                        self.world.shapes.bounded_objects[k],
                         k as f64,
                     );
                 }
@@ -1119,7 +1173,7 @@ impl Prepared {
 
     #[inline(always)]
     fn with_precision<const TEXTBOOK: bool, W: WithKernel>(&self, work: W) -> W::Output {
-        match self.world.precision {
+        match self.world.shapes.precision {
             Precision::F64 if W::ONE_LANE => {
                 work.run(self, &Exact::<TEXTBOOK, f64>::new(self.world.offset))
             }
@@ -1173,7 +1227,7 @@ impl Prepared {
     pub fn rays_through(&self, tile: &Tile, points: &[(f64, f64)]) -> u64 {
         let culled = self.tile_candidates(tile);
         let candidates = match &culled {
-            Some(list) if list.is_empty() && self.world.planes.is_empty() => return 0,
+            Some(list) if list.is_empty() && self.world.shapes.planes.is_empty() => return 0,
             Some(list) => Candidates::Only(list),
             None => Candidates::All,
         };
@@ -1396,7 +1450,7 @@ impl Prepared {
         let candidates = self.tile_candidates(&traced_area);
         let candidates = match &candidates {
             Some(list) => {
-                if list.is_empty() && self.world.planes.is_empty() {
+                if list.is_empty() && self.world.shapes.planes.is_empty() {
                     // Nothing can be hit from this tile: every ray misses.
                     return (!cancel.is_cancelled()).then_some(0);
                 }
@@ -1444,7 +1498,7 @@ impl Prepared {
     /// edges), or `None` when the scene has too many to cull or culling
     /// is off.
     fn tile_candidates(&self, tile: &Tile) -> Option<Vec<usize>> {
-        if !self.world.cull {
+        if !self.world.shapes.cull {
             return None;
         }
         let (x0, y0) = (f64::from(tile.x), f64::from(tile.y));
@@ -1478,8 +1532,8 @@ impl Prepared {
             if n.dot(centre) < 0.0 { -n } else { n }
         });
         let relative = 1e-9 + 1e-13 / sin_min;
-        if let Some(bvh) = &self.world.bvh
-            && self.world.cull_spheres.is_empty()
+        if let Some(bvh) = &self.world.shapes.bvh
+            && self.world.shapes.cull_spheres.is_empty()
         {
             let mut found = Vec::new();
             return bvh
@@ -1493,6 +1547,7 @@ impl Prepared {
         };
         Some(
             self.world
+                .shapes
                 .cull_spheres
                 .iter()
                 .enumerate()

@@ -1,6 +1,7 @@
 //! A progressive render, as the app shows one: the scene prepared once
 //! (or the last render's preparation taken again when only the camera or
-//! the anti-aliasing changed, see [`LastPrepared`]), then traced coarse to
+//! the anti-aliasing changed, and its geometry when only colours,
+//! materials, lights or the model did, see [`LastPrepared`]), then traced coarse to
 //! fine — 1/8, 1/4, then full size for a large image ([`passes`]) — each
 //! pass through the one tile loop ([`trace_tiles`]) on the pool it is
 //! called in, each finished tile handed on at once.
@@ -33,7 +34,10 @@ pub fn passes(width: u32, height: u32) -> Vec<u32> {
 /// The scene prepared last, the options it was prepared with, and the
 /// prepared scene. The next render reuses it when only the camera or the
 /// anti-aliasing changed (orbiting a million spheres prepares them once),
-/// and a viewer picks objects in it rather than preparing again.
+/// and its geometry when only colours, materials, lights or the model
+/// changed (an edit of a value on a million spheres builds no second
+/// hierarchy beside the first); a viewer picks objects in it rather than
+/// preparing again.
 #[derive(Default)]
 pub struct LastPrepared {
     last: Mutex<Option<(Arc<Scene>, RenderOptions, Prepared)>>,
@@ -42,25 +46,33 @@ pub struct LastPrepared {
 impl LastPrepared {
     /// `scene` prepared with `options`: the last preparation when it was
     /// of the same scene but for the camera, with the same options but
-    /// for the anti-aliasing; else prepared now, and kept.
+    /// for the anti-aliasing; over the last one's geometry when only
+    /// colours, materials, lights or the model changed
+    /// ([`Prepared::with_surfaces`]); else prepared now. Kept for the next.
     pub fn prepare(&self, scene: &Arc<Scene>, options: &RenderOptions) -> Prepared {
-        let reused = self.last.lock().ok().and_then(|last| {
+        let last = self.last.lock().ok().and_then(|last| {
             let (last, last_options, prepared) = last.as_ref()?;
             let same_options = RenderOptions {
                 aa: options.aa,
                 ..last_options.clone()
             } == *options;
-            (same_options && last.same_but_camera(scene)).then(|| prepared.clone())
+            Some((
+                same_options && last.same_but_camera(scene),
+                prepared.clone(),
+            ))
         });
-        reused.unwrap_or_else(|| {
-            // The last one goes first: both may be large.
-            self.forget();
-            let prepared = prepare(scene, options);
-            if let Ok(mut last) = self.last.lock() {
-                *last = Some((Arc::clone(scene), options.clone(), prepared.clone()));
-            }
-            prepared
-        })
+        let surfaced = match last {
+            Some((true, prepared)) => return prepared,
+            Some((false, prepared)) => prepared.with_surfaces(scene, options),
+            None => None,
+        };
+        // The last one goes first: both may be large.
+        self.forget();
+        let prepared = surfaced.unwrap_or_else(|| prepare(scene, options));
+        if let Ok(mut last) = self.last.lock() {
+            *last = Some((Arc::clone(scene), options.clone(), prepared.clone()));
+        }
+        prepared
     }
 
     /// `scene` prepared (with the options of the last render), seen
@@ -224,5 +236,127 @@ mod tests {
             )
             .is_err()
         );
+    }
+
+    /// Renders `scene` through `last` and checks the image is the one a
+    /// fresh preparation gives; returns the preparation used.
+    fn rendered_as_fresh(last: &LastPrepared, scene: &Scene, options: &RenderOptions) -> Prepared {
+        let scene = Arc::new(scene.clone());
+        let (width, height) = (scene.camera.width, scene.camera.height);
+        let image = Mutex::new(image::RgbImage::new(width, height));
+        render_progressive(
+            &scene,
+            options,
+            &[1],
+            last,
+            &Cancel::never(),
+            &mut |_| {},
+            &|_, t: &Tile, pixels: &[u8]| {
+                let mut image = image.lock().unwrap();
+                for (k, p) in pixels.chunks_exact(3).enumerate() {
+                    let (x, y) = (t.x + k as u32 % t.width, t.y + k as u32 / t.width);
+                    image.put_pixel(x, y, image::Rgb([p[0], p[1], p[2]]));
+                }
+            },
+        )
+        .unwrap();
+        let fresh = super::super::render(&scene, options).unwrap();
+        assert!(
+            image.into_inner().unwrap() == fresh,
+            "the image of a fresh preparation"
+        );
+        last.seen_from(&scene).expect("kept")
+    }
+
+    /// A change to a scene, in the test below.
+    type Edit = Box<dyn Fn(&mut Scene)>;
+
+    #[test]
+    fn an_edit_of_surfaces_keeps_the_geometry_and_the_image_is_the_same() {
+        use crate::shading::Illumination;
+        // Enough spheres for a hierarchy, a plane, reflections.
+        let text = crate::bench::spheres_on_floor(40, 64, 48);
+        let mut scene = crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap();
+        scene.model.illumination = Illumination::Whitted;
+        let last = LastPrepared::default();
+        for options in [
+            RenderOptions::default(),
+            RenderOptions {
+                accelerate: false,
+                ..RenderOptions::default()
+            },
+            RenderOptions {
+                precision: crate::render::Precision::F32,
+                ..RenderOptions::default()
+            },
+        ] {
+            let mut before = rendered_as_fresh(&last, &scene, &options);
+            let mut edits: Vec<(&str, Edit, bool)> = vec![
+                (
+                    "a material",
+                    Box::new(|s| Arc::make_mut(&mut s.objects[3]).material.ks += 0.05),
+                    true,
+                ),
+                (
+                    "every material",
+                    Box::new(|s| {
+                        for o in &mut s.objects {
+                            Arc::make_mut(o).material.ka *= 0.5;
+                        }
+                    }),
+                    true,
+                ),
+                (
+                    "a colour",
+                    Box::new(|s| Arc::make_mut(&mut s.objects[0]).color.y += 0.1),
+                    true,
+                ),
+                ("a light", Box::new(|s| s.lights[0].position.x += 1.0), true),
+                (
+                    "the model",
+                    Box::new(|s| {
+                        s.model.illumination = match s.model.illumination {
+                            Illumination::Whitted => Illumination::Phong,
+                            _ => Illumination::Whitted,
+                        }
+                    }),
+                    true,
+                ),
+                (
+                    "a move",
+                    Box::new(|s| {
+                        let o = Arc::make_mut(&mut s.objects[5]);
+                        let mut steps = o.transform.steps().to_vec();
+                        steps.push(crate::math::TransformStep::Translate(
+                            crate::math::Vec3::new(0.5, 0.0, 0.0),
+                        ));
+                        o.transform = crate::math::Transform::from_steps(steps).unwrap();
+                    }),
+                    false,
+                ),
+                (
+                    "one object fewer",
+                    Box::new(|s| {
+                        s.objects.pop();
+                    }),
+                    false,
+                ),
+            ];
+            for (what, edit, kept) in edits.drain(..) {
+                edit(&mut scene);
+                let after = rendered_as_fresh(&last, &scene, &options);
+                assert_eq!(after.same_shapes(&before), kept, "{what}");
+                assert!(!after.same_world(&before), "{what}");
+                before = after;
+            }
+            // Other options than the geometry was made with: made again.
+            let other = RenderOptions {
+                accelerate: !options.accelerate,
+                ..options.clone()
+            };
+            let again = rendered_as_fresh(&last, &scene, &other);
+            assert!(!again.same_shapes(&before));
+            rendered_as_fresh(&last, &scene, &options);
+        }
     }
 }
