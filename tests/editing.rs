@@ -538,8 +538,14 @@ fn defect_11_a_picked_object_opens_once_and_then_folds() {
     let mut harness = app_on(Document::open(&path).unwrap());
     // The middle of the picture is the green sphere.
     harness.state_mut().pick(8.0, 6.0);
-    harness.run_steps(3);
-    assert!(harness.query_by_label("Remove object").is_some(), "opened");
+    // The pick waits for the worker to have prepared the scene (a loaded
+    // machine may take more than a few frames).
+    let start = Instant::now();
+    while harness.query_by_label("Remove object").is_none() {
+        assert!(start.elapsed() < Duration::from_secs(10), "opened");
+        harness.step();
+        std::thread::sleep(Duration::from_millis(10));
+    }
     harness.get_by_label("Edit #2 GREEN sphere").click();
     harness.run_steps(3);
     assert!(

@@ -174,16 +174,13 @@ impl<'t> Rewrite<'t> {
 /// need their elements found in the text. An object kept as it was, with
 /// its transformation steps where they were, needs nothing.
 fn changed_objects(original: &Scene, edited: &Edited) -> std::collections::HashSet<usize> {
-    edited
-        .objects
-        .iter()
-        .zip(&edited.scene().objects)
-        .filter_map(|(origin, object)| {
-            let origin = origin.as_ref()?;
+    (0..edited.scene().objects.len())
+        .filter_map(|n| {
+            let origin = edited.origin_of(n)?;
             let unchanged = original
                 .objects
                 .get(origin.index)
-                .is_some_and(|o| unchanged(o, object, &origin.steps));
+                .is_some_and(|o| unchanged(o, &edited.scene().objects[n], &origin.steps));
             (!unchanged).then_some(origin.index)
         })
         .collect()
@@ -218,15 +215,19 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
             .collect()
     };
     let mut by_index = Edited::new(edited.clone());
-    for (i, origin) in std::sync::Arc::make_mut(&mut by_index.objects)
-        .iter_mut()
-        .enumerate()
-    {
-        *origin = original.objects.get(i).map(|o| ObjectOrigin {
-            index: i,
-            steps: steps(o.transform.steps(), edited.objects[i].transform.steps()),
-        });
-    }
+    by_index.set_object_origins(
+        edited
+            .objects
+            .iter()
+            .enumerate()
+            .map(|(i, e)| {
+                original.objects.get(i).map(|o| ObjectOrigin {
+                    index: i,
+                    steps: steps(o.transform.steps(), e.transform.steps()),
+                })
+            })
+            .collect(),
+    );
     for (i, origin) in by_index.lights.iter_mut().enumerate() {
         *origin = (i < original.lights.len()).then_some(i);
     }
@@ -844,10 +845,8 @@ impl Editor<'_, '_> {
             return Err(internal("the text's elements do not match its scene"));
         }
 
-        let origins: Vec<Option<usize>> = edited
-            .objects
-            .iter()
-            .map(|o| o.as_ref().map(|o| o.index))
+        let origins: Vec<Option<usize>> = (0..scene.objects.len())
+            .map(|n| edited.object_origin(n))
             .collect();
         self.group(
             root,
@@ -855,9 +854,8 @@ impl Editor<'_, '_> {
             &origins,
             |i| object_lines(&scene.objects[i]),
             |editor, k, i| {
-                let steps = edited.objects[i]
-                    .as_ref()
-                    .map_or(&[][..], |o| o.steps.as_slice());
+                let origin = edited.origin_of(i);
+                let steps = origin.as_ref().map_or(&[][..], |o| &o.steps[..]);
                 // Its elements were not scanned (see `changed_objects`).
                 if unchanged(&original.objects[k], &scene.objects[i], steps) {
                     return Ok(());

@@ -11,6 +11,7 @@ use super::{
 use crate::math::{Transform, TransformError, TransformStep};
 use crate::scene::{Camera, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, Object, Scene};
 use crate::shading::{Light, Model};
+use std::borrow::Cow;
 use std::sync::Arc;
 
 fn set_step_attr(step: &mut TransformStep, attr: StepAttr, value: f64) {
@@ -35,16 +36,65 @@ pub(crate) struct ObjectOrigin {
     pub(crate) steps: Vec<Option<usize>>,
 }
 
+/// Where an object came from, as [`Edited::origin_of`] tells it: its
+/// index among the text's objects and the origins of its steps.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct OriginOf<'a> {
+    pub(crate) index: usize,
+    pub(crate) steps: Cow<'a, [Option<usize>]>,
+}
+
+/// The origins of an element's own steps as loaded: `Some(0), Some(1), …`
+/// (borrowed for the usual few steps).
+fn own_steps(len: usize) -> Cow<'static, [Option<usize>]> {
+    const OWN: [Option<usize>; 16] = {
+        let mut own = [None; 16];
+        let mut k = 0;
+        while k < own.len() {
+            own[k] = Some(k);
+            k += 1;
+        }
+        own
+    };
+    match OWN.get(..len) {
+        Some(own) => Cow::Borrowed(own),
+        None => Cow::Owned((0..len).map(Some).collect()),
+    }
+}
+
+/// Where each object of an [`Edited`] came from.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct ObjectOrigins(
+    /// `None` while every object is the text's object of its own number
+    /// with its own steps (as loaded, and after edits of values only): a
+    /// million objects need no list of a million origins (80 MB) until
+    /// an edit adds, removes or moves an object or a step. The list is
+    /// shared between copies until one changes it.
+    Option<Arc<Vec<Option<ObjectOrigin>>>>,
+);
+
 /// A scene and, for each of its elements, where it came from in the text
 /// it was loaded from (`None`: added since).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub struct Edited {
     scene: Scene,
-    /// Shared between copies until one changes them (a million objects
-    /// have a million origins; changing a value changes none).
-    pub(crate) objects: Arc<Vec<Option<ObjectOrigin>>>,
+    objects: ObjectOrigins,
     pub(crate) lights: Vec<Option<usize>>,
     pub(crate) camera_steps: Vec<Option<usize>>,
+}
+
+impl PartialEq for Edited {
+    /// The same scene with the same origins, however they are held.
+    fn eq(&self, other: &Edited) -> bool {
+        self.scene == other.scene
+            && self.lights == other.lights
+            && self.camera_steps == other.camera_steps
+            && match (&self.objects.0, &other.objects.0) {
+                (None, None) => true,
+                (Some(a), Some(b)) if Arc::ptr_eq(a, b) => true,
+                _ => (0..self.scene.objects.len()).all(|n| self.origin_of(n) == other.origin_of(n)),
+            }
+    }
 }
 
 /// What undoes an applied edit: the inverse edit, and the origin the
@@ -76,45 +126,24 @@ impl Edited {
     /// Whether this is `scene` as just loaded (`*self ==
     /// Edited::new(scene.clone())`, without the copy).
     pub fn is_as_loaded(&self, scene: &Scene) -> bool {
-        let own = |origins: &[Option<usize>], len: usize| {
-            origins.len() == len && origins.iter().enumerate().all(|(k, o)| *o == Some(k))
-        };
+        let own = |origins: &[Option<usize>], len: usize| *origins == *own_steps(len);
         self.scene == *scene
-            && self.objects.len() == scene.objects.len()
-            && self
-                .objects
-                .iter()
-                .zip(&scene.objects)
-                .enumerate()
-                .all(|(index, (o, object))| {
-                    o.as_ref().is_some_and(|o| {
-                        o.index == index && own(&o.steps, object.transform.steps().len())
-                    })
+            && (0..scene.objects.len()).all(|n| {
+                self.origin_of(n).is_some_and(|o| {
+                    o.index == n && o.steps == own_steps(scene.objects[n].transform.steps().len())
                 })
+            })
             && own(&self.lights, scene.lights.len())
             && own(&self.camera_steps, scene.camera.transform.steps().len())
     }
 
     /// A scene just loaded from a text: every element is its own origin.
     pub fn new(scene: Scene) -> Edited {
-        let objects = scene
-            .objects
-            .iter()
-            .enumerate()
-            .map(|(index, o)| {
-                Some(ObjectOrigin {
-                    index,
-                    steps: (0..o.transform.steps().len()).map(Some).collect(),
-                })
-            })
-            .collect();
         let lights = (0..scene.lights.len()).map(Some).collect();
-        let camera_steps = (0..scene.camera.transform.steps().len())
-            .map(Some)
-            .collect();
+        let camera_steps = own_steps(scene.camera.transform.steps().len()).into_owned();
         Edited {
             scene,
-            objects: Arc::new(objects),
+            objects: ObjectOrigins::default(),
             lights,
             camera_steps,
         }
@@ -127,12 +156,59 @@ impl Edited {
     /// The index, among the loaded text's objects, that object `n` came
     /// from; `None` for an object added since.
     pub fn object_origin(&self, n: usize) -> Option<usize> {
-        self.objects.get(n)?.as_ref().map(|o| o.index)
+        match &self.objects.0 {
+            None => (n < self.scene.objects.len()).then_some(n),
+            Some(list) => list.get(n)?.as_ref().map(|o| o.index),
+        }
     }
 
     /// The index, among the loaded text's lights, that light `n` came from.
     pub fn light_origin(&self, n: usize) -> Option<usize> {
         *self.lights.get(n)?
+    }
+
+    /// Where object `n` came from: its index among the loaded text's
+    /// objects and its steps' origins; `None` for an object added since.
+    pub(crate) fn origin_of(&self, n: usize) -> Option<OriginOf<'_>> {
+        match &self.objects.0 {
+            None => self.scene.objects.get(n).map(|o| OriginOf {
+                index: n,
+                steps: own_steps(o.transform.steps().len()),
+            }),
+            Some(list) => list.get(n)?.as_ref().map(|o| OriginOf {
+                index: o.index,
+                steps: Cow::Borrowed(&o.steps),
+            }),
+        }
+    }
+
+    /// The list of the objects' origins, made from the scene as it is now
+    /// if it was not held yet: before an edit that adds, removes or moves
+    /// an object or a step.
+    fn object_origins_mut(&mut self) -> &mut Vec<Option<ObjectOrigin>> {
+        let scene = &self.scene;
+        let list = self.objects.0.get_or_insert_with(|| {
+            Arc::new(
+                scene
+                    .objects
+                    .iter()
+                    .enumerate()
+                    .map(|(index, o)| {
+                        Some(ObjectOrigin {
+                            index,
+                            steps: own_steps(o.transform.steps().len()).into_owned(),
+                        })
+                    })
+                    .collect(),
+            )
+        });
+        Arc::make_mut(list)
+    }
+
+    /// Sets the origins of every object (tools that pair elements up by
+    /// their place, [`super::super::splice::rewrite_by_index`]).
+    pub(crate) fn set_object_origins(&mut self, origins: Vec<Option<ObjectOrigin>>) {
+        self.objects.0 = Some(Arc::new(origins));
     }
 
     /// Applies `edit` if the result is a valid scene, and returns what undoes
@@ -148,6 +224,14 @@ impl Edited {
     }
 
     fn apply_restoring(&mut self, edit: &Edit, restore: Restore) -> Result<Undo, EditError> {
+        // An edit that adds, removes or moves objects or their steps needs
+        // the list of the objects' origins, made before anything changes.
+        if let Edit::Insert(Item::Object(_) | Item::Step(Owner::Object(_), _), _)
+        | Edit::Remove(Item::Object(_) | Item::Step(Owner::Object(_), _))
+        | Edit::Transform(Owner::Object(_), _) = edit
+        {
+            self.object_origins_mut();
+        }
         match edit {
             Edit::Set(field, value) => {
                 let old = field.get(&self.scene)?;
@@ -336,7 +420,7 @@ impl Edited {
                 self.scene
                     .objects
                     .insert(n, Arc::new(object.as_ref().clone()));
-                Arc::make_mut(&mut self.objects).insert(
+                self.object_origins_mut().insert(
                     n,
                     origin.filter(|o| o.steps.len() == object.transform.steps().len()),
                 );
@@ -391,7 +475,7 @@ impl Edited {
             Item::Object(n) => {
                 object_of(&self.scene, n)?;
                 let object = self.scene.objects.remove(n);
-                let origin = take(Arc::make_mut(&mut self.objects), n);
+                let origin = take(self.object_origins_mut(), n);
                 (
                     Element::Object(Box::new(Arc::unwrap_or_clone(object))),
                     Restore::Object(origin),
@@ -424,7 +508,7 @@ impl Edited {
     fn step_origins_mut(&mut self, owner: Owner) -> Option<&mut Vec<Option<usize>>> {
         match owner {
             Owner::Camera => Some(&mut self.camera_steps),
-            Owner::Object(n) => match Arc::make_mut(&mut self.objects).get_mut(n)? {
+            Owner::Object(n) => match self.object_origins_mut().get_mut(n)? {
                 Some(origin) => Some(&mut origin.steps),
                 None => None,
             },
@@ -494,5 +578,74 @@ fn check_light(item: Item, l: &Light) -> Result<(), EditError> {
             item,
             "position must be finite and colour finite and >= 0",
         ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::edit::{Field, Value};
+
+    fn example() -> Edited {
+        let text = crate::bench::spheres_on_floor(20, 8, 6);
+        Edited::new(crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap())
+    }
+
+    #[test]
+    fn edits_of_values_make_no_list_of_origins() {
+        let original = example();
+        let mut e = original.clone();
+        for path in ["object[3].material.ka", "object[2].transformation[2].x"] {
+            e.apply(&Edit::Set(Field::parse(path).unwrap(), Value::Number(0.25)))
+                .unwrap();
+        }
+        assert!(e.objects.0.is_none(), "values only: no list");
+        assert_eq!(e.object_origin(4), Some(4));
+        let steps = e.scene().objects[2].transform.steps().len();
+        assert_eq!(
+            e.origin_of(2).map(|o| o.steps.into_owned()),
+            Some((0..steps).map(Some).collect())
+        );
+        assert!(!e.is_as_loaded(original.scene()));
+
+        // Removing an object makes the list, from the scene before it.
+        let undo = e.apply(&Edit::Remove(Item::Object(1))).unwrap();
+        assert!(e.objects.0.is_some());
+        assert_eq!(e.object_origin(1), Some(2));
+        e.undo(undo).unwrap();
+        assert_eq!(e.object_origin(1), Some(1));
+        // Equal to a copy that never made it: the same origins.
+        let mut values_only = original.clone();
+        for path in ["object[3].material.ka", "object[2].transformation[2].x"] {
+            values_only
+                .apply(&Edit::Set(Field::parse(path).unwrap(), Value::Number(0.25)))
+                .unwrap();
+        }
+        assert_eq!(e, values_only);
+        assert_ne!(e, original);
+
+        // A step added to an object: its origins from before the step.
+        let mut s = original.clone();
+        let add = Edit::add_step(
+            s.scene(),
+            Owner::Object(0),
+            TransformStep::UniformScale(2.0),
+        )
+        .unwrap();
+        s.apply(&add).unwrap();
+        let steps = original.scene().objects[0].transform.steps().len();
+        let mut expected: Vec<_> = (0..steps).map(Some).collect();
+        expected.push(None);
+        assert_eq!(s.origin_of(0).unwrap().steps.into_owned(), expected);
+        assert_eq!(s.origin_of(1), original.origin_of(1));
+    }
+
+    #[test]
+    fn own_steps_are_borrowed_for_a_few_and_made_for_more() {
+        assert!(matches!(own_steps(2), Cow::Borrowed(&[Some(0), Some(1)])));
+        assert_eq!(own_steps(0).len(), 0);
+        let many = own_steps(20);
+        assert!(matches!(many, Cow::Owned(_)));
+        assert_eq!(many[19], Some(19));
     }
 }
