@@ -99,7 +99,7 @@ fn each_sample(
 /// The panel's names of the scene's objects.
 struct Names<'a> {
     scene: &'a Scene,
-    comments: Vec<Option<String>>,
+    comments: names::Labels,
 }
 
 impl Names<'_> {
@@ -109,8 +109,7 @@ impl Names<'_> {
             .objects
             .get(n)
             .map_or("object", |o| o.shape.name());
-        let words = self.comments.get(n).and_then(|w| w.as_deref());
-        names::object_name(n, shape, words)
+        names::object_name(n, shape, self.comments.get(n))
     }
 }
 

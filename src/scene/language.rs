@@ -479,9 +479,8 @@ pub fn symbols(text: &str) -> Vec<Symbol> {
             let (name, kind) = match name {
                 "sphere" | "plane" => {
                     objects += 1;
-                    let words = labels.get(objects - 1).cloned().flatten();
                     (
-                        names::object_name(objects - 1, name, words.as_deref()),
+                        names::object_name(objects - 1, name, labels.get(objects - 1)),
                         SymbolKind::Object,
                     )
                 }

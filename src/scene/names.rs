@@ -7,24 +7,43 @@ use super::splice;
 
 /// The first words of the comment directly above each object (spheres and
 /// planes in file order), for naming it in the panel: up to three, before
-/// any punctuation ("RED sphere" for `<!-- RED sphere, left -->`). `None`
-/// where no comment touches the object.
-pub fn object_labels(text: &str) -> Vec<Option<String>> {
-    splice::object_comments(text)
-        .into_iter()
-        .map(|comment| {
-            // Up to the first punctuation, at most three words.
-            let phrase = comment?
-                .split([',', '.', ':', ';', '(', '-', '\n'])
-                .find(|p| !p.trim().is_empty())?;
-            let label = phrase
-                .split_whitespace()
-                .take(3)
-                .collect::<Vec<_>>()
-                .join(" ");
-            (!label.is_empty()).then_some(label)
-        })
-        .collect()
+/// any punctuation ("RED sphere" for `<!-- RED sphere, left -->`).
+///
+/// Only the objects that have some are held: a million spheres without a
+/// comment hold nothing (a list of a million `None`s was 24 MB).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Labels(
+    /// (object number, its words), by object number.
+    Vec<(usize, Box<str>)>,
+);
+
+impl Labels {
+    /// The words of object `k` (0-based, in file order), if a comment
+    /// touches it.
+    pub fn get(&self, k: usize) -> Option<&str> {
+        let i = self.0.binary_search_by_key(&k, |(n, _)| *n).ok()?;
+        Some(&self.0[i].1)
+    }
+}
+
+/// The [`Labels`] of `text`'s objects.
+pub fn object_labels(text: &str) -> Labels {
+    Labels(
+        splice::object_comments(text)
+            .filter_map(|(k, comment)| {
+                // Up to the first punctuation, at most three words.
+                let phrase = comment
+                    .split([',', '.', ':', ';', '(', '-', '\n'])
+                    .find(|p| !p.trim().is_empty())?;
+                let label = phrase
+                    .split_whitespace()
+                    .take(3)
+                    .collect::<Vec<_>>()
+                    .join(" ");
+                (!label.is_empty()).then(|| (k, label.into_boxed_str()))
+            })
+            .collect(),
+    )
 }
 
 /// The name of object `n` (0-based) of shape `shape`, given the first

@@ -238,22 +238,24 @@ pub fn rewrite_by_index(text: &str, path: &Path, edited: &Scene) -> Result<Strin
     save(text, path, &by_index)
 }
 
-/// The comment directly above each object (spheres and planes in file
-/// order), between its `<!--` and `-->`; `None` where no comment touches
-/// the object. [`super::names`] makes the panel's labels of them.
-pub(super) fn object_comments(text: &str) -> Vec<Option<&str>> {
-    // The root and its children are all it needs: the objects' own
-    // elements are not kept (a million objects hold five million).
-    let Ok(doc) = Doc::scan(text, Keep::TopLevel) else {
-        return Vec::new();
-    };
-    doc.children_named(doc.root, &["sphere", "plane"])
-        .into_iter()
-        .map(|node| {
-            let comment = doc.comments_above(doc.node(node).start).last()?.clone();
-            text.get(comment.start + 4..comment.end - 3)
-        })
-        .collect()
+/// The comment directly above each object that has one (spheres and
+/// planes numbered in file order from 0), between its `<!--` and `-->`.
+/// [`super::names`] makes the panel's labels of them.
+pub(super) fn object_comments(text: &str) -> impl Iterator<Item = (usize, &str)> {
+    // Where the objects are is all it needs: they are not kept as nodes
+    // (a million objects would be a million nodes, and five million with
+    // their elements).
+    let doc = Doc::scan(text, Keep::Placed).ok();
+    // Without a comment in the text, no object has one.
+    let places = doc
+        .as_ref()
+        .filter(|d| !d.comments.is_empty())
+        .map_or(0, |d| d.objects.len());
+    (0..places).filter_map(move |k| {
+        let doc = doc.as_ref()?;
+        let comment = doc.comments_above(doc.objects[k].start).last()?.clone();
+        Some((k, text.get(comment.start + 4..comment.end - 3)?))
+    })
 }
 
 /// The elements directly inside `<scene>`, in file order: each one's name,
@@ -280,11 +282,9 @@ pub fn top_level(text: &str) -> Vec<(&str, Range<usize>, Range<usize>)> {
 /// Where the element of object `index` (spheres and planes in file order)
 /// starts in `text`: its line and column, for an editor to open at.
 pub fn object_position(text: &str, index: usize) -> Option<super::Position> {
-    let doc = Doc::scan(text, Keep::TopLevel).ok()?;
-    let node = *doc
-        .children_named(doc.root, &["sphere", "plane"])
-        .get(index)?;
-    Some(super::Position::at_offset(text, doc.node(node).start))
+    let doc = Doc::scan(text, Keep::Placed).ok()?;
+    let place = doc.objects.get(index)?;
+    Some(super::Position::at_offset(text, place.start))
 }
 
 /// A fresh scene file for `scene`, indented by two spaces:
@@ -503,6 +503,20 @@ struct Doc<'t> {
     root: usize,
     /// Every comment, `<!--` to `-->`, in text order.
     comments: Vec<Range<usize>>,
+    /// Where each object (the root's spheres and planes, in text order)
+    /// is, whether or not it is kept as a node: a million objects need a
+    /// million places (16 bytes each), not a million nodes (over 100).
+    objects: Vec<Place>,
+    /// The node of each object kept as one: (object number, node).
+    object_nodes: Vec<(usize, usize)>,
+}
+
+/// Where an element is: the offset of its `<` and the offset just past
+/// the whole element.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Place {
+    start: usize,
+    end: usize,
 }
 
 /// Which elements [`Doc::scan`] keeps; the others are only checked.
@@ -512,8 +526,11 @@ enum Keep<'a> {
     All,
     /// The root and its children.
     TopLevel,
-    /// Every element but those inside the objects (spheres and planes,
-    /// numbered in text order) not in the set.
+    /// The root and its children but the objects (spheres and planes),
+    /// which are only placed (`Doc::objects`).
+    Placed,
+    /// Every element but the objects (spheres and planes, numbered in
+    /// text order) not in the set, which are only placed.
     Objects(&'a std::collections::HashSet<usize>),
 }
 
@@ -542,9 +559,12 @@ impl<'t> Doc<'t> {
         // While inside an object whose elements are not kept: the depth of
         // the stack at its start.
         let mut skip_below: Option<usize> = None;
-        let mut objects = 0;
         let mut root = None;
         let mut comments = Vec::new();
+        let mut objects: Vec<Place> = Vec::new();
+        let mut object_nodes = Vec::new();
+        // Inside an object that is only placed: its end is not known yet.
+        let mut placing = false;
         loop {
             let event = reader
                 .read_event()
@@ -566,6 +586,10 @@ impl<'t> Doc<'t> {
                     }
                     if skip_below.is_some_and(|d| stack.len() <= d) {
                         skip_below = None;
+                        if placing && let Some(place) = objects.last_mut() {
+                            place.end = position;
+                            placing = false;
+                        }
                     }
                     continue;
                 }
@@ -577,28 +601,55 @@ impl<'t> Doc<'t> {
                 }
                 _ => continue,
             };
+            let object = stack.len() == 1
+                && skip_below.is_none()
+                && matches!(start.name().as_ref(), b"sphere" | b"plane");
+            // An object only placed, or kept with or without its elements.
+            let (placed, deep) = match keep {
+                _ if !object => (false, true),
+                #[cfg(test)]
+                Keep::All => (false, true),
+                Keep::TopLevel => (false, false),
+                Keep::Placed => (true, false),
+                Keep::Objects(deep) => {
+                    let deep = deep.contains(&objects.len());
+                    (!deep, deep)
+                }
+            };
+            if object {
+                let at = offset(start.name().as_ref())?
+                    .checked_sub(1)
+                    .ok_or_else(|| internal("start tag without '<'"))?;
+                objects.push(Place {
+                    start: at,
+                    end: position,
+                });
+            }
             let kept = match keep {
+                _ if placed => false,
                 #[cfg(test)]
                 Keep::All => true,
-                Keep::TopLevel => stack.len() <= 1,
+                Keep::TopLevel | Keep::Placed => stack.len() <= 1,
                 Keep::Objects(_) => skip_below.is_none_or(|d| stack.len() <= d),
             };
             if !kept {
                 if !empty {
+                    if placed {
+                        // Up to its end tag (this one's depth): not kept.
+                        skip_below = Some(stack.len());
+                        placing = true;
+                    }
                     stack.push(None);
                 }
                 continue;
             }
             let id = nodes.len();
             nodes.push(element(text, &start, empty, position, &offset)?);
-            if stack.len() == 1 && matches!(nodes[id].name, "sphere" | "plane") {
-                if let Keep::Objects(deep) = keep
-                    && !deep.contains(&objects)
-                    && !empty
-                {
+            if object {
+                object_nodes.push((objects.len() - 1, id));
+                if !deep && !empty {
                     skip_below = Some(stack.len());
                 }
-                objects += 1;
             }
             match stack.last() {
                 Some(&Some(parent)) => nodes[parent].children.push(id),
@@ -623,7 +674,13 @@ impl<'t> Doc<'t> {
             nodes,
             root,
             comments,
+            objects,
+            object_nodes,
         };
+        // A kept object ends where its node does.
+        for &(k, id) in &doc.object_nodes {
+            doc.objects[k].end = doc.nodes[id].elem_end();
+        }
         doc.unit = doc.indent_unit();
         Ok(doc)
     }
@@ -635,16 +692,48 @@ impl<'t> Doc<'t> {
             let Some(parent) = self.own_indent(node.start) else {
                 continue;
             };
-            for &child in &node.children {
-                if let Some(indent) = self.own_indent(self.nodes[child].start)
-                    && indent.len() > parent.len()
-                    && let Some(unit) = indent.strip_prefix(parent)
-                {
-                    return unit.to_owned();
-                }
+            let unit_at = |start: usize| {
+                self.own_indent(start)
+                    .filter(|indent| indent.len() > parent.len())
+                    .and_then(|indent| indent.strip_prefix(parent))
+            };
+            let first_at = |start: usize| unit_at(start).map(|unit| (start, unit));
+            let child = node
+                .children
+                .iter()
+                .find_map(|&c| first_at(self.nodes[c].start));
+            // The root's children are its kept nodes and its placed objects.
+            let object = match std::ptr::eq(node, &self.nodes[self.root]) {
+                true => self.objects.iter().find_map(|p| first_at(p.start)),
+                false => None,
+            };
+            let earliest = match (child, object) {
+                (Some(c), Some(o)) => Some(if o.0 < c.0 { o } else { c }),
+                (c, o) => c.or(o),
+            };
+            if let Some((_, unit)) = earliest {
+                return unit.to_owned();
             }
         }
         "  ".to_owned()
+    }
+
+    /// Where node `id` is.
+    fn place(&self, id: usize) -> Place {
+        let node = self.node(id);
+        Place {
+            start: node.start,
+            end: node.elem_end(),
+        }
+    }
+
+    /// The node of object `k` (in text order), if it was kept as one.
+    fn object_node(&self, k: usize) -> Option<usize> {
+        let i = self
+            .object_nodes
+            .binary_search_by_key(&k, |&(k, _)| k)
+            .ok()?;
+        Some(self.object_nodes[i].1)
     }
 
     /// Offset of the start of the line holding `pos`.
@@ -704,10 +793,10 @@ impl<'t> Doc<'t> {
         found
     }
 
-    /// Where the lines of element `id` begin: the first comment directly
-    /// above it, or its own line; `None` when it shares its line.
-    fn block_start(&self, id: usize) -> Option<usize> {
-        let start = self.node(id).start;
+    /// Where the lines of the element starting at `start` begin: the
+    /// first comment directly above it, or its own line; `None` when it
+    /// shares its line.
+    fn block_start(&self, start: usize) -> Option<usize> {
         self.own_indent(start)?;
         let first = self
             .comments_above(start)
@@ -833,7 +922,7 @@ impl Editor<'_, '_> {
         let doc = self.doc;
         let scene = edited.scene();
         let root = doc.root;
-        let objects = doc.children_named(root, &["sphere", "plane"]);
+        let objects = &doc.objects;
         let lights = doc.children_named(root, &["light"]);
         let cameras = doc.children_named(root, &["camera"]);
         let models = doc.children_named(root, &["model"]);
@@ -850,7 +939,7 @@ impl Editor<'_, '_> {
             .collect();
         self.group(
             root,
-            &objects,
+            objects,
             &origins,
             |i| object_lines(&scene.objects[i]),
             |editor, k, i| {
@@ -860,12 +949,16 @@ impl Editor<'_, '_> {
                 if unchanged(&original.objects[k], &scene.objects[i], steps) {
                     return Ok(());
                 }
-                editor.object(objects[k], &original.objects[k], &scene.objects[i], steps)
+                let node = doc
+                    .object_node(k)
+                    .ok_or_else(|| internal("a changed object was not scanned"))?;
+                editor.object(node, &original.objects[k], &scene.objects[i], steps)
             },
         )?;
+        let light_places: Vec<Place> = lights.iter().map(|&id| doc.place(id)).collect();
         self.group(
             root,
-            &lights,
+            &light_places,
             &edited.lights,
             |i| light_lines(&scene.lights[i]),
             |editor, k, i| editor.light(lights[k], &original.lights[k], &scene.lights[i]),
@@ -906,7 +999,7 @@ impl Editor<'_, '_> {
     fn group(
         &mut self,
         parent: usize,
-        nodes: &[usize],
+        nodes: &[Place],
         origins: &[Option<usize>],
         lines: impl Fn(usize) -> Lines,
         mut keep: impl FnMut(&mut Self, usize, usize) -> Result<(), EditError>,
@@ -923,9 +1016,9 @@ impl Editor<'_, '_> {
             last = Some(k);
             keep(self, k, i)?;
         }
-        for (k, &node) in nodes.iter().enumerate() {
+        for (k, &place) in nodes.iter().enumerate() {
             if !kept[k] {
-                self.remove(node);
+                self.remove(place);
             }
         }
         let name = doc.node(parent).name;
@@ -943,7 +1036,7 @@ impl Editor<'_, '_> {
             match origins.get(run_end).copied().flatten() {
                 Some(k) => self.insert_before(nodes[k], &items),
                 None => match nodes.last() {
-                    Some(&node) => self.insert_after(node, &items),
+                    Some(&place) => self.insert_after(place, &items),
                     None => self.insert(parent, name, None, &items)?,
                 },
             }
@@ -1068,9 +1161,10 @@ impl Editor<'_, '_> {
         if steps.len() != o.len() || origins.len() != e.len() {
             return Err(internal("a transformation's steps do not match its text"));
         }
+        let places: Vec<Place> = steps.iter().map(|&id| self.doc.place(id)).collect();
         self.group(
             node,
-            &steps,
+            &places,
             origins,
             |i| vec![(0, step_tag(&e[i]))],
             |editor, k, i| editor.step(steps[k], &o[k], &e[i]),
@@ -1166,23 +1260,22 @@ impl Editor<'_, '_> {
 
     /// Removes the element `node`: with its lines and the comment lines
     /// directly above it when it is alone on its lines, else just its text.
-    fn remove(&mut self, node: usize) {
+    fn remove(&mut self, place: Place) {
         let doc = self.doc;
-        let n = doc.node(node);
-        let end = n.elem_end();
-        let range = match (doc.block_start(node), doc.line_end_after(end)) {
-            (Some(start), Some(after)) => start..after,
-            _ => n.start..end,
+        let Place { start, end } = place;
+        let range = match (doc.block_start(start), doc.line_end_after(end)) {
+            (Some(line), Some(after)) => line..after,
+            _ => start..end,
         };
         self.splice(range, "");
     }
 
     /// Inserts `items` (siblings of `node`) just before it, with its
     /// indentation and before the comments above it.
-    fn insert_before(&mut self, node: usize, items: &[Lines]) {
+    fn insert_before(&mut self, place: Place, items: &[Lines]) {
         let doc = self.doc;
-        let at = doc.node(node).start;
-        match (doc.block_start(node), doc.own_indent(at)) {
+        let at = place.start;
+        match (doc.block_start(at), doc.own_indent(at)) {
             (Some(line), Some(indent)) => self.splice(line..line, block(doc, indent, items)),
             _ => self.splice(at..at, inline(items)),
         }
@@ -1190,11 +1283,10 @@ impl Editor<'_, '_> {
 
     /// Inserts `items` (siblings of `node`) on the lines just after it, with
     /// its indentation.
-    fn insert_after(&mut self, node: usize, items: &[Lines]) {
+    fn insert_after(&mut self, place: Place, items: &[Lines]) {
         let doc = self.doc;
-        let n = doc.node(node);
-        let end = n.elem_end();
-        match (doc.own_indent(n.start), doc.line_end_after(end)) {
+        let Place { start, end } = place;
+        match (doc.own_indent(start), doc.line_end_after(end)) {
             (Some(indent), Some(after)) => {
                 let mut text = block(doc, indent, items);
                 if !doc.text[..after].ends_with('\n') {
@@ -1292,10 +1384,15 @@ impl Editor<'_, '_> {
 
         let end = p.end.start;
         if let Some(end_indent) = doc.own_indent(end) {
-            let sibling_indent = p
-                .children
-                .last()
-                .and_then(|&c| doc.own_indent(doc.node(c).start));
+            // The last child: a node, or for the root maybe an object.
+            let last_node = p.children.last().map(|&c| doc.node(c).start);
+            let last_object = doc.objects.last().map(|o| o.start);
+            let last = match (last_node, last_object) {
+                (Some(n), Some(o)) if parent == doc.root => Some(n.max(o)),
+                (n, o) if parent == doc.root => n.or(o),
+                (n, _) => n,
+            };
+            let sibling_indent = last.and_then(|start| doc.own_indent(start));
             let indent = match sibling_indent {
                 Some(indent) => indent.to_owned(),
                 None => {
@@ -1384,6 +1481,18 @@ mod tests {
         assert_eq!(Doc::scan(tabs, Keep::All).unwrap().unit, "\t");
         let flat = "<scene><camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>";
         assert_eq!(Doc::scan(flat, Keep::All).unwrap().unit, "  ");
+        // Only the objects show it (the rest on one line): the same unit
+        // when they are only placed as when they are nodes (without their
+        // elements, as in a save: see `Keep::TopLevel`).
+        let objects = "<scene>\n   <sphere/>\n   <plane>\n      <color red=\"1\" green=\"1\" blue=\"1\"/>\n   </plane>\n<camera width=\"1\" height=\"1\" eyeDistance=\"1\"/></scene>";
+        let none = std::collections::HashSet::new();
+        for text in [crate::EXAMPLE_SCENE, tabs, flat, objects] {
+            let unit = Doc::scan(text, Keep::TopLevel).unwrap().unit;
+            assert_eq!(Doc::scan(text, Keep::Placed).unwrap().unit, unit, "{text}");
+        }
+        for keep in [Keep::Placed, Keep::Objects(&none)] {
+            assert_eq!(Doc::scan(objects, keep).unwrap().unit, "   ");
+        }
     }
 
     #[test]
@@ -1414,11 +1523,29 @@ mod tests {
             Doc::scan(text, keep).unwrap().nodes.len()
         }
         let (second, ends) = ([1].into(), [0, 2].into());
-        // The root, three objects and the camera; then a colour each.
+        // The root, three objects and the camera; then a colour each. An
+        // object not asked for is only placed: no node.
         assert_eq!(count(text, Keep::TopLevel), 5);
         assert_eq!(count(text, Keep::All), 8);
-        assert_eq!(count(text, Keep::Objects(&second)), 6);
-        assert_eq!(count(text, Keep::Objects(&ends)), 7);
+        assert_eq!(count(text, Keep::Placed), 2);
+        assert_eq!(count(text, Keep::Objects(&second)), 4);
+        assert_eq!(count(text, Keep::Objects(&ends)), 6);
+        // Every object placed, whichever are kept, at the same place.
+        let places = |keep| Doc::scan(text, keep).unwrap().objects;
+        let all = places(Keep::All);
+        assert_eq!(all.len(), 3);
+        assert_eq!(
+            &text[all[1].start..all[1].end],
+            "<sphere><color red=\"0\" green=\"1\" blue=\"0\"/></sphere>"
+        );
+        for keep in [
+            Keep::TopLevel,
+            Keep::Placed,
+            Keep::Objects(&second),
+            Keep::Objects(&ends),
+        ] {
+            assert_eq!(places(keep), all);
+        }
 
         let original = scene(text);
         let mut edited = Edited::new(original.clone());

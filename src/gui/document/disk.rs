@@ -60,7 +60,7 @@ pub struct FileRead {
     pub text: String,
     pub scene: Scene,
     fingerprint: u64,
-    labels: Vec<Option<String>>,
+    labels: names::Labels,
 }
 
 impl FileRead {

@@ -81,11 +81,11 @@ pub(crate) struct Version {
     /// The scene, with where each element came from in `source`.
     edited: Edited,
     /// The first words of the comment above each object of `source`.
-    labels: Arc<Vec<Option<String>>>,
+    labels: Arc<names::Labels>,
 }
 
 impl Version {
-    fn new(text: Arc<String>, scene: Scene, labels: Arc<Vec<Option<String>>>) -> Version {
+    fn new(text: Arc<String>, scene: Scene, labels: Arc<names::Labels>) -> Version {
         Version {
             source: text,
             source_scene: scene.clone(),
@@ -372,7 +372,7 @@ impl Document {
     fn comment_words(&self, n: usize) -> Option<&str> {
         let version = self.on_screen();
         let k = version.edited.object_origin(n)?;
-        version.labels.get(k)?.as_deref()
+        version.labels.get(k)
     }
 
     /// The objects (in order) that `query` finds: each of its words, case
