@@ -125,6 +125,9 @@ fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
     let (done, results) = std::sync::mpsc::channel();
     let path: Arc<Path> = Arc::from(path);
     let mut pieces: Vec<Option<Gathered>> = Vec::new();
+    // The next piece to share objects with `like`, and its first object's
+    // number.
+    let mut sharing = (0, 0);
     let mut in_flight = 0;
     let mut carry: Vec<u8> = Vec::new();
     let mut total = 0u64;
@@ -181,6 +184,16 @@ fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
             let (k, gathered) = results.recv().ok()?;
             *pieces.get_mut(k)? = Some(gathered?);
             in_flight -= 1;
+            // Each piece's objects shared with `like` as soon as the pieces
+            // before it are in: a save's check of a million objects holds
+            // a few pieces' copies at once, not a second scene (150 MB).
+            while let Some(Some(piece)) = pieces.get_mut(sharing.0) {
+                share(
+                    &mut piece.objects,
+                    like.get(sharing.1..).unwrap_or_default(),
+                );
+                sharing = (sharing.0 + 1, sharing.1 + piece.objects.len());
+            }
         }
         if last {
             break;
@@ -459,12 +472,17 @@ fn join(pieces: Vec<Gathered>, like: &[Arc<Object>], path: &Path) -> Option<Scen
         scene.model = scene.model.or(piece.model);
     }
     // Shared as a parse in one shares them.
-    for (object, same) in scene.objects.iter_mut().zip(like) {
-        if **object == **same {
+    share(&mut scene.objects, like);
+    scene.finish(path).ok()
+}
+
+/// Shares with `like` each object equal to the one at the same place.
+fn share(objects: &mut [Arc<Object>], like: &[Arc<Object>]) {
+    for (object, same) in objects.iter_mut().zip(like) {
+        if !Arc::ptr_eq(object, same) && **object == **same {
             *object = Arc::clone(same);
         }
     }
-    scene.finish(path).ok()
 }
 
 /// Is XML whitespace.
@@ -1825,6 +1843,39 @@ mod tests {
             LoadErrorKind::NotUtf8 { .. }
         ));
         check(&text.replace("</scene>", "</scene><!-- after -->"), false);
+    }
+
+    #[test]
+    fn a_streamed_load_shares_the_objects_it_is_like() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.xml");
+        let text = varied(100_000);
+        fs::write(&path, &text).unwrap();
+        let like = in_one(&text).unwrap().objects;
+        // Every object shared; one changed in the file: that one not.
+        let again = streamed(&path, &like).expect("streamed");
+        assert_eq!(again.objects.len(), like.len());
+        assert!(
+            again
+                .objects
+                .iter()
+                .zip(&like)
+                .all(|(a, b)| Arc::ptr_eq(a, b))
+        );
+        let at = text.len() / 2;
+        // (Not the one in a comment.)
+        let at = at + text[at..].find("\n  <sphere>\n").unwrap() + 1;
+        let changed = format!("{}<sphere/>{}", &text[..at], &text[at..]);
+        fs::write(&path, &changed).unwrap();
+        let shifted = streamed(&path, &like).expect("streamed");
+        let k = shifted
+            .objects
+            .iter()
+            .zip(&like)
+            .position(|(a, b)| !Arc::ptr_eq(a, b))
+            .unwrap();
+        assert_eq!(shifted, in_one(&changed).unwrap());
+        assert!(k > 0, "the objects before the inserted one are shared");
     }
 
     #[test]
