@@ -3,7 +3,8 @@
 //! file's scene, the edited one, the one being rendered and the one read
 //! back after a save are shared where they are the same; a scene is
 //! prepared once however often the camera moves; a save scans only the
-//! objects it changes. Each is checked here by what is shared, not by
+//! objects it changes; a large text held packed saves as the same text
+//! held whole. Each is checked here by what is shared, not by
 //! memory or time, so the tests stay small and exact.
 
 // The app's document, watcher and worker are in the GUI build.
@@ -138,6 +139,38 @@ fn next_loaded(rx: &mpsc::Receiver<FileEvent>) -> Box<FileRead> {
             FileEvent::Missing | FileEvent::Reading => {}
         }
     }
+}
+
+#[test]
+fn a_large_text_held_packed_saves_as_a_text_held_whole() {
+    use rayoflight::scene::edit::{Item, NewElement};
+    use rayoflight::scene::source::PACK_BYTES;
+    let text = spheres_text(95_000);
+    assert!(text.len() >= PACK_BYTES, "{}", text.len());
+    let (_dir, path, mut doc) = common::document_on(&text);
+    assert!(doc.holds_packed_text());
+    // Values, an object removed, one added, a light moved: what the same
+    // edits save into the text held whole.
+    let mut whole = rayoflight::scene::edit::Edited::new(doc.file_scene().clone());
+    for k in 0..4 {
+        let edit = match k {
+            0 => set("object[40000].color.red", 0.75),
+            1 => Edit::Remove(Item::Object(12)),
+            2 => Edit::add(doc.scene(), NewElement::Sphere),
+            _ => set("light[1].x", 2.5),
+        };
+        doc.apply(edit.clone()).unwrap();
+        whole.apply(&edit).unwrap();
+    }
+    let expected = scene::splice::save(&text, &path, &whole).unwrap();
+    doc.save().unwrap();
+    let saved = std::fs::read_to_string(&path).unwrap();
+    assert!(saved == expected, "the packed text's save differs");
+    assert_eq!(&scene::parse(&saved, &path).unwrap(), doc.scene());
+    // Everything undone and saved: the file byte for byte.
+    while doc.undo().is_some() {}
+    doc.save().unwrap();
+    assert!(std::fs::read_to_string(&path).unwrap() == text, "undone");
 }
 
 #[test]

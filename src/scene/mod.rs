@@ -25,6 +25,7 @@ mod load;
 pub mod merge;
 pub mod names;
 pub mod schema;
+pub mod source;
 pub mod splice;
 mod xml;
 

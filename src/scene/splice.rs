@@ -11,6 +11,10 @@
 //! text is kept: comments, whitespace, attribute order and quoting, the
 //! spelling of unchanged numbers (`1.0` stays `1.0`), the XML declaration.
 //!
+//! [`plan_source`] does the same for a text held as a
+//! [`Source`](super::source::Source): one held packed is read twice, a
+//! block at a time, never unpacked whole.
+//!
 //! [`to_xml`] writes a fresh, indented file for a scene that has no source
 //! text yet ("Save as" of the built-in example, a new scene).
 //!
@@ -33,6 +37,7 @@ use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 
 use super::edit::{EditError, Edited, ObjectOrigin, number_text as num};
+use super::source::Source;
 use super::{Color, Illumination, LoadError, Material, Model, Object, Scene, parse};
 use crate::math::{TransformStep, Vec3};
 use crate::shading::Light;
@@ -74,7 +79,7 @@ pub fn plan<'t>(
 ) -> Result<Rewrite<'t>, EditError> {
     if edited.is_as_loaded(original) {
         return Ok(Rewrite {
-            text,
+            text: Text::Str(text),
             splices: Vec::new(),
         });
     }
@@ -121,9 +126,17 @@ fn loads_as(loaded: Result<Scene, LoadError>, scene: &Scene) -> Result<(), EditE
 /// streams the new text without building it.
 #[derive(Debug)]
 pub struct Rewrite<'t> {
-    text: &'t str,
+    text: Text<'t>,
     /// Sorted, not overlapping, inside the text ([`plan`] checked).
     splices: Vec<Splice>,
+}
+
+/// The text a [`Rewrite`] splices into.
+#[derive(Debug)]
+enum Text<'t> {
+    Str(&'t str),
+    /// Read back in order, a block at a time ([`plan_source`]).
+    Source(&'t Source),
 }
 
 impl<'t> Rewrite<'t> {
@@ -143,7 +156,10 @@ impl<'t> Rewrite<'t> {
             }
             cursor = end;
         }
-        Ok(Rewrite { text, splices })
+        Ok(Rewrite {
+            text: Text::Str(text),
+            splices,
+        })
     }
 
     /// Nothing to change: the new text is the old one.
@@ -153,20 +169,241 @@ impl<'t> Rewrite<'t> {
 
     /// The new text's length in bytes.
     pub fn len(&self) -> usize {
-        self.splices.iter().fold(self.text.len(), |n, s| {
-            n - (s.range.end - s.range.start) + s.text.len()
-        })
+        let len = match self.text {
+            Text::Str(text) => text.len(),
+            Text::Source(source) => source.len(),
+        };
+        self.splices
+            .iter()
+            .fold(len, |n, s| n - (s.range.end - s.range.start) + s.text.len())
     }
 
     /// Writes the new text: the kept bytes and the splices in order.
     pub fn write_to(&self, w: &mut (impl std::io::Write + ?Sized)) -> std::io::Result<()> {
-        let mut cursor = 0;
-        for splice in &self.splices {
-            w.write_all(&self.text.as_bytes()[cursor..splice.range.start])?;
-            w.write_all(splice.text.as_bytes())?;
-            cursor = splice.range.end;
+        use std::io::Read;
+        match self.text {
+            Text::Str(text) => {
+                let mut cursor = 0;
+                for splice in &self.splices {
+                    w.write_all(&text.as_bytes()[cursor..splice.range.start])?;
+                    w.write_all(splice.text.as_bytes())?;
+                    cursor = splice.range.end;
+                }
+                w.write_all(&text.as_bytes()[cursor..])
+            }
+            Text::Source(source) => {
+                let mut reader = source.reader();
+                let mut cursor = 0;
+                for splice in &self.splices {
+                    let Range { start, end } = splice.range;
+                    let kept = std::io::copy(&mut (&mut reader).take((start - cursor) as u64), w)?;
+                    let skipped = std::io::copy(
+                        &mut (&mut reader).take((end - start) as u64),
+                        &mut std::io::sink(),
+                    )?;
+                    if kept + skipped != (end - cursor) as u64 {
+                        return Err(std::io::Error::other("an edit past the end of the text"));
+                    }
+                    w.write_all(splice.text.as_bytes())?;
+                    cursor = end;
+                }
+                std::io::copy(&mut reader, w).map(|_| ())
+            }
         }
-        w.write_all(&self.text.as_bytes()[cursor..])
+    }
+}
+
+/// [`plan`] for a text held as a [`Source`]. A packed one is never
+/// unpacked whole: the save reads it once to find the changed objects'
+/// elements ([`Skeleton`]) and once more to write the new text.
+pub fn plan_source<'s>(
+    source: &'s Source,
+    original: &Scene,
+    edited: &Edited,
+) -> Result<Rewrite<'s>, EditError> {
+    if edited.is_as_loaded(original) {
+        return Ok(Rewrite {
+            text: Text::Source(source),
+            splices: Vec::new(),
+        });
+    }
+    if let Some(text) = source.as_str() {
+        return plan(text, original, edited);
+    }
+    let changed = changed_objects(original, edited);
+    let skeleton = Skeleton::read(source, &changed)?;
+    let mut doc = Doc::scan(&skeleton.text, Keep::Objects(&changed))?;
+    if skeleton.crlf {
+        doc.nl = "\r\n";
+    }
+    let mut editor = Editor {
+        doc: &doc,
+        splices: Vec::new(),
+    };
+    editor.scene(original, edited)?;
+    let checked = Rewrite::new(&skeleton.text, editor.splices)?;
+    let splices = checked
+        .splices
+        .into_iter()
+        .map(|s| Splice {
+            range: skeleton.in_source(s.range.start)..skeleton.in_source(s.range.end),
+            text: s.text,
+        })
+        .collect();
+    Ok(Rewrite {
+        text: Text::Source(source),
+        splices,
+    })
+}
+
+/// A packed text with the insides of the objects a save leaves as they
+/// are left out (`<sphere>…</sphere>` becomes `<sphere></sphere>`): what
+/// the save's editor reads instead of the whole text. A million spheres'
+/// 214 MB become about 20 MB, and only the changed objects' elements are
+/// scanned in full, as in a text held whole ([`plan`]).
+///
+/// Every splice the editor makes lies outside the parts left out (at an
+/// object's start or end, or inside a changed one), so each of its
+/// offsets maps to the source's.
+struct Skeleton {
+    text: String,
+    /// For each part left out, the skeleton's offset where it was and the
+    /// bytes left out up to there in all.
+    gaps: Vec<(usize, usize)>,
+    /// The whole text has a CRLF line ending (maybe only in a part left
+    /// out): new lines are written with it, as in a text held whole.
+    crlf: bool,
+}
+
+impl Skeleton {
+    /// Reads `source`, keeping whole the objects (numbered in text order)
+    /// in `keep`.
+    fn read(
+        source: &Source,
+        keep: &std::collections::HashSet<usize>,
+    ) -> Result<Skeleton, EditError> {
+        use std::cell::RefCell;
+        use std::rc::Rc;
+
+        /// The source's bytes as read, not yet given to the skeleton or
+        /// left out; `start`: the source offset of the first.
+        #[derive(Default)]
+        struct Pending {
+            bytes: Vec<u8>,
+            start: usize,
+        }
+        struct Tee<'s> {
+            inner: crate::scene::source::SourceReader<'s>,
+            pending: Rc<RefCell<Pending>>,
+        }
+        impl std::io::Read for Tee<'_> {
+            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+                let n = self.inner.read(buf)?;
+                self.pending.borrow_mut().bytes.extend_from_slice(&buf[..n]);
+                Ok(n)
+            }
+        }
+
+        let pending = Rc::new(RefCell::new(Pending::default()));
+        let tee = Tee {
+            inner: source.reader(),
+            pending: Rc::clone(&pending),
+        };
+        let mut reader = Reader::from_reader(std::io::BufReader::with_capacity(1 << 16, tee));
+        let config = reader.config_mut();
+        config.check_end_names = true;
+        config.expand_empty_elements = false;
+        config.trim_text(false);
+
+        let mut crlf = false;
+        let mut gaps = Vec::new();
+        let mut kept: Vec<u8> = Vec::new();
+        let mut left_out = 0;
+        let mut last_byte = 0u8;
+        // Moves the source's bytes up to `to` from the pending ones into
+        // the skeleton, or leaves them out.
+        let mut take = |to: usize, keep: bool, kept: &mut Vec<u8>| {
+            let mut p = pending.borrow_mut();
+            let n = to.saturating_sub(p.start).min(p.bytes.len());
+            let bytes = &p.bytes[..n];
+            if bytes.first() == Some(&b'\n') && last_byte == b'\r'
+                || bytes.windows(2).any(|w| w == b"\r\n")
+            {
+                crlf = true;
+            }
+            if let Some(&b) = bytes.last() {
+                last_byte = b;
+            }
+            if keep {
+                kept.extend_from_slice(bytes);
+            }
+            p.bytes.drain(..n);
+            p.start += n;
+            n
+        };
+        let position = |reader: &Reader<_>| {
+            usize::try_from(reader.buffer_position()).map_err(|_| internal("position out of range"))
+        };
+        let mut buf = Vec::new();
+        let mut depth = 0usize;
+        let mut objects = 0usize;
+        // Inside an object left out: its element's depth.
+        let mut leaving_out: Option<usize> = None;
+        loop {
+            let before = position(&reader)?;
+            buf.clear();
+            let event = reader
+                .read_event_into(&mut buf)
+                .map_err(|e| internal(format!("XML: {e}")))?;
+            let after = position(&reader)?;
+            match event {
+                Event::Start(start) => {
+                    let object =
+                        depth == 1 && matches!(start.name().as_ref(), b"sphere" | b"plane");
+                    depth += 1;
+                    if object {
+                        if !keep.contains(&objects) && leaving_out.is_none() {
+                            take(after, true, &mut kept);
+                            leaving_out = Some(depth);
+                            continue;
+                        }
+                        objects += 1;
+                    }
+                }
+                Event::Empty(start)
+                    if depth == 1 && matches!(start.name().as_ref(), b"sphere" | b"plane") =>
+                {
+                    objects += 1;
+                }
+                Event::End(_) => {
+                    if leaving_out == Some(depth) {
+                        // The inside, up to the `<` of the end tag.
+                        left_out += take(before, false, &mut kept);
+                        gaps.push((kept.len(), left_out));
+                        leaving_out = None;
+                        objects += 1;
+                    }
+                    depth = depth.saturating_sub(1);
+                }
+                Event::Eof => break,
+                _ => {}
+            }
+            match leaving_out {
+                Some(_) => left_out += take(after, false, &mut kept),
+                None => {
+                    take(after, true, &mut kept);
+                }
+            }
+        }
+        take(usize::MAX, true, &mut kept);
+        let text = String::from_utf8(kept).map_err(|_| internal("the skeleton is not UTF-8"))?;
+        Ok(Skeleton { text, gaps, crlf })
+    }
+
+    /// The source's offset of the skeleton's offset `at`.
+    fn in_source(&self, at: usize) -> usize {
+        let i = self.gaps.partition_point(|&(gap, _)| gap <= at);
+        at + i.checked_sub(1).map_or(0, |i| self.gaps[i].1)
     }
 }
 
@@ -1560,6 +1797,92 @@ mod tests {
         assert_eq!(
             saved,
             text.replacen("green=\"1\" blue=\"0\"", "green=\"1\" blue=\"0.5\"", 1)
+        );
+    }
+
+    /// The text of `rewrite`.
+    fn written(rewrite: &Rewrite<'_>) -> String {
+        let mut out = Vec::new();
+        rewrite.write_to(&mut out).unwrap();
+        assert_eq!(out.len(), rewrite.len());
+        String::from_utf8(out).unwrap()
+    }
+
+    #[test]
+    fn a_packed_text_is_saved_as_the_same_text_held_whole() {
+        use crate::scene::edit::{Edit, Element, Field, Item, Owner, Value};
+        // Comments above objects, objects on one line and on several, an
+        // empty one, CRLF inside objects only, tabs.
+        let mut text = String::from("<?xml version=\"1.0\"?>\n<!-- top -->\n<scene>\n");
+        for i in 0..60 {
+            text.push_str(&match i % 5 {
+                0 => format!("  <!-- BALL {i} -->\n  <sphere><color red=\"0.{i}\" green=\"1\" blue=\"0\"/><material ka=\"0.1\"/></sphere>\n"),
+                1 => format!("  <sphere>\r\n    <material kd=\"0.{i}\"/>\r\n    <transformation><translate x=\"{i}\"/></transformation>\r\n  </sphere>\n"),
+                2 => "\t<sphere/>\n".to_owned(),
+                3 => format!("  <plane><transformation><rotate-x angle=\"1.{i}\"/><translate y=\"{i}\"/></transformation></plane>\n"),
+                _ => format!("  <sphere> <!-- inside {i} --> <color red=\"1\" green=\"0\" blue=\"0\"/> </sphere>\n"),
+            });
+        }
+        text.push_str("  <light x=\"1\" y=\"2\" z=\"3\"/>\n  <camera width=\"8\" height=\"6\" eyeDistance=\"1\"/>\n</scene>\n");
+        let original = scene(&text);
+        let packed = Source::packed(&text);
+        let mut edited = Edited::new(original.clone());
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut next = |n: usize| {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng % n as u64) as usize
+        };
+        for round in 0..120 {
+            let objects = edited.scene().objects.len();
+            // An insertion first, before any object is kept whole.
+            let kind = if round == 0 { 3 } else { next(8) };
+            let edit = match kind {
+                0 | 1 => Edit::Set(
+                    Field::parse(&format!("object[{}].material.ka", next(objects) + 1)).unwrap(),
+                    Value::Number(round as f64 / 100.0),
+                ),
+                2 => Edit::Remove(Item::Object(next(objects))),
+                3 => {
+                    let copy = edited.scene().objects[next(objects)].as_ref().clone();
+                    Edit::Insert(
+                        Item::Object(next(objects + 1)),
+                        Element::Object(Box::new(copy)),
+                    )
+                }
+                4 => Edit::add_step(
+                    edited.scene(),
+                    Owner::Object(next(objects)),
+                    crate::math::TransformStep::UniformScale(1.5),
+                )
+                .unwrap(),
+                5 => Edit::Set(
+                    Field::parse("light[1].x").unwrap(),
+                    Value::Number(round as f64),
+                ),
+                6 => Edit::Set(
+                    Field::parse("camera.width").unwrap(),
+                    Value::Integer(4 + round as u64 % 9),
+                ),
+                _ => Edit::Set(
+                    Field::parse(&format!("object[{}].color.red", next(objects) + 1)).unwrap(),
+                    Value::Number(0.5),
+                ),
+            };
+            if edited.apply(&edit).is_err() {
+                continue;
+            }
+            let whole = written(&plan(&text, &original, &edited).unwrap());
+            let from_packed = written(&plan_source(&packed, &original, &edited).unwrap());
+            assert_eq!(from_packed, whole, "round {round}: {edit:?}");
+            assert_eq!(&scene(&whole), edited.scene());
+        }
+        // Nothing changed: the text as it is.
+        let unchanged = Edited::new(original.clone());
+        assert_eq!(
+            written(&plan_source(&packed, &original, &unchanged).unwrap()),
+            text
         );
     }
 }

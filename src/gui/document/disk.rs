@@ -252,7 +252,11 @@ impl Document {
             labels,
         } = read;
         self.disk = Some(fingerprint);
-        self.file = Version::new(Arc::new(text), scene, Arc::new(labels));
+        self.file = Version::new(
+            crate::scene::source::Source::new(text),
+            scene,
+            Arc::new(labels),
+        );
         self.file.clone()
     }
 

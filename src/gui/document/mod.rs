@@ -28,7 +28,9 @@
 //! Save-back splices the edits into the text of the version on screen
 //! (the source the edits' origins point into), so unchanged bytes stay as
 //! they are and undoing everything and saving gives the file back byte for
-//! byte.
+//! byte. A large text is held packed ([`Source`]: a million spheres' 214
+//! MB in about 40) and a save reads it back a block at a time
+//! ([`scene::splice::plan_source`]), never whole.
 //!
 //! The undo history lives in `history`, reading the file in `disk`,
 //! saving (on another thread if need be) in `save`, what the journal of
@@ -50,6 +52,7 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::scene::edit::Edited;
+use crate::scene::source::Source;
 use crate::scene::{self, LoadError, LoadErrorKind, Scene, names};
 
 /// Where the scene comes from, and how that source is doing.
@@ -72,8 +75,8 @@ pub enum FileState {
 #[derive(Debug, Clone)]
 pub(crate) struct Version {
     /// The text the origins of `edited` point into; saves splice the edits
-    /// into it.
-    source: Arc<String>,
+    /// into it. A large one is held packed ([`Source`]).
+    source: Source,
     /// The scene `source` loads to (sharing its objects with `edited` where
     /// they are the same): saves compare with it rather than parse the text
     /// again.
@@ -85,7 +88,7 @@ pub(crate) struct Version {
 }
 
 impl Version {
-    fn new(text: Arc<String>, scene: Scene, labels: Arc<names::Labels>) -> Version {
+    fn new(text: Source, scene: Scene, labels: Arc<names::Labels>) -> Version {
         Version {
             source: text,
             source_scene: scene.clone(),
@@ -97,7 +100,7 @@ impl Version {
     /// Whether this writes the same text as `other` would: the same source
     /// and the same scene. (Two versions of one source text share it.)
     fn same_as(&self, other: &Version) -> bool {
-        Arc::ptr_eq(&self.source, &other.source) && self.edited.scene() == other.edited.scene()
+        self.source.same(&other.source) && self.edited.scene() == other.edited.scene()
     }
 }
 
@@ -147,7 +150,7 @@ impl Document {
     fn from_text(path: Option<PathBuf>, text: String, scene: Scene, state: FileState) -> Document {
         let labels = Arc::new(names::object_labels(&text));
         let disk = Some(fingerprint(text.as_bytes()));
-        let file = Version::new(Arc::new(text), scene, labels);
+        let file = Version::new(Source::new(text), scene, labels);
         Document {
             path,
             disk,
@@ -241,6 +244,11 @@ impl Document {
         self.path.as_deref()
     }
 
+    /// The text on screen is held packed ([`Source`]: a large file's).
+    pub fn holds_packed_text(&self) -> bool {
+        self.on_screen().source.is_packed()
+    }
+
     /// The scene on screen.
     pub fn scene(&self) -> &Scene {
         self.on_screen().edited.scene()
@@ -257,7 +265,7 @@ impl Document {
     /// one that did on screen, with its error; the file's own text ends
     /// the following. Nothing is written.
     pub fn follow(&mut self, text: String) {
-        if *self.file.source == text {
+        if self.file.source.is(&text) {
             self.unfollow();
             return;
         }
@@ -266,7 +274,7 @@ impl Document {
         match scene::parse_sharing(&text, &path, like) {
             Ok(scene) => {
                 let labels = Arc::new(names::object_labels(&text));
-                self.editor = Some(Version::new(Arc::new(text), scene, labels));
+                self.editor = Some(Version::new(Source::new(text), scene, labels));
                 self.editor_error = None;
             }
             Err(e) => {
@@ -337,7 +345,8 @@ impl Document {
     pub fn object_position(&self, n: usize) -> Option<scene::Position> {
         let version = self.on_screen();
         let origin = version.edited.object_origin(n)?;
-        scene::splice::object_position(&version.source, origin)
+        // (A packed text is unpacked for it: asked for by a menu, once.)
+        scene::splice::object_position(&version.source.text(), origin)
     }
 
     /// Object `n`'s number among the spheres and planes of the text on

@@ -30,7 +30,7 @@ impl Document {
     pub fn file_text_writer(&self) -> TextWriter {
         let file = self.file.clone();
         Box::new(move |w| {
-            let rewrite = splice::plan(&file.source, &file.source_scene, &file.edited)
+            let rewrite = splice::plan_source(&file.source, &file.source_scene, &file.edited)
                 .map_err(std::io::Error::other)?;
             rewrite.write_to(w)
         })
@@ -65,7 +65,8 @@ impl Document {
         } else if self.disk == doc.disk {
             Reload::Unchanged
         } else {
-            let read = FileRead::new(self.file.source.as_ref().clone(), self.file_scene().clone());
+            let text = self.file.source.text().into_owned();
+            let read = FileRead::new(text, self.file_scene().clone());
             doc.file_read(read)
         };
         *self = doc;

@@ -159,7 +159,7 @@ fn write_scene(
     announce: Option<&OwnWrites>,
 ) -> Result<Option<u64>, SaveError> {
     let edited = &version.edited;
-    let rewrite = splice::plan(&version.source, &version.source_scene, edited)?;
+    let rewrite = splice::plan_source(&version.source, &version.source_scene, edited)?;
     let mut written = None;
     crate::output::write_atomic_with(
         path,
