@@ -149,6 +149,14 @@ fn a_large_text_held_packed_saves_as_a_text_held_whole() {
     assert!(text.len() >= PACK_BYTES, "{}", text.len());
     let (_dir, path, mut doc) = common::document_on(&text);
     assert!(doc.holds_packed_text());
+    // The labels the comments above the objects give, as of a whole text.
+    let labels = scene::names::object_labels(&text);
+    for n in [0, 1, 47_000, 94_999] {
+        let shape = doc.scene().objects[n].shape.name();
+        let expected = scene::names::object_name(n, shape, labels.get(n));
+        assert_eq!(doc.object_label(n), expected);
+    }
+    assert_eq!(doc.object_label(47_000), "#47001 ball 47000 sphere");
     // Values, an object removed, one added, a light moved: what the same
     // edits save into the text held whole.
     let mut whole = rayoflight::scene::edit::Edited::new(doc.file_scene().clone());

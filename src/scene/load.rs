@@ -25,6 +25,7 @@
 //! Nothing here panics on any input, and every count the file controls is
 //! checked against its limit before anything is allocated for it.
 
+use super::source::Block;
 use std::borrow::Cow;
 use std::fs;
 use std::io::Read;
@@ -74,10 +75,53 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 /// place in it, as [`parse_sharing`] does; the text is not kept (a save
 /// checking the file it wrote).
 pub fn load_like(path: &Path, like: &[Arc<Object>]) -> Result<Scene, LoadError> {
-    if let Some(scene) = streamed(path, like) {
-        return Ok(scene);
+    if let Some(streamed) = streamed(path, like, false, None) {
+        return Ok(streamed.scene);
     }
     load_sharing(path, like).map(|(_, scene)| scene)
+}
+
+/// A large file loaded with its text, which is never held whole
+/// ([`load_packed`]).
+pub struct PackedLoad {
+    pub scene: Scene,
+    /// The file's text (byte-order mark and all), held packed.
+    pub text: super::source::Source,
+    /// The text has a comment somewhere (none: no object has a label).
+    pub comments: bool,
+}
+
+/// [`load_counting`] for the app, keeping a large file's text packed
+/// ([`super::source::Source`]): each piece of the file is parsed and
+/// packed on the cores while the next is read, so that the memory of the
+/// load is the scene's, the packed text's and a few pieces', never the
+/// text's (a million spheres: 214 MB). `Ok(None)` where it is not read so
+/// (a file smaller than [`super::source::PACK_BYTES`], or at the least
+/// doubt, as [`load`] has it): [`load_counting`] then reads it whole and
+/// gives any error, at its line and column. Stopped by `progress`:
+/// [`LoadErrorKind::Stopped`].
+pub fn load_packed(
+    path: &Path,
+    progress: Option<&LoadProgress>,
+) -> Result<Option<PackedLoad>, LoadError> {
+    let large = fs::metadata(path)
+        .is_ok_and(|m| m.is_file() && m.len() >= super::source::PACK_BYTES as u64);
+    if !large {
+        return Ok(None);
+    }
+    let loaded = streamed(path, &[], true, progress);
+    if progress.is_some_and(LoadProgress::is_stopped) {
+        return Err(LoadError::new(path, None, LoadErrorKind::Stopped));
+    }
+    if let Some(progress) = progress {
+        let total = 2 * fs::metadata(path).map_or(0, |m| m.len());
+        progress.set(total, total);
+    }
+    Ok(loaded.map(|streamed| PackedLoad {
+        scene: streamed.scene,
+        text: super::source::Source::from_blocks(streamed.blocks),
+        comments: streamed.comments,
+    }))
 }
 
 /// The cores a text of `bytes` is parsed on: 1 below two pieces' worth
@@ -112,7 +156,12 @@ const STREAM_PIECE_BYTES: usize = 1 << 20;
 /// (it would wait on itself), a read that fails, a text that is not UTF-8,
 /// a cut that does not fall between two of the root's children, a text
 /// that declares an ASCII encoding (checked of the whole text only).
-fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
+fn streamed(
+    path: &Path,
+    like: &[Arc<Object>],
+    pack: bool,
+    progress: Option<&LoadProgress>,
+) -> Option<Streamed> {
     let meta = fs::metadata(path).ok()?;
     if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
         return None;
@@ -122,6 +171,11 @@ fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
         return None;
     }
     let mut file = fs::File::open(path).ok()?.take(MAX_FILE_BYTES + 1);
+    if let Some(progress) = progress {
+        progress.set(0, 2 * meta.len());
+    }
+    let mut blocks: Vec<Option<Block>> = Vec::new();
+    let mut comments = false;
     let (done, results) = std::sync::mpsc::channel();
     let path: Arc<Path> = Arc::from(path);
     let mut pieces: Vec<Option<Gathered>> = Vec::new();
@@ -133,6 +187,9 @@ fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
     let mut total = 0u64;
     let mut first = true;
     loop {
+        if progress.is_some_and(LoadProgress::is_stopped) {
+            return None;
+        }
         let mut buf = std::mem::take(&mut carry);
         let wanted = buf.len() + STREAM_PIECE_BYTES;
         buf.reserve(STREAM_PIECE_BYTES);
@@ -166,23 +223,38 @@ fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
         buf.truncate(end);
         let k = pieces.len();
         pieces.push(None);
+        blocks.push(None);
+        if let Some(progress) = progress {
+            progress.add(buf.len());
+        }
         let (done, path, is_first) = (done.clone(), Arc::clone(&path), first);
         rayon::spawn(move || {
-            let gathered = std::str::from_utf8(buf.get(skip..).unwrap_or_default())
+            let piece = std::str::from_utf8(buf.get(skip..).unwrap_or_default())
                 .ok()
                 .and_then(|text| {
                     let mut parser = Parser::new(text, &path);
                     parser.whole = None;
-                    parser.piece(is_first).ok()
+                    let gathered = parser.piece(is_first).ok()?;
+                    // The text kept packed (from the byte-order mark on).
+                    let kept = pack.then(|| (Block::pack(&buf), text.contains("<!--")));
+                    Some((gathered, kept, buf.len()))
                 });
             // The loader stops listening only once it has given up.
-            let _ = done.send((k, gathered));
+            let _ = done.send((k, piece));
         });
         first = false;
         in_flight += 1;
         while in_flight >= STREAM_AHEAD * threads || (last && in_flight > 0) {
-            let (k, gathered) = results.recv().ok()?;
-            *pieces.get_mut(k)? = Some(gathered?);
+            let (k, piece) = results.recv().ok()?;
+            let (gathered, kept, bytes) = piece?;
+            *pieces.get_mut(k)? = Some(gathered);
+            if let Some((block, has_comments)) = kept {
+                *blocks.get_mut(k)? = Some(block);
+                comments |= has_comments;
+            }
+            if let Some(progress) = progress {
+                progress.add(bytes);
+            }
             in_flight -= 1;
             // Each piece's objects shared with `like` as soon as the pieces
             // before it are in: a save's check of a million objects holds
@@ -200,7 +272,27 @@ fn streamed(path: &Path, like: &[Arc<Object>]) -> Option<Scene> {
         }
     }
     let pieces = pieces.into_iter().collect::<Option<Vec<_>>>()?;
-    join(pieces, like, &path)
+    let blocks = match pack {
+        true => {
+            // The root's end tag and what follows it: the last piece's rest.
+            blocks.push(Some(Block::pack(&carry)));
+            blocks.into_iter().collect::<Option<Vec<_>>>()?
+        }
+        false => Vec::new(),
+    };
+    Some(Streamed {
+        scene: join(pieces, like, &path)?,
+        blocks,
+        comments,
+    })
+}
+
+/// What [`streamed`] read: the scene, and when asked for, the text's
+/// pieces packed and whether they have a comment.
+struct Streamed {
+    scene: Scene,
+    blocks: Vec<Block>,
+    comments: bool,
 }
 
 /// Like [`load`], and also returns the file's text (the app keeps it to
@@ -1802,7 +1894,7 @@ mod tests {
             );
             assert_eq!(loaded.replace(&path.display().to_string(), "t.xml"), one);
             assert_eq!(loaded, read);
-            let streamed = streamed(&path, &[]);
+            let streamed = streamed(&path, &[], false, None).map(|s| s.scene);
             assert_eq!(streamed.is_some(), streams, "{}", &text[..60]);
             if let Some(scene) = streamed {
                 assert_eq!(format!("{:?}", Ok::<_, String>(scene)), one);
@@ -1837,12 +1929,48 @@ mod tests {
         let mut not_utf8 = text.clone().into_bytes();
         not_utf8[text.len() / 2] = 0xff;
         fs::write(&path, &not_utf8).unwrap();
-        assert!(streamed(&path, &[]).is_none());
+        assert!(streamed(&path, &[], false, None).is_none());
         assert!(matches!(
             load(&path).unwrap_err().kind,
             LoadErrorKind::NotUtf8 { .. }
         ));
         check(&text.replace("</scene>", "</scene><!-- after -->"), false);
+    }
+
+    #[test]
+    fn a_large_file_is_loaded_with_its_text_packed() {
+        use crate::scene::source::PACK_BYTES;
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.xml");
+        let text = format!("\u{feff}{}", varied(200_000));
+        assert!(text.len() >= PACK_BYTES, "{}", text.len());
+        fs::write(&path, &text).unwrap();
+        let loaded = load_packed(&path, None).unwrap().expect("streamed");
+        assert!(loaded.text.is_packed());
+        assert!(
+            loaded.text.is(&text),
+            "the file's text, byte-order mark and all"
+        );
+        assert!(loaded.comments);
+        assert_eq!(loaded.scene, load(&path).unwrap());
+        // No comment: said so.
+        let plain: String = text
+            .split_inclusive('\n')
+            .filter(|line| !line.contains("<!--"))
+            .collect();
+        fs::write(&path, &plain).unwrap();
+        assert!(!load_packed(&path, None).unwrap().unwrap().comments);
+        // Stopped: said so.
+        let progress = LoadProgress::default();
+        progress.stop();
+        let err = load_packed(&path, Some(&progress)).err().unwrap();
+        assert_eq!(err.kind, LoadErrorKind::Stopped);
+        // Broken: not streamed, for the whole read to give the error.
+        fs::write(&path, plain.replacen("<light", "<lihgt", 1)).unwrap();
+        assert!(load_packed(&path, None).unwrap().is_none());
+        // Small: not packed.
+        fs::write(&path, varied(10)).unwrap();
+        assert!(load_packed(&path, None).unwrap().is_none());
     }
 
     #[test]
@@ -1853,7 +1981,7 @@ mod tests {
         fs::write(&path, &text).unwrap();
         let like = in_one(&text).unwrap().objects;
         // Every object shared; one changed in the file: that one not.
-        let again = streamed(&path, &like).expect("streamed");
+        let again = streamed(&path, &like, false, None).expect("streamed").scene;
         assert_eq!(again.objects.len(), like.len());
         assert!(
             again
@@ -1867,7 +1995,7 @@ mod tests {
         let at = at + text[at..].find("\n  <sphere>\n").unwrap() + 1;
         let changed = format!("{}<sphere/>{}", &text[..at], &text[at..]);
         fs::write(&path, &changed).unwrap();
-        let shifted = streamed(&path, &like).expect("streamed");
+        let shifted = streamed(&path, &like, false, None).expect("streamed").scene;
         let k = shifted
             .objects
             .iter()

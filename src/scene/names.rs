@@ -3,6 +3,7 @@
 //! from 1 in file order (as paths do); the words are the first ones of the
 //! comment directly above the object in the file ([`object_labels`]).
 
+use super::source::Source;
 use super::splice;
 
 /// The first words of the comment directly above each object (spheres and
@@ -28,8 +29,21 @@ impl Labels {
 
 /// The [`Labels`] of `text`'s objects.
 pub fn object_labels(text: &str) -> Labels {
+    labels_of(splice::object_comments(text))
+}
+
+/// The [`Labels`] of the objects of a text held as a [`Source`] (a packed
+/// one is read a block at a time).
+pub fn source_labels(source: &Source) -> Labels {
+    let comments = splice::source_object_comments(source);
+    labels_of(comments.iter().map(|(k, c)| (*k, c.as_str())))
+}
+
+/// The labels made of the comments above objects: (object number, the
+/// comment between its `<!--` and `-->`), by object number.
+fn labels_of<'a>(comments: impl Iterator<Item = (usize, &'a str)>) -> Labels {
     Labels(
-        splice::object_comments(text)
+        comments
             .filter_map(|(k, comment)| {
                 // Up to the first punctuation, at most three words.
                 let phrase = comment

@@ -17,8 +17,8 @@ use rayon::prelude::*;
 /// Texts from this size on are held in compressed blocks.
 pub const PACK_BYTES: usize = 16 << 20;
 
-/// The size of a compressed block's text: big enough to compress well,
-/// small enough that reading one back for a piece of it is quick.
+/// About the size of a compressed block's text: big enough to compress
+/// well, small enough that reading one back for a piece of it is quick.
 pub const BLOCK_BYTES: usize = 1 << 20;
 
 /// A scene file's text, shared: copies share one held text.
@@ -27,21 +27,40 @@ pub struct Source(Arc<Held>);
 
 enum Held {
     Whole(String),
-    /// The text's blocks, each compressed; every block but the last holds
-    /// [`BLOCK_BYTES`] bytes of text (a block may end inside a character).
+    /// The text's blocks in order, each compressed on its own.
     Packed {
-        blocks: Vec<Box<[u8]>>,
+        blocks: Vec<Block>,
         len: usize,
     },
+}
+
+/// A piece of a packed text, compressed (it may end inside a character).
+pub struct Block {
+    packed: Box<[u8]>,
+    /// The length of its text.
+    len: usize,
+}
+
+impl Block {
+    /// Packs `text`, a piece of a text.
+    pub fn pack(text: &[u8]) -> Block {
+        Block {
+            packed: lz4_flex::block::compress(text).into_boxed_slice(),
+            len: text.len(),
+        }
+    }
+
+    fn unpack(&self) -> Vec<u8> {
+        lz4_flex::block::decompress(&self.packed, self.len).expect("a packed block unpacks")
+    }
 }
 
 impl std::fmt::Debug for Source {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &*self.0 {
             Held::Whole(text) => write!(f, "Source({} bytes)", text.len()),
-            Held::Packed { blocks, len } => {
-                let held: usize = blocks.iter().map(|b| b.len()).sum();
-                write!(f, "Source({len} bytes in {held} packed)")
+            Held::Packed { len, .. } => {
+                write!(f, "Source({len} bytes in {} packed)", self.held_bytes())
             }
         }
     }
@@ -57,18 +76,24 @@ impl Source {
         Source::packed(&text)
     }
 
-    /// Holds `text` packed whatever its size (tests and tools that check
-    /// a packed text against the same text held whole).
+    /// Holds `text` packed whatever its size, in blocks of [`BLOCK_BYTES`]
+    /// (tests and tools that check a packed text against the same text
+    /// held whole).
     pub fn packed(text: &str) -> Source {
-        let blocks = text
-            .as_bytes()
-            .par_chunks(BLOCK_BYTES)
-            .map(|block| lz4_flex::block::compress(block).into_boxed_slice())
-            .collect();
-        Source(Arc::new(Held::Packed {
-            blocks,
-            len: text.len(),
-        }))
+        Source::from_blocks(
+            text.as_bytes()
+                .par_chunks(BLOCK_BYTES)
+                .map(Block::pack)
+                .collect(),
+        )
+    }
+
+    /// The text whose pieces, in order, `blocks` packed ([`Block::pack`]).
+    /// Together they must be UTF-8 (the loader checks each piece, cut
+    /// between two elements, before it packs it).
+    pub fn from_blocks(blocks: Vec<Block>) -> Source {
+        let len = blocks.iter().map(|b| b.len).sum();
+        Source(Arc::new(Held::Packed { blocks, len }))
     }
 
     /// The text's length in bytes.
@@ -92,7 +117,7 @@ impl Source {
     pub fn held_bytes(&self) -> usize {
         match &*self.0 {
             Held::Whole(text) => text.len(),
-            Held::Packed { blocks, .. } => blocks.iter().map(|b| b.len()).sum(),
+            Held::Packed { blocks, .. } => blocks.iter().map(|b| b.packed.len()).sum(),
         }
     }
 
@@ -119,7 +144,7 @@ impl Source {
                 self.reader()
                     .read_to_end(&mut bytes)
                     .expect("a packed text unpacks");
-                // It was a str when packed.
+                // It was UTF-8 when packed.
                 Cow::Owned(String::from_utf8(bytes).expect("a packed text is UTF-8"))
             }
         }
@@ -132,10 +157,14 @@ impl Source {
         }
         match &*self.0 {
             Held::Whole(own) => own == text,
-            Held::Packed { blocks, .. } => blocks
-                .iter()
-                .zip(text.as_bytes().chunks(BLOCK_BYTES))
-                .all(|(block, theirs)| unpack(block, theirs.len()) == theirs),
+            Held::Packed { blocks, .. } => {
+                let mut rest = text.as_bytes();
+                blocks.iter().all(|block| {
+                    let (theirs, after) = rest.split_at(block.len.min(rest.len()));
+                    rest = after;
+                    block.unpack() == theirs
+                })
+            }
         }
     }
 
@@ -148,11 +177,6 @@ impl Source {
             at: 0,
         }
     }
-}
-
-/// Unpacks a block of `len` bytes.
-fn unpack(block: &[u8], len: usize) -> Vec<u8> {
-    lz4_flex::block::decompress(block, len).expect("a packed block unpacks")
 }
 
 /// A [`Source`]'s bytes in order ([`Source::reader`]).
@@ -171,13 +195,12 @@ impl Read for SourceReader<'_> {
         let rest: &[u8] = match &*self.source.0 {
             // A whole text is read in place.
             Held::Whole(text) => &text.as_bytes()[self.at..],
-            Held::Packed { blocks, len } => {
-                if self.at == self.current.len() {
+            Held::Packed { blocks, .. } => {
+                while self.at == self.current.len() {
                     let Some(block) = blocks.get(self.block) else {
                         return Ok(0);
                     };
-                    let size = (len - self.block * BLOCK_BYTES).min(BLOCK_BYTES);
-                    self.current = unpack(block, size);
+                    self.current = block.unpack();
                     self.block += 1;
                     self.at = 0;
                 }
@@ -233,6 +256,29 @@ mod tests {
             back.extend_from_slice(&buf[..n]);
         }
         assert_eq!(back, text.as_bytes());
+    }
+
+    #[test]
+    fn blocks_of_any_size_make_the_text_they_packed() {
+        let text = big();
+        let mut blocks = Vec::new();
+        let mut rest = text.as_str();
+        for n in [1usize, 17, 0, 65_536, 3_000_001].iter().cycle() {
+            if rest.is_empty() {
+                break;
+            }
+            let mut cut = (*n).min(rest.len());
+            while !rest.is_char_boundary(cut) {
+                cut += 1;
+            }
+            blocks.push(Block::pack(&rest.as_bytes()[..cut]));
+            rest = &rest[cut..];
+        }
+        let source = Source::from_blocks(blocks);
+        assert_eq!(source.len(), text.len());
+        assert!(source.is(&text));
+        assert_eq!(source.text(), text);
+        assert!(!source.is(&text.replace("<sphere/>\n</scene>", "<sphere/>\n</scenE>")));
     }
 
     #[test]

@@ -495,6 +495,25 @@ pub(super) fn object_comments(text: &str) -> impl Iterator<Item = (usize, &str)>
     })
 }
 
+/// [`object_comments`] of a text held as a [`Source`]: of its skeleton
+/// with every object's inside left out (a packed text is never unpacked
+/// whole). The comments above the objects are all outside them, and so is
+/// every line an object starts on, up to its start: what is found is what
+/// the whole text gives.
+pub(super) fn source_object_comments(source: &Source) -> Vec<(usize, String)> {
+    if let Some(text) = source.as_str() {
+        return object_comments(text)
+            .map(|(k, c)| (k, c.to_owned()))
+            .collect();
+    }
+    let Ok(skeleton) = Skeleton::read(source, &std::collections::HashSet::new()) else {
+        return Vec::new();
+    };
+    object_comments(&skeleton.text)
+        .map(|(k, c)| (k, c.to_owned()))
+        .collect()
+}
+
 /// The elements directly inside `<scene>`, in file order: each one's name,
 /// its bytes (`<` to the end of its end tag) and its start tag's bytes.
 /// Empty when the text is not well-formed XML.

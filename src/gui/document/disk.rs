@@ -104,6 +104,21 @@ pub(super) fn fingerprint(bytes: &[u8]) -> u64 {
     f.finish()
 }
 
+/// The [`fingerprint`] of a text held as a [`Source`], read a block at a
+/// time.
+pub(super) fn fingerprint_source(source: &crate::scene::source::Source) -> u64 {
+    use std::io::Read;
+    let mut f = Fingerprint::default();
+    let mut reader = source.reader();
+    let mut buffer = vec![0; 1 << 16];
+    loop {
+        match reader.read(&mut buffer) {
+            Ok(0) | Err(_) => return f.finish(),
+            Ok(n) => f.add(&buffer[..n]),
+        }
+    }
+}
+
 /// Why a path could not be fingerprinted.
 #[derive(Debug)]
 pub enum FingerprintError {

@@ -41,8 +41,8 @@ mod history;
 mod restore;
 mod save;
 
-use disk::fingerprint;
 pub use disk::{FileRead, FingerprintError, PendingMerge, Reload, SaveError, fingerprint_file};
+use disk::{fingerprint, fingerprint_source};
 use history::Step;
 pub use restore::{TextWriter, fingerprint_text};
 pub use save::{OwnWrites, SaveJob, SaveOutcome, SaveStep};
@@ -148,12 +148,42 @@ fn next_generation() -> u64 {
 
 impl Document {
     fn from_text(path: Option<PathBuf>, text: String, scene: Scene, state: FileState) -> Document {
-        let labels = Arc::new(names::object_labels(&text));
-        let disk = Some(fingerprint(text.as_bytes()));
-        let file = Version::new(Source::new(text), scene, labels);
+        let labels = names::object_labels(&text);
+        let disk = fingerprint(text.as_bytes());
+        Document::from_parts(path, Source::new(text), scene, labels, disk, state)
+    }
+
+    /// A document on a large file loaded with its text packed
+    /// ([`scene::load_packed`]); `comments`: the text has some (else no
+    /// object has a label, and the text is not read again for them).
+    fn from_packed(path: &Path, loaded: scene::PackedLoad) -> Document {
+        let labels = match loaded.comments {
+            true => names::source_labels(&loaded.text),
+            false => names::Labels::default(),
+        };
+        let disk = fingerprint_source(&loaded.text);
+        Document::from_parts(
+            Some(path.to_owned()),
+            loaded.text,
+            loaded.scene,
+            labels,
+            disk,
+            FileState::Watching,
+        )
+    }
+
+    fn from_parts(
+        path: Option<PathBuf>,
+        text: Source,
+        scene: Scene,
+        labels: names::Labels,
+        disk: u64,
+        state: FileState,
+    ) -> Document {
+        let file = Version::new(text, scene, Arc::new(labels));
         Document {
             path,
-            disk,
+            disk: Some(disk),
             shown: file.clone(),
             file,
             dirty: false,
@@ -192,7 +222,14 @@ impl Document {
         path: &Path,
         progress: Option<&scene::LoadProgress>,
     ) -> Result<Document, LoadError> {
-        match scene::load_counting(path, &[], progress) {
+        // A large file's text is never held whole: read a piece at a time
+        // and packed as it is parsed.
+        let loaded = match scene::load_packed(path, progress) {
+            Ok(Some(loaded)) => return Ok(Document::from_packed(path, loaded)),
+            Ok(None) => scene::load_counting(path, &[], progress),
+            Err(e) => Err(e),
+        };
+        match loaded {
             Ok((text, scene)) => Ok(Document::from_text(
                 Some(path.to_owned()),
                 text,
