@@ -256,6 +256,36 @@ pub fn plan_source<'s>(
     })
 }
 
+/// Where each element of a group came from ([`Editor::group`]): the
+/// index among the text's elements of current element `i`, or `None` for
+/// an element added since.
+#[derive(Clone, Copy)]
+enum Origins<'a> {
+    List(&'a [Option<usize>]),
+    /// `len` elements, each asked of `of` (the objects' origins are the
+    /// edit engine's, asked for: a list of a million would be 16 MB).
+    Asked {
+        len: usize,
+        of: &'a dyn Fn(usize) -> Option<usize>,
+    },
+}
+
+impl Origins<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Origins::List(list) => list.len(),
+            Origins::Asked { len, .. } => *len,
+        }
+    }
+
+    fn of(&self, i: usize) -> Option<usize> {
+        match self {
+            Origins::List(list) => list.get(i).copied().flatten(),
+            Origins::Asked { len, of } => (i < *len).then(|| of(i)).flatten(),
+        }
+    }
+}
+
 /// A packed text with the insides of the objects a save leaves as they
 /// are left out (`<sphere>…</sphere>` becomes `<sphere></sphere>`): what
 /// the save's editor reads instead of the whole text. A million spheres'
@@ -269,7 +299,8 @@ struct Skeleton {
     text: String,
     /// For each part left out, the skeleton's offset where it was and the
     /// bytes left out up to there in all.
-    gaps: Vec<(usize, usize)>,
+    /// (u32: a text is at most 1 GiB.)
+    gaps: Vec<(u32, u32)>,
     /// The whole text has a CRLF line ending (maybe only in a part left
     /// out): new lines are written with it, as in a text held whole.
     crlf: bool,
@@ -379,7 +410,12 @@ impl Skeleton {
                     if leaving_out == Some(depth) {
                         // The inside, up to the `<` of the end tag.
                         left_out += take(before, false, &mut kept);
-                        gaps.push((kept.len(), left_out));
+                        let at = u32::try_from(kept.len());
+                        let out = u32::try_from(left_out);
+                        let (Ok(at), Ok(out)) = (at, out) else {
+                            return Err(internal("a text over 4 GiB"));
+                        };
+                        gaps.push((at, out));
                         leaving_out = None;
                         objects += 1;
                     }
@@ -402,8 +438,8 @@ impl Skeleton {
 
     /// The source's offset of the skeleton's offset `at`.
     fn in_source(&self, at: usize) -> usize {
-        let i = self.gaps.partition_point(|&(gap, _)| gap <= at);
-        at + i.checked_sub(1).map_or(0, |i| self.gaps[i].1)
+        let i = self.gaps.partition_point(|&(gap, _)| gap as usize <= at);
+        at + i.checked_sub(1).map_or(0, |i| self.gaps[i].1 as usize)
     }
 }
 
@@ -1190,13 +1226,14 @@ impl Editor<'_, '_> {
             return Err(internal("the text's elements do not match its scene"));
         }
 
-        let origins: Vec<Option<usize>> = (0..scene.objects.len())
-            .map(|n| edited.object_origin(n))
-            .collect();
+        let origins = Origins::Asked {
+            len: scene.objects.len(),
+            of: &|n| edited.object_origin(n),
+        };
         self.group(
             root,
             objects,
-            &origins,
+            origins,
             |i| object_lines(&scene.objects[i]),
             |editor, k, i| {
                 let origin = edited.origin_of(i);
@@ -1215,7 +1252,7 @@ impl Editor<'_, '_> {
         self.group(
             root,
             &light_places,
-            &edited.lights,
+            Origins::List(&edited.lights),
             |i| light_lines(&scene.lights[i]),
             |editor, k, i| editor.light(lights[k], &original.lights[k], &scene.lights[i]),
         )?;
@@ -1256,15 +1293,15 @@ impl Editor<'_, '_> {
         &mut self,
         parent: usize,
         nodes: &[Place],
-        origins: &[Option<usize>],
+        origins: Origins<'_>,
         lines: impl Fn(usize) -> Lines,
         mut keep: impl FnMut(&mut Self, usize, usize) -> Result<(), EditError>,
     ) -> Result<(), EditError> {
         let doc = self.doc;
         let mut kept = vec![false; nodes.len()];
         let mut last = None;
-        for (i, origin) in origins.iter().enumerate() {
-            let Some(k) = *origin else { continue };
+        for i in 0..origins.len() {
+            let Some(k) = origins.of(i) else { continue };
             if k >= nodes.len() || kept[k] || last.is_some_and(|l| l >= k) {
                 return Err(internal("the elements' origins are not in text order"));
             }
@@ -1280,16 +1317,15 @@ impl Editor<'_, '_> {
         let name = doc.node(parent).name;
         let mut i = 0;
         while i < origins.len() {
-            if origins[i].is_some() {
+            if origins.of(i).is_some() {
                 i += 1;
                 continue;
             }
-            let run_end = origins[i..]
-                .iter()
-                .position(Option::is_some)
-                .map_or(origins.len(), |p| i + p);
+            let run_end = (i..origins.len())
+                .find(|&j| origins.of(j).is_some())
+                .unwrap_or(origins.len());
             let items: Vec<Lines> = (i..run_end).map(&lines).collect();
-            match origins.get(run_end).copied().flatten() {
+            match origins.of(run_end) {
                 Some(k) => self.insert_before(nodes[k], &items),
                 None => match nodes.last() {
                     Some(&place) => self.insert_after(place, &items),
@@ -1421,7 +1457,7 @@ impl Editor<'_, '_> {
         self.group(
             node,
             &places,
-            origins,
+            Origins::List(origins),
             |i| vec![(0, step_tag(&e[i]))],
             |editor, k, i| editor.step(steps[k], &o[k], &e[i]),
         )
