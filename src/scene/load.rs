@@ -1711,6 +1711,11 @@ mod tests {
         text
     }
 
+    /// Each object of `objects` is the one at its place in `like`.
+    fn all_shared(objects: &[Arc<Object>], like: &[Arc<Object>]) -> bool {
+        objects.iter().zip(like).all(|(a, b)| Arc::ptr_eq(a, b))
+    }
+
     /// A parse in pieces either makes what the parse in one makes, to the
     /// bit, or gives way to it.
     fn agrees(text: &str, count: usize) -> Result<bool, String> {
@@ -1734,13 +1739,7 @@ mod tests {
         // The objects come back shared as a parse in one shares them.
         let like = in_one(&text).unwrap().objects;
         let again = in_pieces(&text, Path::new("t.xml"), &like, None, 5).unwrap();
-        assert!(
-            again
-                .objects
-                .iter()
-                .zip(&like)
-                .all(|(a, b)| Arc::ptr_eq(a, b))
-        );
+        assert!(all_shared(&again.objects, &like));
     }
 
     #[test]
@@ -1983,13 +1982,7 @@ mod tests {
         // Every object shared; one changed in the file: that one not.
         let again = streamed(&path, &like, false, None).expect("streamed").scene;
         assert_eq!(again.objects.len(), like.len());
-        assert!(
-            again
-                .objects
-                .iter()
-                .zip(&like)
-                .all(|(a, b)| Arc::ptr_eq(a, b))
-        );
+        assert!(all_shared(&again.objects, &like));
         let at = text.len() / 2;
         // (Not the one in a comment.)
         let at = at + text[at..].find("\n  <sphere>\n").unwrap() + 1;
