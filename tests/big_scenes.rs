@@ -56,12 +56,16 @@ fn unshared(a: &Scene, b: &Scene) -> Vec<usize> {
 fn the_edited_scene_shares_every_object_but_the_one_edited() {
     let (_dir, _path, mut doc) = common::document_on(&spheres_text(1000));
     assert!(unshared(doc.file_scene(), doc.scene()).is_empty());
+    // Until an edit, even the list of objects is one.
+    assert!(doc.file_scene().objects.same_list(&doc.scene().objects));
     // Paths count from 1: object[700] is index 699.
     doc.apply(set("object[700].material.ka", 0.5)).unwrap();
     assert_eq!(unshared(doc.file_scene(), doc.scene()), vec![699]);
-    // A copy of the scene (what a render request sends) shares them all.
+    // A copy of the scene (what a render request sends) shares them all,
+    // and their list: a million objects' is 8 MB a copy.
     let sent = doc.scene().clone();
     assert!(unshared(&sent, doc.scene()).is_empty());
+    assert!(sent.objects.same_list(&doc.scene().objects));
     // Undone, the one copied object is equal again: nothing unsaved.
     doc.undo();
     assert!(!doc.has_unsaved_edits());
@@ -236,4 +240,55 @@ fn moving_the_camera_does_not_prepare_the_scene_again() {
     assert!(worker.prepared(&edited).is_none());
     render(&worker, &edited);
     assert!(!worker.prepared(&edited).unwrap().same_world(&first));
+}
+
+/// The bench's measure of the app without its window (`bench
+/// --app-document`, a child of the big section): it opens the file,
+/// renders, edits one value, journals and saves it, and says its peak
+/// memory after each stage; the file ends up with that one value changed.
+#[test]
+fn the_bench_measures_the_app_through_a_picture_an_edit_and_a_save() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("spheres.xml");
+    let text = spheres_text(2000);
+    std::fs::write(&path, &text).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(["bench", "--threads", "1", "--app-document"])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let stages: Vec<(&str, f64)> = stdout
+        .lines()
+        .map(|l| {
+            let (stage, kb) = l.rsplit_once(' ').unwrap();
+            (stage, kb.parse().unwrap())
+        })
+        .collect();
+    let names: Vec<&str> = stages.iter().map(|s| s.0).collect();
+    assert_eq!(
+        names,
+        ["after the picture", "after an edit", "after a save"]
+    );
+    // Peaks only rise, and a process holding 2000 objects is over 1 MB.
+    assert!(stages.windows(2).all(|w| w[0].1 <= w[1].1), "{stages:?}");
+    assert!(stages[0].1 > 1000.0, "{stages:?}");
+    // Saved: the first object's ka and nothing else, as the command
+    // line's edit (the same edit engine) writes it.
+    let copy = dir.path().join("copy.xml");
+    std::fs::write(&copy, &text).unwrap();
+    let edit = std::process::Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .args(["edit", "--set", "object[1].material.ka=0.25"])
+        .arg(&copy)
+        .status()
+        .unwrap();
+    assert!(edit.success());
+    let saved = std::fs::read_to_string(&path).unwrap();
+    assert_ne!(saved, text);
+    assert_eq!(saved, std::fs::read_to_string(&copy).unwrap());
 }

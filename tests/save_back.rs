@@ -820,7 +820,8 @@ impl Rng {
             }
             5 => {
                 let n = self.below(s.objects.len() + 1);
-                s.objects.truncate(s.objects.len() - n.min(2));
+                let keep = s.objects.len() - n.min(2);
+                s.objects.truncate(keep);
             }
             6 if !s.lights.is_empty() => {
                 let i = self.below(s.lights.len());

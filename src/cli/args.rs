@@ -593,6 +593,10 @@ struct BenchFlags {
         allow_negative_numbers = true
     )]
     big_spheres: usize,
+    /// The big section's own child: the app without its window on FILE,
+    /// printing its peak memory after each stage.
+    #[arg(long, value_name = "FILE", hide = true)]
+    app_document: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -861,6 +865,7 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
             quiet: b.quiet,
             split_size: b.split_size,
             big_spheres: b.big_spheres,
+            app_document: b.app_document,
         }),
         Some(Sub::Study(s)) => Command::Study(super::study::StudyArgs {
             out: s.out,

@@ -28,6 +28,9 @@ pub struct BenchArgs {
     pub split_size: u32,
     /// Spheres in the big scene (0: skip that section).
     pub big_spheres: usize,
+    /// Not the bench: the big section's child, the app without its window
+    /// on this file ([`app_document`]).
+    pub app_document: Option<PathBuf>,
 }
 
 /// Most spheres the big-scene section takes (`--big-spheres`): about
@@ -64,6 +67,9 @@ struct PovRun {
 /// Runs the whole bench; the report goes to stdout as it comes, a progress
 /// bar (`steps`) to stderr.
 pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
+    if let Some(path) = &args.app_document {
+        return app_document(path, args.threads);
+    }
     // The CSV's folder takes it, checked before the minutes of work.
     if let Some(path) = &args.csv {
         output::check_file_target(path).map_err(|e| e.to_string())?;
@@ -681,7 +687,142 @@ fn big_section(
         ms(wall)
     ))?;
     rows.push(row("command line", wall, peak));
+
+    step("big scene: the app");
+    let Some(stages) = app_document_peaks(&dir.path().join(format!("spheres-{n}.xml")), threads)?
+    else {
+        return Ok(());
+    };
+    let stages: Vec<String> = stages
+        .iter()
+        .map(|(stage, mb)| {
+            rows.push(row(&format!("app {stage}"), Duration::ZERO, Some(*mb)));
+            format!("{mb:.0} MB ({:.2}x) {stage}", mb / size_mb)
+        })
+        .collect();
+    out(&format!(
+        "{:<34} peak {} (goal: 2x, with the window: \
+         tools/measure-app-memory.sh measures it)\n",
+        "the app without its window",
+        stages.join(", ")
+    ))?;
     Ok(())
+}
+
+/// The stages of [`app_document`], each with the app's peak memory after
+/// it, in MB: run in a process of its own on `path` (which it edits and
+/// saves). `None` in a build without the app.
+#[cfg(feature = "gui")]
+fn app_document_peaks(path: &Path, threads: usize) -> Result<Option<Vec<(String, f64)>>, String> {
+    let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let output = Command::new(exe)
+        .arg("bench")
+        .arg("--app-document")
+        .arg(path)
+        .arg("--threads")
+        .arg(threads.to_string())
+        .stderr(std::process::Stdio::inherit())
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !output.status.success() {
+        return Err("rayoflight bench --app-document failed".to_owned());
+    }
+    let stages = String::from_utf8_lossy(&output.stdout)
+        .lines()
+        .filter_map(|line| {
+            let (stage, kb) = line.rsplit_once(' ')?;
+            Some((stage.to_owned(), kb.parse::<f64>().ok()? / 1e3))
+        })
+        .collect();
+    Ok(Some(stages))
+}
+
+#[cfg(not(feature = "gui"))]
+fn app_document_peaks(_: &Path, _: usize) -> Result<Option<Vec<(String, f64)>>, String> {
+    Ok(None)
+}
+
+#[cfg(not(feature = "gui"))]
+pub fn app_document(_: &Path, _: usize) -> Result<(), String> {
+    Err("--app-document: this build has no app (built without the gui feature)".to_owned())
+}
+
+/// The app on `path` as a user meets it, less the window: the document
+/// opened as the app opens it, the picture from the app's render worker,
+/// an edit of one value (journaled, as the app does within a second), its
+/// picture, and a save. After each it prints the stage and the process's
+/// peak resident memory so far in kB (`after an edit 534000`): the child
+/// `rayoflight bench --app-document FILE` of the big section.
+#[cfg(feature = "gui")]
+pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
+    use rayoflight::gui::document::Document;
+    use rayoflight::gui::journal::{Entry, Job, Writer};
+    use rayoflight::scene::edit::{Edit, Field, Value};
+
+    let error = |e: &dyn std::fmt::Display| e.to_string();
+    let say = |stage: &str| {
+        let kb = PeakMemory::read_kb("VmHWM:").unwrap_or(0.0);
+        println!("{stage} {kb:.0}");
+    };
+    let mut doc = Document::open(path).map_err(|e| error(&e))?;
+    if let Some(e) = doc.error() {
+        return Err(e.to_owned());
+    }
+    let worker = rayoflight::gui::worker::Worker::spawn(threads, || {});
+    picture(&worker, doc.scene())?;
+    say("after the picture");
+
+    let ka = Field::parse("object[1].material.ka").map_err(|e| error(&e))?;
+    let value = match ka.get(doc.scene()) {
+        Ok(Value::Number(0.25)) => 0.5,
+        _ => 0.25,
+    };
+    doc.apply(Edit::Set(ka, Value::Number(value)))
+        .map_err(|e| error(&e))?;
+    doc.end_drag();
+    let journal = tempfile::tempdir().map_err(|e| error(&e))?;
+    let writer = Writer::start(journal.path().to_owned());
+    writer.send(Job::Write {
+        entry: Entry {
+            scene: rayoflight::files::absolute(path),
+            base_fingerprint: doc.file_fingerprint(),
+            saved_at: std::time::SystemTime::now(),
+            edits: doc.unsaved_edits(),
+        },
+        base: Some(doc.file_text_writer()),
+    });
+    picture(&worker, doc.scene())?;
+    writer.flush(Duration::from_secs(600));
+    say("after an edit");
+
+    doc.save().map_err(|e| error(&e))?;
+    say("after a save");
+    Ok(())
+}
+
+/// The full-size picture of `scene` from the app's worker, as the app
+/// asks for it.
+#[cfg(feature = "gui")]
+fn picture(worker: &rayoflight::gui::worker::Worker, scene: &Scene) -> Result<(), String> {
+    use rayoflight::gui::worker::{self, Event};
+    let passes = worker::passes(scene.camera.width, scene.camera.height);
+    let generation = worker.request_passes(
+        std::sync::Arc::new(scene.clone()),
+        RenderRequest::default(),
+        passes,
+    );
+    loop {
+        match worker.next_event(Duration::from_secs(600)) {
+            Some(Event::PassFinished {
+                generation: g,
+                scale: 1,
+                ..
+            }) if g == generation => return Ok(()),
+            Some(Event::Failed { message, .. }) => return Err(message),
+            Some(_) => {}
+            None => return Err("the app's worker did not answer".to_owned()),
+        }
+    }
 }
 
 /// The peak resident memory from now on (Linux: /proc/self/clear_refs

@@ -157,6 +157,8 @@ impl Bvh {
             count: 0,
         });
         build_node(&mut nodes, 0, items, own, 0, 0, forks);
+        // Fewer than the 2n reserved: leaves hold up to MAX_LEAF items.
+        nodes.shrink_to_fit();
         Bvh { nodes }
     }
 

@@ -27,7 +27,7 @@
 
 use crate::files::through_links;
 use crate::gui::document::{FileRead, OwnWrites, fingerprint_file};
-use crate::scene::{self, LoadError, Object};
+use crate::scene::{self, LoadError, Object, Objects};
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
 use std::path::{Path, PathBuf};
@@ -63,7 +63,7 @@ pub struct SceneWatcher {
     path: PathBuf,
     stop: Arc<AtomicBool>,
     /// The objects the next read shares where equal.
-    known: Arc<Mutex<Vec<Arc<Object>>>>,
+    known: Arc<Mutex<Objects>>,
     /// What the app's own saves wrote: not read back.
     own: OwnWrites,
 }
@@ -208,7 +208,7 @@ impl SceneWatcher {
             Arc::new(Mutex::new((stamp(&path), None)));
         // The objects last read or shown: the next read shares those it
         // still has.
-        let known = Arc::new(Mutex::new(Vec::new()));
+        let known = Arc::new(Mutex::new(Objects::default()));
         let last = known.clone();
         let own = OwnWrites::default();
         let report = {
@@ -251,7 +251,7 @@ impl SceneWatcher {
                 }
                 let event = read(&target, &last);
                 if let FileEvent::Loaded(read) = &event {
-                    last.clone_from(&read.scene.objects);
+                    *last = read.scene.objects.clone();
                 }
                 drop(last);
                 let key = match &event {
@@ -321,9 +321,9 @@ impl SceneWatcher {
     /// The next read of the file shares with `objects` those equal to
     /// them (the app passes the scene it shows: a file saved with one
     /// change is read back as one new object, not a million).
-    pub fn share(&self, objects: &[Arc<Object>]) {
+    pub fn share(&self, objects: &Objects) {
         if let Ok(mut known) = self.known.lock() {
-            *known = objects.to_vec();
+            *known = objects.clone();
         }
     }
 

@@ -230,6 +230,7 @@ mod tests {
         crate::scene::parse(text, Path::new("t.xml"))
             .unwrap()
             .objects
+            .to_vec()
     }
 
     fn sphere(x: f64, red: f64) -> String {

@@ -738,7 +738,7 @@ impl Gathered {
             return Err(LoadError::new(path, None, LoadErrorKind::MissingCamera));
         };
         Ok(Scene {
-            objects: self.objects,
+            objects: self.objects.into(),
             lights: self.lights,
             camera,
             model: self.model.unwrap_or_default(),

@@ -720,7 +720,8 @@ mod tests {
     fn added_elements_are_appended_to_theirs() {
         let base = example();
         let mut theirs = base.clone();
-        theirs.objects.push(theirs.objects[0].clone());
+        let first = theirs.objects[0].clone();
+        theirs.objects.push(first);
         let edits = vec![Edit::add(&base, NewElement::Light)];
         let m = merge(&base, &theirs, &edits, &BTreeMap::new());
         assert!(m.conflicts.is_empty());

@@ -67,13 +67,73 @@ pub struct Camera {
 /// does not change (the app holds the file's scene, the edited one and the
 /// one being rendered; with a million objects each would be 400 MB), and
 /// two scenes compare object by object, equal at once where they share it
-/// ([`Scene::same_objects`]). Change one with [`Arc::make_mut`].
+/// ([`Scene::same_but_camera`]). Change one with [`Arc::make_mut`].
 #[derive(Debug, Clone)]
 pub struct Scene {
-    pub objects: Vec<Arc<Object>>,
+    pub objects: Objects,
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub model: Model,
+}
+
+/// A scene's list of objects, itself shared between copies of the scene
+/// until one of them changes it: a million objects' list is 8 MB, and the
+/// app holds half a dozen copies of its scene (the file's, the edited one,
+/// the one being rendered, the world's, the journal's).
+///
+/// It reads as the [`Vec`] it holds. Writing through it (`&mut`) first
+/// makes the list this copy's own ([`Arc::make_mut`]: copied if another
+/// copy shares it), never the objects, which stay shared until each is
+/// changed with [`Arc::make_mut`] in turn.
+#[derive(Debug, Clone, Default)]
+pub struct Objects(Arc<Vec<Arc<Object>>>);
+
+impl Objects {
+    /// Whether both are the one same list (so equal without a look).
+    pub fn same_list(&self, other: &Objects) -> bool {
+        Arc::ptr_eq(&self.0, &other.0)
+    }
+}
+
+impl std::ops::Deref for Objects {
+    type Target = Vec<Arc<Object>>;
+    fn deref(&self) -> &Vec<Arc<Object>> {
+        &self.0
+    }
+}
+
+impl std::ops::DerefMut for Objects {
+    fn deref_mut(&mut self) -> &mut Vec<Arc<Object>> {
+        Arc::make_mut(&mut self.0)
+    }
+}
+
+impl From<Vec<Arc<Object>>> for Objects {
+    fn from(list: Vec<Arc<Object>>) -> Objects {
+        Objects(Arc::new(list))
+    }
+}
+
+impl FromIterator<Arc<Object>> for Objects {
+    fn from_iter<I: IntoIterator<Item = Arc<Object>>>(iter: I) -> Objects {
+        Objects::from(iter.into_iter().collect::<Vec<_>>())
+    }
+}
+
+impl<'a> IntoIterator for &'a Objects {
+    type Item = &'a Arc<Object>;
+    type IntoIter = std::slice::Iter<'a, Arc<Object>>;
+    fn into_iter(self) -> Self::IntoIter {
+        self.0.iter()
+    }
+}
+
+impl<'a> IntoIterator for &'a mut Objects {
+    type Item = &'a mut Arc<Object>;
+    type IntoIter = std::slice::IterMut<'a, Arc<Object>>;
+    fn into_iter(self) -> Self::IntoIter {
+        Arc::make_mut(&mut self.0).iter_mut()
+    }
 }
 
 impl PartialEq for Scene {
@@ -87,13 +147,47 @@ impl Scene {
     /// ([`crate::render::prepare`]) is the same for both.
     pub fn same_but_camera(&self, other: &Scene) -> bool {
         // A shared object is equal to itself without a look at its values.
-        self.objects.len() == other.objects.len()
-            && self
-                .objects
-                .iter()
-                .zip(&other.objects)
-                .all(|(a, b)| Arc::ptr_eq(a, b) || a == b)
+        (self.objects.same_list(&other.objects)
+            || self.objects.len() == other.objects.len()
+                && self
+                    .objects
+                    .iter()
+                    .zip(&other.objects)
+                    .all(|(a, b)| Arc::ptr_eq(a, b) || a == b))
             && self.lights == other.lights
             && self.model == other.model
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_copy_shares_the_list_until_one_changes_it_and_then_only_the_list() {
+        let scene = parse(crate::EXAMPLE_SCENE, std::path::Path::new("example.xml")).unwrap();
+        let mut copy = scene.clone();
+        assert!(copy.objects.same_list(&scene.objects));
+        assert!(copy.same_but_camera(&scene));
+
+        // Changing one object gives the copy its own list, and its own
+        // copy of that object; every other object is still the scene's.
+        Arc::make_mut(&mut copy.objects[1]).material.ka = 0.75;
+        assert!(!copy.objects.same_list(&scene.objects));
+        assert!(!Arc::ptr_eq(&copy.objects[1], &scene.objects[1]));
+        assert!(
+            (0..scene.objects.len())
+                .filter(|&n| n != 1)
+                .all(|n| Arc::ptr_eq(&copy.objects[n], &scene.objects[n]))
+        );
+        assert_eq!(scene.objects[1].material.ka, 0.4);
+        assert!(!copy.same_but_camera(&scene));
+
+        // A list that is not shared is changed where it is.
+        let mut own = copy.clone();
+        drop(copy);
+        let before = own.objects.as_ptr();
+        own.objects.pop();
+        assert_eq!(own.objects.as_ptr(), before);
     }
 }
