@@ -241,8 +241,18 @@ pub fn plan_source<'s>(
         return plan(text, original, edited);
     }
     let changed = changed_objects(original, edited);
-    let skeleton = Skeleton::read(source, &changed)?;
-    let mut doc = Doc::scan(&skeleton.text, Keep::Objects(&changed))?;
+    // Values edited in place: the runs of objects between the changed ones
+    // are folded away.
+    let fold = edited.objects_in_place() && edited.scene().objects.len() == original.objects.len();
+    let skeleton = Skeleton::read(source, &changed, fold)?;
+    let mut doc = match &skeleton.folded {
+        Some(folded) => {
+            let mut doc = Doc::scan(&skeleton.text, Keep::Folded(&folded.changed))?;
+            doc.numbers = Some(&folded.numbers);
+            doc
+        }
+        None => Doc::scan(&skeleton.text, Keep::Objects(&changed))?,
+    };
     if skeleton.crlf {
         doc.nl = "\r\n";
     }
@@ -295,7 +305,9 @@ impl Origins<'_> {
 /// are left out (`<sphere>…</sphere>` becomes `<sphere></sphere>`): what
 /// the save's editor reads instead of the whole text. A million spheres'
 /// 214 MB become about 20 MB, and only the changed objects' elements are
-/// scanned in full, as in a text held whole ([`plan`]).
+/// scanned in full, as in a text held whole ([`plan`]). When only values
+/// were edited, runs of unchanged objects are folded away whole
+/// ([`Folded`]): a few lines.
 ///
 /// Every splice the editor makes lies outside the parts left out (at an
 /// object's start or end, or inside a changed one), so each of its
@@ -309,14 +321,40 @@ struct Skeleton {
     /// The whole text has a CRLF line ending (maybe only in a part left
     /// out): new lines are written with it, as in a text held whole.
     crlf: bool,
+    /// Runs of objects folded away, when they were.
+    folded: Option<Folded>,
 }
+
+/// The objects of a skeleton in which each run of unchanged objects (the
+/// root's spheres and planes one after the other, with only spaces and
+/// comments between them), but its last, is folded into one `<_/>`: a
+/// million spheres edited in one value make a skeleton of a few lines
+/// rather than 20 MB, with as many places and gaps. Folded only when no
+/// object moves (the edits set values): the editor then has no objects to
+/// remove, add or move, and needs no place of an unchanged one but the
+/// last of each run (what an element added after it, at the root's end,
+/// lines up with), nor any before the first that sets the indentation
+/// unit (`Doc::indent_unit`); those stay, their insides left out.
+struct Folded {
+    /// Each object's number in the text, in skeleton order.
+    numbers: Vec<usize>,
+    /// Which of the skeleton's objects (by skeleton order) are changed.
+    changed: std::collections::HashSet<usize>,
+}
+
+/// What a run of objects folds into in a skeleton ([`Folded`]); its gap
+/// is after the second byte.
+const FOLD: &[u8; 4] = b"<_/>";
 
 impl Skeleton {
     /// Reads `source`, keeping whole the objects (numbered in text order)
-    /// in `keep`.
+    /// in `keep`. With `fold` (every object is where it was, with its own
+    /// steps: an edit of values only), each run of unchanged objects but
+    /// its last is folded into one `<_/>` ([`Skeleton::numbers`]).
     fn read(
         source: &Source,
         keep: &std::collections::HashSet<usize>,
+        fold: bool,
     ) -> Result<Skeleton, EditError> {
         use std::cell::RefCell;
         use std::rc::Rc;
@@ -328,22 +366,56 @@ impl Skeleton {
             bytes: Vec<u8>,
             start: usize,
         }
+        /// The source's bytes to the XML reader, and into `pending`; a
+        /// byte order mark (`hide`: its length) to `pending` only, so that
+        /// the reader's positions are the text's less it.
         struct Tee<'s> {
             inner: crate::scene::source::SourceReader<'s>,
             pending: Rc<RefCell<Pending>>,
+            hide: usize,
         }
         impl std::io::Read for Tee<'_> {
             fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-                let n = self.inner.read(buf)?;
-                self.pending.borrow_mut().bytes.extend_from_slice(&buf[..n]);
-                Ok(n)
+                loop {
+                    let n = self.inner.read(buf)?;
+                    self.pending.borrow_mut().bytes.extend_from_slice(&buf[..n]);
+                    let hidden = self.hide.min(n);
+                    if hidden == 0 {
+                        return Ok(n);
+                    }
+                    buf.copy_within(hidden..n, 0);
+                    self.hide -= hidden;
+                    if n > hidden {
+                        return Ok(n - hidden);
+                    }
+                }
             }
         }
+        /// An object that may be folded, read whole, its fate waiting on
+        /// what comes next: folded if another such object follows, else
+        /// the last of its run, left as a stub (`<sphere></sphere>`).
+        struct Held {
+            number: usize,
+            start: usize,
+            /// Just past its start tag and at its end tag's `<` (`None`
+            /// for `<sphere/>`).
+            inside: Option<(usize, usize)>,
+            end: usize,
+        }
 
+        let bom = {
+            let mut head = [0u8; 3];
+            let read = std::io::Read::read_exact(&mut source.reader(), &mut head);
+            match read.is_ok() && head == *b"\xef\xbb\xbf" {
+                true => head.len(),
+                false => 0,
+            }
+        };
         let pending = Rc::new(RefCell::new(Pending::default()));
         let tee = Tee {
             inner: source.reader(),
             pending: Rc::clone(&pending),
+            hide: bom,
         };
         let mut reader = Reader::from_reader(std::io::BufReader::with_capacity(1 << 16, tee));
         let config = reader.config_mut();
@@ -352,12 +424,13 @@ impl Skeleton {
         config.trim_text(false);
 
         let mut crlf = false;
-        let mut gaps = Vec::new();
         let mut kept: Vec<u8> = Vec::new();
-        let mut left_out = 0;
         let mut last_byte = 0u8;
+        // The current line's bytes so far, while they are all spaces and
+        // tabs (`Doc::own_indent`).
+        let line: RefCell<Option<Vec<u8>>> = RefCell::new(Some(Vec::new()));
         // Moves the source's bytes up to `to` from the pending ones into
-        // the skeleton, or leaves them out.
+        // the skeleton, or leaves them out; returns how many.
         let mut take = |to: usize, keep: bool, kept: &mut Vec<u8>| {
             let mut p = pending.borrow_mut();
             let n = to.saturating_sub(p.start).min(p.bytes.len());
@@ -370,6 +443,23 @@ impl Skeleton {
             if let Some(&b) = bytes.last() {
                 last_byte = b;
             }
+            // A byte order mark is not on the first line (`Doc::scan`).
+            let line_bytes = match p.start == 0 && bytes.starts_with(b"\xef\xbb\xbf") {
+                true => &bytes[3..],
+                false => bytes,
+            };
+            let blank = |bytes: &[u8]| bytes.iter().all(|&b| b == b' ' || b == b'\t');
+            let mut line = line.borrow_mut();
+            if !fold {
+            } else if let Some(nl) = line_bytes.iter().rposition(|&b| b == b'\n') {
+                let rest = &line_bytes[nl + 1..];
+                *line = blank(rest).then(|| rest.to_vec());
+            } else if let Some(l) = line.as_mut() {
+                match blank(line_bytes) {
+                    true => l.extend_from_slice(line_bytes),
+                    false => *line = None,
+                }
+            }
             if keep {
                 kept.extend_from_slice(bytes);
             }
@@ -378,13 +468,36 @@ impl Skeleton {
             n
         };
         let position = |reader: &Reader<_>| {
-            usize::try_from(reader.buffer_position()).map_err(|_| internal("position out of range"))
+            usize::try_from(reader.buffer_position())
+                .map(|p| p + bom)
+                .map_err(|_| internal("position out of range"))
         };
+        let gap = |at: usize, out: usize| match (u32::try_from(at), u32::try_from(out)) {
+            (Ok(at), Ok(out)) => Ok((at, out)),
+            _ => Err(internal("a text over 4 GiB")),
+        };
+
+        let mut gaps = Vec::new();
+        let mut numbers = Vec::new();
+        let mut changed = std::collections::HashSet::new();
+        let mut left_out = 0;
         let mut buf = Vec::new();
         let mut depth = 0usize;
         let mut objects = 0usize;
-        // Inside an object left out: its element's depth.
+        // Inside an object whose inside is left out: its element's depth.
         let mut leaving_out: Option<usize> = None;
+        // Inside an object that may be folded: its start, the end of its
+        // start tag, its element's depth.
+        let mut holding: Option<(usize, usize, usize)> = None;
+        let mut held: Option<Held> = None;
+        // A fold open in the skeleton: the offset of its gap, inside `<_/>`.
+        let mut folding: Option<usize> = None;
+        // Whether objects may be folded yet: `Doc::indent_unit` reads the
+        // root's first object on its own line, indented further than the
+        // root (none when the root is not on its own line); it, and every
+        // object before it, stays.
+        let mut root_indent: Option<Option<Vec<u8>>> = None;
+        let mut may_fold = false;
         loop {
             let before = position(&reader)?;
             buf.clear();
@@ -392,42 +505,137 @@ impl Skeleton {
                 .read_event_into(&mut buf)
                 .map_err(|e| internal(format!("XML: {e}")))?;
             let after = position(&reader)?;
+            // Inside an object that may be folded: nothing is taken yet.
+            if let Some((start, inside, at_depth)) = holding {
+                match event {
+                    Event::Start(_) => depth += 1,
+                    Event::End(_) if depth == at_depth => {
+                        held = Some(Held {
+                            number: objects - 1,
+                            start,
+                            inside: Some((inside, before)),
+                            end: after,
+                        });
+                        holding = None;
+                        depth -= 1;
+                    }
+                    Event::End(_) => depth -= 1,
+                    Event::Eof => return Err(internal("an object not closed")),
+                    _ => {}
+                }
+                continue;
+            }
+            let root_level =
+                depth == 1 && matches!(event, Event::Start(_) | Event::Empty(_) | Event::End(_));
+            let object = match &event {
+                Event::Start(e) | Event::Empty(e) => {
+                    depth == 1 && matches!(e.name().as_ref(), b"sphere" | b"plane")
+                }
+                _ => false,
+            };
+            let foldable = fold && may_fold && object && !keep.contains(&objects);
+            if root_level || matches!(event, Event::Eof) {
+                // What follows the held object decides its fate.
+                if let Some(h) = held.take() {
+                    if foldable {
+                        if folding.is_none() {
+                            take(h.start, true, &mut kept);
+                            kept.extend_from_slice(&FOLD[..2]);
+                            folding = Some(kept.len());
+                        }
+                        // It, and the bytes before it since the last one.
+                        left_out += take(h.end, false, &mut kept);
+                    } else {
+                        if let Some(at) = folding.take() {
+                            // The fold's own four bytes are not the text's.
+                            left_out = left_out
+                                .checked_sub(FOLD.len())
+                                .ok_or_else(|| internal("a fold of nothing"))?;
+                            gaps.push(gap(at, left_out)?);
+                            kept.extend_from_slice(&FOLD[2..]);
+                        }
+                        numbers.push(h.number);
+                        if let Some((inside, end_tag)) = h.inside {
+                            take(inside, true, &mut kept);
+                            left_out += take(end_tag, false, &mut kept);
+                            gaps.push(gap(kept.len(), left_out)?);
+                        }
+                        take(h.end, true, &mut kept);
+                    }
+                }
+                // The bytes since are kept, but before an object that may
+                // be folded: they go with it.
+                if !foldable {
+                    take(before, true, &mut kept);
+                }
+            }
             match event {
-                Event::Start(start) => {
-                    let object =
-                        depth == 1 && matches!(start.name().as_ref(), b"sphere" | b"plane");
+                Event::Start(_) if depth == 0 && root_indent.is_none() => {
+                    let line = line.borrow().clone();
+                    may_fold = line.is_none();
+                    root_indent = Some(line);
                     depth += 1;
-                    if object {
-                        if !keep.contains(&objects) && leaving_out.is_none() {
+                }
+                Event::Start(_) | Event::Empty(_) if object => {
+                    let number = objects;
+                    objects += 1;
+                    let empty = matches!(event, Event::Empty(_));
+                    if foldable {
+                        match empty {
+                            true => {
+                                held = Some(Held {
+                                    number,
+                                    start: before,
+                                    inside: None,
+                                    end: after,
+                                });
+                            }
+                            false => {
+                                depth += 1;
+                                holding = Some((before, after, depth));
+                            }
+                        }
+                        continue;
+                    }
+                    if fold && !may_fold {
+                        may_fold = match (&root_indent, &*line.borrow()) {
+                            (Some(Some(root)), Some(own)) => {
+                                own.len() > root.len() && own.starts_with(root)
+                            }
+                            _ => false,
+                        };
+                    }
+                    if fold {
+                        if keep.contains(&number) {
+                            changed.insert(numbers.len());
+                        }
+                        numbers.push(number);
+                    }
+                    if !empty {
+                        depth += 1;
+                        if !keep.contains(&number) {
                             take(after, true, &mut kept);
                             leaving_out = Some(depth);
                             continue;
                         }
-                        objects += 1;
                     }
                 }
-                Event::Empty(start)
-                    if depth == 1 && matches!(start.name().as_ref(), b"sphere" | b"plane") =>
-                {
-                    objects += 1;
-                }
+                Event::Start(_) => depth += 1,
                 Event::End(_) => {
                     if leaving_out == Some(depth) {
                         // The inside, up to the `<` of the end tag.
                         left_out += take(before, false, &mut kept);
-                        let at = u32::try_from(kept.len());
-                        let out = u32::try_from(left_out);
-                        let (Ok(at), Ok(out)) = (at, out) else {
-                            return Err(internal("a text over 4 GiB"));
-                        };
-                        gaps.push((at, out));
+                        gaps.push(gap(kept.len(), left_out)?);
                         leaving_out = None;
-                        objects += 1;
                     }
                     depth = depth.saturating_sub(1);
                 }
                 Event::Eof => break,
                 _ => {}
+            }
+            if held.is_some() {
+                // Between two objects that may be folded: taken with them.
+                continue;
             }
             match leaving_out {
                 Some(_) => left_out += take(after, false, &mut kept),
@@ -438,7 +646,13 @@ impl Skeleton {
         }
         take(usize::MAX, true, &mut kept);
         let text = String::from_utf8(kept).map_err(|_| internal("the skeleton is not UTF-8"))?;
-        Ok(Skeleton { text, gaps, crlf })
+        let folded = fold.then_some(Folded { numbers, changed });
+        Ok(Skeleton {
+            text,
+            gaps,
+            crlf,
+            folded,
+        })
     }
 
     /// The source's offset of the skeleton's offset `at`.
@@ -547,7 +761,7 @@ pub(super) fn source_object_comments(source: &Source) -> Vec<(usize, String)> {
             .map(|(k, c)| (k, c.to_owned()))
             .collect();
     }
-    let Ok(skeleton) = Skeleton::read(source, &std::collections::HashSet::new()) else {
+    let Ok(skeleton) = Skeleton::read(source, &std::collections::HashSet::new(), false) else {
         return Vec::new();
     };
     object_comments(&skeleton.text)
@@ -806,6 +1020,10 @@ struct Doc<'t> {
     objects: Vec<Place>,
     /// The node of each object kept as one: (object number, node).
     object_nodes: Vec<(usize, usize)>,
+    /// In a skeleton with objects folded away, each object's number in
+    /// the whole text ([`Folded::numbers`]); `None`: the objects are all
+    /// here.
+    numbers: Option<&'t [usize]>,
 }
 
 /// Where an element is: the offset of its `<` and the offset just past
@@ -829,6 +1047,9 @@ enum Keep<'a> {
     /// Every element but the objects (spheres and planes, numbered in
     /// text order) not in the set, which are only placed.
     Objects(&'a std::collections::HashSet<usize>),
+    /// As `Objects`, in a skeleton with objects folded away ([`Folded`]):
+    /// its folds are not elements.
+    Folded(&'a std::collections::HashSet<usize>),
 }
 
 impl<'t> Doc<'t> {
@@ -898,6 +1119,14 @@ impl<'t> Doc<'t> {
                 }
                 _ => continue,
             };
+            // A fold of a skeleton's objects ([`Folded`]) is nothing.
+            if matches!(keep, Keep::Folded(_)) && stack.len() == 1 && start.name().as_ref() == b"_"
+            {
+                match empty {
+                    true => continue,
+                    false => return Err(internal("a fold with an inside")),
+                }
+            }
             let object = stack.len() == 1
                 && skip_below.is_none()
                 && matches!(start.name().as_ref(), b"sphere" | b"plane");
@@ -908,7 +1137,7 @@ impl<'t> Doc<'t> {
                 Keep::All => (false, true),
                 Keep::TopLevel => (false, false),
                 Keep::Placed => (true, false),
-                Keep::Objects(deep) => {
+                Keep::Objects(deep) | Keep::Folded(deep) => {
                     let deep = deep.contains(&objects.len());
                     (!deep, deep)
                 }
@@ -927,7 +1156,7 @@ impl<'t> Doc<'t> {
                 #[cfg(test)]
                 Keep::All => true,
                 Keep::TopLevel | Keep::Placed => stack.len() <= 1,
-                Keep::Objects(_) => skip_below.is_none_or(|d| stack.len() <= d),
+                Keep::Objects(_) | Keep::Folded(_) => skip_below.is_none_or(|d| stack.len() <= d),
             };
             if !kept {
                 if !empty {
@@ -973,6 +1202,7 @@ impl<'t> Doc<'t> {
             comments,
             objects,
             object_nodes,
+            numbers: None,
         };
         // A kept object ends where its node does.
         for &(k, id) in &doc.object_nodes {
@@ -1223,7 +1453,8 @@ impl Editor<'_, '_> {
         let lights = doc.children_named(root, &["light"]);
         let cameras = doc.children_named(root, &["camera"]);
         let models = doc.children_named(root, &["model"]);
-        if objects.len() != original.objects.len()
+        let objects_here = doc.numbers.map_or(original.objects.len(), <[usize]>::len);
+        if objects.len() != objects_here
             || lights.len() != original.lights.len()
             || cameras.len() != 1
             || models.len() > 1
@@ -1231,6 +1462,45 @@ impl Editor<'_, '_> {
             return Err(internal("the text's elements do not match its scene"));
         }
 
+        if let Some(numbers) = doc.numbers {
+            // Every object where it was (a skeleton folds objects only
+            // then): the changed ones are edited in place, as `group` would.
+            for (k, &n) in numbers.iter().enumerate() {
+                let (Some(o), Some(e), Some(origin)) = (
+                    original.objects.get(n),
+                    scene.objects.get(n),
+                    edited.origin_of(n),
+                ) else {
+                    return Err(internal("the text's elements do not match its scene"));
+                };
+                if origin.index != n {
+                    return Err(internal("an object moved in a folded skeleton"));
+                }
+                if unchanged(o, e, &origin.steps) {
+                    continue;
+                }
+                let node = doc
+                    .object_node(k)
+                    .ok_or_else(|| internal("a changed object was not scanned"))?;
+                self.object(node, o, e, &origin.steps)?;
+            }
+        } else {
+            self.objects(original, edited, objects)?;
+        }
+        self.lights_camera_model(original, edited, lights, cameras, models)
+    }
+
+    /// The objects, brought to `edited`'s ([`Editor::group`]); `places`:
+    /// the text's.
+    fn objects(
+        &mut self,
+        original: &Scene,
+        edited: &Edited,
+        places: &[Place],
+    ) -> Result<(), EditError> {
+        let doc = self.doc;
+        let scene = edited.scene();
+        let (root, objects) = (doc.root, places);
         let origins = Origins::Asked {
             len: scene.objects.len(),
             of: &|n| edited.object_origin(n),
@@ -1252,7 +1522,21 @@ impl Editor<'_, '_> {
                     .ok_or_else(|| internal("a changed object was not scanned"))?;
                 editor.object(node, &original.objects[k], &scene.objects[i], steps)
             },
-        )?;
+        )
+    }
+
+    /// The lights, the camera and the model, brought to `edited`'s.
+    fn lights_camera_model(
+        &mut self,
+        original: &Scene,
+        edited: &Edited,
+        lights: Vec<usize>,
+        cameras: Vec<usize>,
+        models: Vec<usize>,
+    ) -> Result<(), EditError> {
+        let doc = self.doc;
+        let scene = edited.scene();
+        let root = doc.root;
         let light_places: Vec<Place> = lights.iter().map(|&id| doc.place(id)).collect();
         self.group(
             root,
@@ -1873,7 +2157,7 @@ mod tests {
         use crate::scene::edit::{Edit, Element, Field, Item, Owner, Value};
         // Comments above objects, objects on one line and on several, an
         // empty one, CRLF inside objects only, tabs.
-        let mut text = String::from("<?xml version=\"1.0\"?>\n<!-- top -->\n<scene>\n");
+        let mut text = String::from("\u{feff}<?xml version=\"1.0\"?>\n<!-- top -->\n<scene>\n");
         for i in 0..60 {
             text.push_str(&match i % 5 {
                 0 => format!("  <!-- BALL {i} -->\n  <sphere><color red=\"0.{i}\" green=\"1\" blue=\"0\"/><material ka=\"0.1\"/></sphere>\n"),
@@ -1944,5 +2228,98 @@ mod tests {
             written(&plan_source(&packed, &original, &unchanged).unwrap()),
             text
         );
+    }
+
+    /// Values edited in place, on texts laid out every which way: the
+    /// save of a packed text folds the unchanged objects away (its
+    /// skeleton a fraction of the text) and writes the text a text held
+    /// whole would.
+    #[test]
+    fn a_skeleton_with_objects_folded_away_saves_as_the_whole_text() {
+        use crate::scene::edit::{Edit, Field, Item, NewElement};
+        let ball =
+            |i: usize| format!("<sphere><color red=\"0.{i}\" green=\"1\" blue=\"0\"/></sphere>");
+        let many = |each: &dyn Fn(usize) -> String| (0..40).map(each).collect::<String>();
+        let texts = [
+            // Comments between objects, a light among them, no model.
+            format!(
+                "<scene>\n{}  <light x=\"1\" y=\"2\" z=\"3\"/>\n{}  <camera width=\"8\" height=\"6\" eyeDistance=\"1\"/>\n</scene>\n",
+                many(&|i| format!("  <!-- ball {i} -->\n  {}\n", ball(i))),
+                many(&|i| format!("  <plane/><!-- {i} -->\n  {}\n", ball(i))),
+            ),
+            // The root not on its own line, objects on its line.
+            format!(
+                "<?xml version=\"1.0\"?><scene>{}\n<light x=\"1\" y=\"2\" z=\"3\"/><camera width=\"8\" height=\"6\" eyeDistance=\"1\"/><model type=\"lambert\"/></scene>",
+                many(&|i| ball(i)),
+            ),
+            // A byte order mark, CRLF, tabs; the first objects not on lines
+            // of their own, then some less indented than the root.
+            format!(
+                "{}  <scene>\r\n  <sphere/> {}\r\n {}\r\n{}\t\t<light x=\"1\" y=\"2\" z=\"3\"/>\r\n\t\t<camera width=\"8\" height=\"6\" eyeDistance=\"1\"/>\r\n  </scene>\r\n",
+                '\u{feff}',
+                ball(0),
+                ball(1),
+                many(&|i| format!("  \t{}\r\n", ball(i))),
+            ),
+            // The first object sets the indentation unit (three spaces)
+            // that an empty sphere given a colour indents it with.
+            format!(
+                "<scene>\n   <sphere/>\n{}  <light x=\"1\" y=\"2\" z=\"3\"/>\n  <camera width=\"8\" height=\"6\" eyeDistance=\"1\"/>\n</scene>\n",
+                many(&|_| "  <sphere/>\n".to_owned()),
+            ),
+            // Every object on one line; lights last, one after the other.
+            format!(
+                "<scene>\n  {}<light x=\"1\" y=\"2\" z=\"3\"/><light x=\"4\" y=\"2\" z=\"3\"/>\n  <camera width=\"8\" height=\"6\" eyeDistance=\"1\"/>\n</scene>",
+                many(&|i| ball(i)),
+            ),
+        ];
+        for (t, text) in texts.iter().enumerate() {
+            let original = scene(text);
+            let packed = Source::packed(text);
+            let mut edited = Edited::new(original.clone());
+            let mut rng = 0x9e37_79b9_7f4a_7c15u64 + t as u64;
+            let mut next = |n: usize| {
+                rng ^= rng << 13;
+                rng ^= rng >> 7;
+                rng ^= rng << 17;
+                (rng % n.max(1) as u64) as usize
+            };
+            for round in 0..40 {
+                let objects = original.objects.len();
+                let lights = edited.scene().lights.len();
+                let set = |path: String, value: &str| {
+                    let field = Field::parse(&path).unwrap();
+                    Edit::Set(field, field.parse_value(value).unwrap())
+                };
+                let edit = match next(8) {
+                    0 | 1 => set(
+                        format!("object[{}].material.ka", next(objects) + 1),
+                        &format!("0.{round}"),
+                    ),
+                    2 => set(format!("object[{}].color.green", next(objects) + 1), "0.5"),
+                    3 if lights > 0 => set(format!("light[{}].x", next(lights) + 1), "7"),
+                    4 => Edit::add(edited.scene(), NewElement::Light),
+                    5 if lights > 1 => Edit::Remove(Item::Light(next(lights))),
+                    6 => set("camera.width".to_owned(), &format!("{}", 4 + round)),
+                    _ => set("model.type".to_owned(), ["phong", "whitted"][round % 2]),
+                };
+                if edited.apply(&edit).is_err() {
+                    continue;
+                }
+                assert!(edited.objects_in_place());
+                let changed = changed_objects(&original, &edited);
+                let skeleton = Skeleton::read(&packed, &changed, true).unwrap();
+                let folded = skeleton.folded.as_ref().unwrap();
+                assert!(
+                    folded.numbers.len() <= 2 * changed.len() + 8,
+                    "text {t}, round {round}: {} objects left of {objects}",
+                    folded.numbers.len()
+                );
+                let whole = written(&plan(text, &original, &edited).unwrap());
+                let from_packed = written(&plan_source(&packed, &original, &edited).unwrap());
+                assert_eq!(from_packed, whole, "text {t}, round {round}: {edit:?}");
+                assert_eq!(&scene(&whole), edited.scene());
+            }
+        }
     }
 }

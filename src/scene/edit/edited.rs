@@ -153,6 +153,13 @@ impl Edited {
         &self.scene
     }
 
+    /// Every object is the loaded text's object of its own number, with
+    /// its own steps: only values were edited (a save may then pass over
+    /// the unchanged objects' places).
+    pub(crate) fn objects_in_place(&self) -> bool {
+        self.objects.0.is_none()
+    }
+
     /// The index, among the loaded text's objects, that object `n` came
     /// from; `None` for an object added since.
     pub fn object_origin(&self, n: usize) -> Option<usize> {
