@@ -795,7 +795,20 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
     writer.flush(Duration::from_secs(600));
     say("after an edit");
 
-    doc.save().map_err(|e| error(&e))?;
+    // On a thread of its own, as the app saves (the window goes on).
+    let job = doc.save_job().map_err(|e| error(&e))?;
+    let (job, outcome) = std::thread::spawn(move || {
+        let outcome = job.run();
+        (job, outcome)
+    })
+    .join()
+    .map_err(|_| "the save's thread panicked".to_owned())?;
+    match doc.save_done(job, outcome).map_err(|e| error(&e))? {
+        rayoflight::gui::document::SaveStep::Done(_) => {}
+        rayoflight::gui::document::SaveStep::Again => {
+            doc.save().map(|_| ()).map_err(|e| error(&e))?
+        }
+    }
     say("after a save");
     Ok(())
 }

@@ -44,7 +44,7 @@ use super::grammar::{
     TRANSFORM_CHILDREN, TRANSLATE_ATTRS, XSI_NAMESPACE,
 };
 use super::xml;
-use super::{Camera, Color, Illumination, Light, Material, Model, Object, Scene, Shape};
+use super::{Camera, Color, Illumination, Light, Material, Model, Object, Objects, Scene, Shape};
 use crate::math::{Steps, Transform, TransformError, TransformStep, Vec3};
 use smallvec::SmallVec;
 
@@ -68,13 +68,14 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 /// A big file is read and parsed a piece at a time ([`streamed`]): its
 /// text is never in memory whole, only the scene it makes.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
-    load_like(path, &[])
+    load_like(path, &Objects::default())
 }
 
 /// [`load`], sharing with `like` each object equal to the one at the same
-/// place in it, as [`parse_sharing`] does; the text is not kept (a save
+/// place in it, as [`parse_sharing`] does, and the list itself when every
+/// object is (a large file read in pieces); the text is not kept (a save
 /// checking the file it wrote).
-pub fn load_like(path: &Path, like: &[Arc<Object>]) -> Result<Scene, LoadError> {
+pub fn load_like(path: &Path, like: &Objects) -> Result<Scene, LoadError> {
     if let Some(streamed) = streamed(path, like, false, None) {
         return Ok(streamed.scene);
     }
@@ -109,7 +110,7 @@ pub fn load_packed(
     if !large {
         return Ok(None);
     }
-    let loaded = streamed(path, &[], true, progress);
+    let loaded = streamed(path, &Objects::default(), true, progress);
     if progress.is_some_and(LoadProgress::is_stopped) {
         return Err(LoadError::new(path, None, LoadErrorKind::Stopped));
     }
@@ -158,7 +159,7 @@ const STREAM_PIECE_BYTES: usize = 1 << 20;
 /// that declares an ASCII encoding (checked of the whole text only).
 fn streamed(
     path: &Path,
-    like: &[Arc<Object>],
+    like: &Objects,
     pack: bool,
     progress: Option<&LoadProgress>,
 ) -> Option<Streamed> {
@@ -179,9 +180,13 @@ fn streamed(
     let (done, results) = std::sync::mpsc::channel();
     let path: Arc<Path> = Arc::from(path);
     let mut pieces: Vec<Option<Gathered>> = Vec::new();
-    // The next piece to share objects with `like`, and its first object's
-    // number.
-    let mut sharing = (0, 0);
+    // The scene's objects, each piece's put in as soon as the pieces before
+    // it are in (their own lists freed for the next pieces: a second list
+    // of a million objects would be 8 MB more); `None` while every object
+    // so far is `like`'s own at its place (a save's check: then its list
+    // is the scene's). How many so far, the next piece to come.
+    let mut objects: Option<Vec<Arc<Object>>> = None;
+    let (mut count, mut next) = (0, 0);
     let mut in_flight = 0;
     let mut carry: Vec<u8> = Vec::new();
     let mut total = 0u64;
@@ -259,12 +264,27 @@ fn streamed(
             // Each piece's objects shared with `like` as soon as the pieces
             // before it are in: a save's check of a million objects holds
             // a few pieces' copies at once, not a second scene (150 MB).
-            while let Some(Some(piece)) = pieces.get_mut(sharing.0) {
-                share(
-                    &mut piece.objects,
-                    like.get(sharing.1..).unwrap_or_default(),
-                );
-                sharing = (sharing.0 + 1, sharing.1 + piece.objects.len());
+            while let Some(Some(piece)) = pieces.get_mut(next) {
+                let mut own = std::mem::take(&mut piece.objects);
+                let here = like.get(count..).unwrap_or_default();
+                share(&mut own, here);
+                count += own.len();
+                if count > MAX_OBJECTS {
+                    return None;
+                }
+                let alike =
+                    own.len() <= here.len() && own.iter().zip(here).all(|(a, b)| Arc::ptr_eq(a, b));
+                match &mut objects {
+                    None if alike => {}
+                    None => {
+                        let before = count - own.len();
+                        let mut list = like.get(..before)?.to_vec();
+                        list.extend(own);
+                        objects = Some(list);
+                    }
+                    Some(list) => list.extend(own),
+                }
+                next += 1;
             }
         }
         if last {
@@ -280,8 +300,13 @@ fn streamed(
         }
         false => Vec::new(),
     };
+    let objects = match objects {
+        Some(list) => Objects::from(list),
+        None if count == like.len() => like.clone(),
+        None => Objects::from(like.get(..count)?.to_vec()),
+    };
     Some(Streamed {
-        scene: join(pieces, like, &path)?,
+        scene: join(pieces, objects, like, &path)?,
         blocks,
         comments,
     })
@@ -532,25 +557,36 @@ fn in_pieces(
         })
         .collect::<Option<_>>()?;
 
-    join(pieces, like, path)
+    join(pieces, Objects::default(), like, path)
 }
 
-/// The scene the `pieces` of a text make, joined in order; `None` where
+/// The scene the `pieces` of a text make, joined in order after
+/// `objects` (those of the pieces before them); `None` where
 /// only a parse in one can tell (a second camera or model, objects or
 /// lights over the limit, no camera).
-fn join(pieces: Vec<Gathered>, like: &[Arc<Object>], path: &Path) -> Option<Scene> {
-    let objects = pieces.iter().map(|p| p.objects.len()).sum::<usize>();
+fn join(
+    pieces: Vec<Gathered>,
+    objects: Objects,
+    like: &[Arc<Object>],
+    path: &Path,
+) -> Option<Scene> {
+    let in_pieces = pieces.iter().map(|p| p.objects.len()).sum::<usize>();
     let lights = pieces.iter().map(|p| p.lights.len()).sum::<usize>();
-    if objects > MAX_OBJECTS || lights > MAX_LIGHTS {
+    if objects.len() + in_pieces > MAX_OBJECTS || lights > MAX_LIGHTS {
         return None;
     }
+    let mut objects = objects;
     let mut scene = Gathered {
-        objects: Vec::with_capacity(objects),
         lights: Vec::with_capacity(lights),
         ..Gathered::default()
     };
+    if in_pieces > 0 {
+        objects.reserve_exact(in_pieces);
+    }
     for piece in pieces {
-        scene.objects.extend(piece.objects);
+        if !piece.objects.is_empty() {
+            objects.extend(piece.objects);
+        }
         scene.lights.extend(piece.lights);
         for (one, found) in [
             (scene.camera.is_some(), piece.camera.is_some()),
@@ -563,9 +599,12 @@ fn join(pieces: Vec<Gathered>, like: &[Arc<Object>], path: &Path) -> Option<Scen
         scene.camera = scene.camera.or(piece.camera);
         scene.model = scene.model.or(piece.model);
     }
-    // Shared as a parse in one shares them.
-    share(&mut scene.objects, like);
-    scene.finish(path).ok()
+    // Shared as a parse in one shares them (a streamed load shared each
+    // piece's as it came).
+    if in_pieces > 0 {
+        share(&mut objects, like);
+    }
+    scene.finish_with(objects, path).ok()
 }
 
 /// Shares with `like` each object equal to the one at the same place.
@@ -733,12 +772,18 @@ struct Gathered {
 
 impl Gathered {
     /// The scene, once it is known to have a camera.
-    fn finish(self, path: &Path) -> Result<Scene, LoadError> {
+    fn finish(mut self, path: &Path) -> Result<Scene, LoadError> {
+        let objects = std::mem::take(&mut self.objects).into();
+        self.finish_with(objects, path)
+    }
+
+    /// [`Gathered::finish`] with `objects` for the objects.
+    fn finish_with(self, objects: Objects, path: &Path) -> Result<Scene, LoadError> {
         let Some(camera) = self.camera else {
             return Err(LoadError::new(path, None, LoadErrorKind::MissingCamera));
         };
         Ok(Scene {
-            objects: self.objects.into(),
+            objects,
             lights: self.lights,
             camera,
             model: self.model.unwrap_or_default(),
@@ -1893,7 +1938,7 @@ mod tests {
             );
             assert_eq!(loaded.replace(&path.display().to_string(), "t.xml"), one);
             assert_eq!(loaded, read);
-            let streamed = streamed(&path, &[], false, None).map(|s| s.scene);
+            let streamed = streamed(&path, &Objects::default(), false, None).map(|s| s.scene);
             assert_eq!(streamed.is_some(), streams, "{}", &text[..60]);
             if let Some(scene) = streamed {
                 assert_eq!(format!("{:?}", Ok::<_, String>(scene)), one);
@@ -1928,7 +1973,7 @@ mod tests {
         let mut not_utf8 = text.clone().into_bytes();
         not_utf8[text.len() / 2] = 0xff;
         fs::write(&path, &not_utf8).unwrap();
-        assert!(streamed(&path, &[], false, None).is_none());
+        assert!(streamed(&path, &Objects::default(), false, None).is_none());
         assert!(matches!(
             load(&path).unwrap_err().kind,
             LoadErrorKind::NotUtf8 { .. }
@@ -1983,6 +2028,8 @@ mod tests {
         let again = streamed(&path, &like, false, None).expect("streamed").scene;
         assert_eq!(again.objects.len(), like.len());
         assert!(all_shared(&again.objects, &like));
+        // Every one of them: the very list (a save's check makes none).
+        assert!(again.objects.same_list(&like));
         let at = text.len() / 2;
         // (Not the one in a comment.)
         let at = at + text[at..].find("\n  <sphere>\n").unwrap() + 1;
@@ -1997,6 +2044,18 @@ mod tests {
             .unwrap();
         assert_eq!(shifted, in_one(&changed).unwrap());
         assert!(k > 0, "the objects before the inserted one are shared");
+        assert!(!shifted.objects.same_list(&like));
+        // A file with one object fewer (the last sphere): a list of its own
+        // too.
+        let last = text.rfind("\n  <sphere>\n").unwrap() + 1;
+        let end = last + text[last..].find("</sphere>\n").unwrap() + "</sphere>\n".len();
+        let cut = text[..last].to_owned() + &text[end..];
+        let fewer = in_one(&cut).unwrap();
+        fs::write(&path, &cut).unwrap();
+        let streamed = streamed(&path, &like, false, None).expect("streamed");
+        assert_eq!(streamed.scene, fewer);
+        assert!(fewer.objects.len() < like.len());
+        assert!(!streamed.scene.objects.same_list(&like));
     }
 
     #[test]

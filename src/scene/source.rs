@@ -1,8 +1,9 @@
 //! A scene file's text as the app keeps it for save-back ([`Source`]):
 //! whole when small; when large, in blocks of [`BLOCK_BYTES`] each
-//! compressed on its own (LZ4), so that a million spheres' 214 MB of XML
-//! is held in about 40 MB, and read back a block at a time, in order
-//! ([`Source::reader`]) or whole ([`Source::text`]) where a use needs it.
+//! compressed on its own (zstd, its fastest level), so that a million
+//! spheres' 214 MB of XML is held in about 21 MB, and read back a block at
+//! a time, in order ([`Source::reader`]) or whole ([`Source::text`]) where
+//! a use needs it.
 //!
 //! The text is held, not read again from the file, because the file may
 //! have changed since (another program's save, to be merged with the
@@ -20,6 +21,9 @@ pub const PACK_BYTES: usize = 16 << 20;
 /// About the size of a compressed block's text: big enough to compress
 /// well, small enough that reading one back for a piece of it is quick.
 pub const BLOCK_BYTES: usize = 1 << 20;
+
+/// zstd's level: its fastest.
+const LEVEL: i32 = 1;
 
 /// A scene file's text, shared: copies share one held text.
 #[derive(Clone)]
@@ -44,14 +48,40 @@ pub struct Block {
 impl Block {
     /// Packs `text`, a piece of a text.
     pub fn pack(text: &[u8]) -> Block {
+        thread_local! {
+            // One compressor a thread, its tables made once.
+            static PACKER: std::cell::RefCell<Option<zstd::bulk::Compressor<'static>>> =
+                const { std::cell::RefCell::new(None) };
+        }
+        let packed = PACKER
+            .with_borrow_mut(|packer| {
+                let packer = match packer {
+                    Some(packer) => packer,
+                    None => packer.insert(zstd::bulk::Compressor::new(LEVEL)?),
+                };
+                packer.compress(text)
+            })
+            .expect("a block of text packs");
         Block {
-            packed: lz4_flex::block::compress(text).into_boxed_slice(),
+            packed: packed.into_boxed_slice(),
             len: text.len(),
         }
     }
 
     fn unpack(&self) -> Vec<u8> {
-        lz4_flex::block::decompress(&self.packed, self.len).expect("a packed block unpacks")
+        thread_local! {
+            static UNPACKER: std::cell::RefCell<Option<zstd::bulk::Decompressor<'static>>> =
+                const { std::cell::RefCell::new(None) };
+        }
+        UNPACKER
+            .with_borrow_mut(|unpacker| {
+                let unpacker = match unpacker {
+                    Some(unpacker) => unpacker,
+                    None => unpacker.insert(zstd::bulk::Decompressor::new()?),
+                };
+                unpacker.decompress(&self.packed, self.len)
+            })
+            .expect("a packed block unpacks")
     }
 }
 
