@@ -730,8 +730,9 @@ fn app_document_peaks(path: &Path, threads: usize) -> Result<Option<Vec<(String,
     let stages = String::from_utf8_lossy(&output.stdout)
         .lines()
         .filter_map(|line| {
-            let (stage, kb) = line.rsplit_once(' ')?;
-            Some((stage.to_owned(), kb.parse::<f64>().ok()? / 1e3))
+            let (line, _resident) = line.rsplit_once(' ')?;
+            let (stage, peak) = line.rsplit_once(' ')?;
+            Some((stage.to_owned(), peak.parse::<f64>().ok()? / 1e3))
         })
         .collect();
     Ok(Some(stages))
@@ -750,9 +751,10 @@ pub fn app_document(_: &Path, _: usize) -> Result<(), String> {
 /// The app on `path` as a user meets it, less the window: the document
 /// opened as the app opens it, the picture from the app's render worker,
 /// an edit of one value (journaled, as the app does within a second), its
-/// picture, and a save. After each it prints the stage and the process's
-/// peak resident memory so far in kB (`after an edit 534000`): the child
-/// `rayoflight bench --app-document FILE` of the big section.
+/// picture, and a save. After each it prints the stage, the process's
+/// peak resident memory so far and its resident memory now, in kB (`after
+/// an edit 534000 521000`): the child `rayoflight bench --app-document
+/// FILE` of the big section.
 #[cfg(feature = "gui")]
 pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
     use rayoflight::gui::document::Document;
@@ -761,8 +763,9 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
 
     let error = |e: &dyn std::fmt::Display| e.to_string();
     let say = |stage: &str| {
-        let kb = PeakMemory::read_kb("VmHWM:").unwrap_or(0.0);
-        println!("{stage} {kb:.0}");
+        let peak = PeakMemory::read_kb("VmHWM:").unwrap_or(0.0);
+        let now = PeakMemory::read_kb("VmRSS:").unwrap_or(0.0);
+        println!("{stage} {peak:.0} {now:.0}");
     };
     let mut doc = Document::open(path).map_err(|e| error(&e))?;
     if let Some(e) = doc.error() {
