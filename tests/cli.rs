@@ -8,7 +8,6 @@ mod common;
 use common::{TINY, files_in, rayoflight, stderr, stdout};
 use std::fs;
 use std::path::PathBuf;
-use std::process::Command;
 
 /// A temporary directory holding `tiny.xml`.
 fn workdir() -> (tempfile::TempDir, PathBuf) {
@@ -570,7 +569,7 @@ fn negative_numbers_are_values_and_single_dash_words_are_named_whole() {
 #[test]
 fn quiet_alone_renders_without_opening_the_app() {
     let (dir, _) = workdir();
-    let o = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_rayoflight"))
         .args(["-q", "tiny.xml"])
         .current_dir(dir.path())
         // A display that is not there: opening a window would fail.

@@ -12,6 +12,8 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+/// `install-desktop` is in the GUI build only.
+#[cfg(feature = "gui")]
 const BIN: &str = env!("CARGO_BIN_EXE_rayoflight");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
@@ -632,6 +634,7 @@ fn a_scene_that_names_its_schema_loads_validates_and_keeps_it_through_edit() {
 // ----- the desktop -----
 
 /// Every file and folder under `dir`, relative, sorted.
+#[cfg(feature = "gui")]
 fn tree(dir: &Path) -> Vec<String> {
     fn walk(root: &Path, dir: &Path, out: &mut Vec<String>) {
         for entry in fs::read_dir(dir).unwrap() {
@@ -648,6 +651,7 @@ fn tree(dir: &Path) -> Vec<String> {
     out
 }
 
+#[cfg(feature = "gui")]
 fn install_desktop(home: &Path, args: &[&str]) -> std::process::Output {
     Command::new(BIN)
         .arg("install-desktop")
