@@ -26,8 +26,10 @@
 //! of four (the pool's threads reserving their arenas before the image
 //! was taken), `--threads 8` every time. With an address-space limit set,
 //! every thread allocates from the one arena: they wait on its lock when
-//! they allocate at once (a load of a million spheres is 23 % slower; a
-//! render allocates little), and never reserve what they do not use.
+//! they allocate at once (the command line's run of a million spheres
+//! under a limit took 1.56 s against 1.19 s without one, the threads
+//! parsing its pieces taking turns; a render allocates little: the
+//! mirrors at `--aa 2` as fast), and never reserve what they do not use.
 //!
 //! A user who sets the allocator's own variables (`MALLOC_MMAP_THRESHOLD_`,
 //! `MALLOC_TRIM_THRESHOLD_`, `MALLOC_ARENA_MAX`, or `malloc` tunables in
