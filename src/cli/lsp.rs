@@ -58,10 +58,12 @@ macro_rules! json {
     };
 }
 
-/// An open document: the editor's text and where its lines start.
+/// An open document: the editor's text, where its lines start, and where
+/// a reading of it before a cursor may start again.
 struct Document {
     text: String,
     lines: Lines,
+    marks: language::Marks,
 }
 
 impl Document {
@@ -183,7 +185,11 @@ fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
             let (uri, text) = (p.text_document.uri, p.text_document.text);
             let key = uri.to_string();
             let lines = Lines::new(&text);
-            let document = Document { text, lines };
+            let document = Document {
+                text,
+                lines,
+                marks: language::Marks::default(),
+            };
             lock(documents).insert(key.clone(), document);
             Some(Changed::Text(key, uri))
         }
@@ -193,17 +199,19 @@ fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
             let mut all = lock(documents);
             let document = all.get_mut(&key)?;
             for change in p.content_changes {
-                let Document { text, lines, .. } = &mut *document;
+                let Document { text, lines, marks } = &mut *document;
                 match change.range {
                     Some(range) => {
                         let start = lines.offset(text, place(range.start));
                         let end = lines.offset(text, place(range.end)).max(start);
                         text.replace_range(start..end, &change.text);
                         lines.edit(text, start..end, change.text.len());
+                        marks.edited(start);
                     }
                     None => {
                         *lines = Lines::new(&change.text);
                         *text = change.text;
+                        *marks = language::Marks::default();
                     }
                 }
             }
@@ -607,36 +615,28 @@ fn answer(documents: &Documents, request: Request) -> Response {
     let result = match request.method.as_str() {
         Completion::METHOD => serde_json::from_value::<CompletionParams>(request.params).map(|p| {
             let at = p.text_document_position;
-            json!(with_text(
-                documents,
-                &at.text_document.uri,
-                |text, lines| {
-                    let offset = lines.offset(text, place(at.position));
-                    CompletionResponse::Array(completion_items(text, offset))
-                }
-            ))
+            json!(with_document(documents, &at.text_document.uri, |d| {
+                let offset = d.lines.offset(&d.text, place(at.position));
+                CompletionResponse::Array(completion_items(&d.text, offset, &mut d.marks))
+            }))
         }),
         HoverRequest::METHOD => serde_json::from_value::<HoverParams>(request.params).map(|p| {
             let at = p.text_document_position_params;
-            json!(with_text(
-                documents,
-                &at.text_document.uri,
-                |text, lines| {
-                    let offset = lines.offset(text, place(at.position));
-                    language::hover(text, offset).map(|(doc, bytes)| Hover {
-                        contents: HoverContents::Markup(MarkupContent {
-                            kind: MarkupKind::PlainText,
-                            value: doc,
-                        }),
-                        range: Some(range(text, lines, bytes)),
-                    })
-                }
-            ))
+            json!(with_document(documents, &at.text_document.uri, |d| {
+                let offset = d.lines.offset(&d.text, place(at.position));
+                language::hover(&d.text, offset, &mut d.marks).map(|(doc, bytes)| Hover {
+                    contents: HoverContents::Markup(MarkupContent {
+                        kind: MarkupKind::PlainText,
+                        value: doc,
+                    }),
+                    range: Some(range(&d.text, &d.lines, bytes)),
+                })
+            }))
         }),
         DocumentSymbolRequest::METHOD => {
             serde_json::from_value::<DocumentSymbolParams>(request.params).map(|p| {
-                json!(with_text(documents, &p.text_document.uri, |text, lines| {
-                    DocumentSymbolResponse::Nested(document_symbols(text, lines))
+                json!(with_document(documents, &p.text_document.uri, |d| {
+                    DocumentSymbolResponse::Nested(document_symbols(&d.text, &d.lines))
                 }))
             })
         }
@@ -661,14 +661,19 @@ fn unknown(id: RequestId, method: &str) -> Response {
 }
 
 /// `f` of the document's text, if the client opened it.
-fn with_text<T>(documents: &Documents, uri: &Uri, f: impl FnOnce(&str, &Lines) -> T) -> Option<T> {
-    let all = lock(documents);
-    let document = all.get(&uri.to_string())?;
-    Some(f(&document.text, &document.lines))
+/// `f` of the open document at `uri`, under the lock.
+fn with_document<T>(
+    documents: &Documents,
+    uri: &Uri,
+    f: impl FnOnce(&mut Document) -> T,
+) -> Option<T> {
+    let mut all = lock(documents);
+    let document = all.get_mut(&uri.to_string())?;
+    Some(f(document))
 }
 
-fn completion_items(text: &str, offset: usize) -> Vec<CompletionItem> {
-    language::completions(text, offset)
+fn completion_items(text: &str, offset: usize, marks: &mut language::Marks) -> Vec<CompletionItem> {
+    language::completions(text, offset, marks)
         .into_iter()
         .map(|c| CompletionItem {
             kind: Some(match c.kind {

@@ -8,7 +8,9 @@
 //! Completion reads the text before the cursor leniently, as it is while
 //! being typed (a tag not closed yet, an attribute half written): the
 //! elements open at the cursor give the parent, the tag the cursor is in
-//! gives the element and the attributes it has.
+//! gives the element and the attributes it has. An editor's text keeps
+//! [`Marks`] of where that reading may start again, so that a completion
+//! in a large text does not read it all from the start each time.
 
 use super::grammar::{self, Value};
 use super::xml::is_name_char;
@@ -232,37 +234,98 @@ enum Spot<'t> {
     },
 }
 
-/// Where `offset` is in `text`, read leniently from the start.
-fn spot(text: &str, offset: usize) -> Spot<'_> {
+/// Where a scan of a text before a cursor ([`completions`], [`hover`])
+/// may start again instead of at the start: the elements open at places
+/// every [`Marks::DEFAULT_EVERY`] bytes or so, as a scan from the start
+/// found them. The state of the scan at a place depends only on the text
+/// before it, so a mark stays true until the text before it changes: kept
+/// beside an editor's text, [`Marks::edited`] drops the marks after an
+/// edit's start. A completion at the end of a million objects (214 MB)
+/// reads the whole text once (0.5 s), then only from the last mark.
+#[derive(Debug, Clone)]
+pub struct Marks {
+    every: usize,
+    /// In the order of the text: where, and the open elements' names
+    /// (their bytes in the text), outermost first.
+    marks: Vec<(usize, Vec<Range<usize>>)>,
+}
+
+impl Default for Marks {
+    fn default() -> Marks {
+        Marks::every(Marks::DEFAULT_EVERY)
+    }
+}
+
+impl Marks {
+    /// A scan from a mark reads at most this much more than it must
+    /// (under a millisecond).
+    pub const DEFAULT_EVERY: usize = 256 << 10;
+
+    /// Marks about `every` bytes apart (at least one).
+    pub fn every(every: usize) -> Marks {
+        Marks {
+            every: every.max(1),
+            marks: Vec::new(),
+        }
+    }
+
+    /// The text was changed from byte `start` on: the marks after it
+    /// are dropped.
+    pub fn edited(&mut self, start: usize) {
+        let keep = self.marks.partition_point(|m| m.0 <= start);
+        self.marks.truncate(keep);
+    }
+
+    /// The last mark at or before `offset`: the scan's place and the open
+    /// elements there (the start, with none, where there is no mark).
+    fn before(&self, offset: usize) -> (usize, Vec<Range<usize>>) {
+        let k = self.marks.partition_point(|m| m.0 <= offset);
+        k.checked_sub(1)
+            .and_then(|k| self.marks.get(k))
+            .cloned()
+            .unwrap_or_default()
+    }
+
+    /// The scan is at `at` with `open` elements: a mark if the last is far
+    /// enough behind.
+    fn passing(&mut self, at: usize, open: &[Range<usize>]) {
+        let last = self.marks.last().map_or(0, |m| m.0);
+        if at >= last.saturating_add(self.every) {
+            self.marks.push((at, open.to_vec()));
+        }
+    }
+}
+
+/// Where `offset` is in `text`, read leniently from the start, or from the
+/// last of `marks` before it (and marked on the way).
+fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
     let mut offset = offset.min(text.len());
     while !text.is_char_boundary(offset) {
         offset -= 1;
     }
     let before = &text[..offset];
-    let mut open: Vec<&str> = Vec::new();
-    let mut i = 0;
+    let (mut i, mut open) = marks.before(offset);
+    let content = |open: &[Range<usize>]| Spot::Content {
+        parent: open.last().map(|r| &before[r.clone()]),
+    };
     let bytes = before.as_bytes();
-    while let Some(lt) = before[i..].find('<').map(|k| i + k) {
+    loop {
+        marks.passing(i, &open);
+        let Some(lt) = before[i..].find('<').map(|k| i + k) else {
+            break;
+        };
         let rest = &before[lt..];
         if rest.starts_with("<!--") {
             match rest.find("-->") {
                 Some(end) => i = lt + end + 3,
-                None => {
-                    return Spot::Content {
-                        parent: open.last().copied(),
-                    };
-                }
+                None => return content(&open),
             }
             continue;
         }
         if rest.starts_with("<?") || rest.starts_with("<!") {
             match rest.find('>') {
                 Some(end) => i = lt + end + 1,
-                None => {
-                    return Spot::Content {
-                        parent: open.last().copied(),
-                    };
-                }
+                None => return content(&open),
             }
             continue;
         }
@@ -271,16 +334,12 @@ fn spot(text: &str, offset: usize) -> Spot<'_> {
                 .find(|c: char| !is_name_char(c))
                 .unwrap_or(closing.len());
             let name = &closing[..name_len];
-            if let Some(k) = open.iter().rposition(|o| *o == name) {
+            if let Some(k) = open.iter().rposition(|o| &before[o.clone()] == name) {
                 open.truncate(k);
             }
             i = match rest.find('>') {
                 Some(end) => lt + end + 1,
-                None => {
-                    return Spot::Content {
-                        parent: open.last().copied(),
-                    };
-                }
+                None => return content(&open),
             };
             continue;
         }
@@ -293,13 +352,21 @@ fn spot(text: &str, offset: usize) -> Spot<'_> {
         let mut j = lt + 1 + name_len;
         if j == before.len() {
             return Spot::ElementName {
-                parent: open.last().copied(),
+                parent: open.last().map(|r| &before[r.clone()]),
                 typed: name,
             };
         }
+        // A tag closed before the offset: only its end matters (a text of
+        // a million objects is read this way but for its last tag).
+        if let Some(end) = tag_end(bytes, j) {
+            if bytes[end - 1] != b'/' {
+                open.push(lt + 1..lt + 1 + name_len);
+            }
+            i = end + 1;
+            continue;
+        }
         let mut present = Vec::new();
         let mut quote: Option<(u8, usize, &str)> = None;
-        let mut closed = false;
         while j < bytes.len() {
             let b = bytes[j];
             match quote {
@@ -314,41 +381,42 @@ fn spot(text: &str, offset: usize) -> Spot<'_> {
                     present.push(attribute);
                     quote = Some((b, j + 1, attribute));
                 }
-                None if b == b'>' => {
-                    closed = true;
-                    break;
-                }
                 None => {}
             }
             j += 1;
         }
-        if !closed {
-            return match quote {
-                Some((_, start, attribute)) => Spot::AttributeValue {
+        return match quote {
+            Some((_, start, attribute)) => Spot::AttributeValue {
+                element: name,
+                attribute,
+                typed: &before[start..],
+            },
+            None => {
+                let typed_start = before
+                    .rfind(|c: char| !is_name_char(c))
+                    .map_or(0, |k| k + 1);
+                let typed = &before[typed_start.max(lt + 1 + name_len)..];
+                Spot::AttributeName {
                     element: name,
-                    attribute,
-                    typed: &before[start..],
-                },
-                None => {
-                    let typed_start = before
-                        .rfind(|c: char| !is_name_char(c))
-                        .map_or(0, |k| k + 1);
-                    let typed = &before[typed_start.max(lt + 1 + name_len)..];
-                    Spot::AttributeName {
-                        element: name,
-                        present,
-                        typed,
-                    }
+                    present,
+                    typed,
                 }
-            };
-        }
-        if bytes[j - 1] != b'/' {
-            open.push(name);
-        }
-        i = j + 1;
+            }
+        };
     }
-    Spot::Content {
-        parent: open.last().copied(),
+    content(&open)
+}
+
+/// The `>` that ends the tag whose attributes start at `from`: the first
+/// outside quotes. `None`: the text ends first.
+fn tag_end(bytes: &[u8], from: usize) -> Option<usize> {
+    let mut j = from;
+    loop {
+        let k = j + memchr::memchr3(b'>', b'"', b'\'', bytes.get(j..)?)?;
+        match bytes[k] {
+            b'>' => return Some(k),
+            quote => j = k + 1 + memchr::memchr(quote, bytes.get(k + 1..)?)? + 1,
+        }
     }
 }
 
@@ -364,15 +432,16 @@ fn element_doc(name: &str) -> String {
     grammar::element(name).map_or_else(String::new, grammar::Element::documentation)
 }
 
-/// What may be typed at byte `offset` of `text`.
-pub fn completions(text: &str, offset: usize) -> Vec<Completion> {
+/// What may be typed at byte `offset` of `text` (read from the last of
+/// its `marks` before it).
+pub fn completions(text: &str, offset: usize, marks: &mut Marks) -> Vec<Completion> {
     let element = |name: &str, insert: String| Completion {
         label: name.to_owned(),
         insert,
         kind: CompletionKind::Element,
         doc: element_doc(name),
     };
-    match spot(text, offset) {
+    match spot(text, offset, marks) {
         Spot::Content { parent } => children_of(parent)
             .iter()
             .map(|name| element(name, format!("<{name}")))
@@ -420,8 +489,8 @@ pub fn completions(text: &str, offset: usize) -> Vec<Completion> {
 }
 
 /// What the name at byte `offset` means (an element's or an attribute's),
-/// and the bytes of that name.
-pub fn hover(text: &str, offset: usize) -> Option<(String, Range<usize>)> {
+/// and the bytes of that name (the text read as [`completions`] reads it).
+pub fn hover(text: &str, offset: usize, marks: &mut Marks) -> Option<(String, Range<usize>)> {
     let mut offset = offset.min(text.len());
     while !text.is_char_boundary(offset) {
         offset -= 1;
@@ -441,7 +510,7 @@ pub fn hover(text: &str, offset: usize) -> Option<(String, Range<usize>)> {
     if before.ends_with('<') || before.ends_with("</") {
         return grammar::element(name).map(|_| (element_doc(name), start..end));
     }
-    match spot(text, end) {
+    match spot(text, end, marks) {
         Spot::AttributeName { element, .. } | Spot::AttributeValue { element, .. } => {
             grammar::attribute(element, name).map(|a| (a.documentation(), start..end))
         }
@@ -599,7 +668,7 @@ mod tests {
     #[test]
     fn completion_knows_where_it_is() {
         let labels = |text: &str| -> Vec<String> {
-            completions(text, text.len())
+            completions(text, text.len(), &mut Marks::default())
                 .into_iter()
                 .map(|c| c.label)
                 .collect()
@@ -630,23 +699,70 @@ mod tests {
         );
         assert_eq!(labels("<scene><model type=\"ph"), ["phong"]);
         assert_eq!(labels("<scene><light x=\""), Vec::<String>::new());
-        let c = completions("<scene><material ", 17);
+        let c = completions("<scene><material ", 17, &mut Marks::default());
         assert_eq!(c[0].insert, "ka=\"\"");
         assert!(c[0].doc.contains("Default: 0.2."), "{}", c[0].doc);
+    }
+
+    /// A reading from a mark finds what a reading from the start finds, at
+    /// every offset of texts of every kind of markup, marks close or far
+    /// apart, and after an edit that changes what the text after it means.
+    #[test]
+    fn a_reading_from_the_marks_finds_what_one_from_the_start_finds() {
+        let texts = [
+            crate::EXAMPLE_SCENE,
+            "<?xml version=\"1.0\"?>\n<!DOCTYPE scene>\n<scene><!-- <sphere> é😀 -->\
+             <sphere><material ka=\"0.2\" kd='>'/><color red=\"1\"></color></sphere>\
+             </x><light x=\"1\" y='2'/><plane></plane><![CDATA[ <a> ]]>\n</scene>\n",
+            "<scene>\r\n\t<sphere >< material/></sphere\n><camera width=\"2\" ",
+        ];
+        fn fresh(text: &str, offset: usize) -> Spot<'_> {
+            spot(text, offset, &mut Marks::every(usize::MAX))
+        }
+        for text in texts {
+            for every in [1, 3, 17] {
+                let mut marks = Marks::every(every);
+                spot(text, text.len(), &mut marks);
+                assert!(marks.marks.len() >= 2, "{every}: {:?}", marks.marks);
+                for offset in 0..=text.len() {
+                    let mut m = marks.clone();
+                    assert_eq!(spot(text, offset, &mut m), fresh(text, offset), "{offset}");
+                }
+                let mut at = text.len() / 2;
+                while !text.is_char_boundary(at) {
+                    at += 1;
+                }
+                for edit in ["<!--", "\"", "</sphere>", "<camera ", "-->"] {
+                    let mut edited = text.to_owned();
+                    edited.insert_str(at, edit);
+                    let mut m = marks.clone();
+                    m.edited(at);
+                    assert!(m.before(edited.len()).0 <= at);
+                    for offset in 0..=edited.len() {
+                        assert_eq!(
+                            spot(&edited, offset, &mut m.clone()),
+                            fresh(&edited, offset),
+                            "{edit:?} at {at}, {offset}"
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
     fn hover_says_what_a_name_means() {
         let text = "<scene><sphere><material ka=\"0.5\"/></sphere><model type=\"phong\"/></scene>";
-        let (doc, range) = hover(text, text.find("ka").unwrap() + 1).unwrap();
+        let hover = |offset| hover(text, offset, &mut Marks::default());
+        let (doc, range) = hover(text.find("ka").unwrap() + 1).unwrap();
         assert_eq!(&text[range], "ka");
         assert!(
             doc.contains("Ambient") && doc.contains("Default: 0.2."),
             "{doc}"
         );
-        let (doc, _) = hover(text, text.find("model").unwrap()).unwrap();
+        let (doc, _) = hover(text.find("model").unwrap()).unwrap();
         assert!(doc.contains("illumination model"), "{doc}");
-        assert!(hover(text, text.find("0.5").unwrap()).is_none());
+        assert!(hover(text.find("0.5").unwrap()).is_none());
     }
 
     #[test]
