@@ -19,8 +19,9 @@
 //! back only for the same path, and only whole: a base whose fingerprint
 //! is not the recorded one, an edit that does not parse or apply, a file
 //! cut short, are a [`JournalError`] (the app says so and leaves the
-//! journal alone). The document restores the edits onto the base and
-//! merges them with the file as it is now.
+//! journal alone). The document restores the edits onto the file as it
+//! opened when it still holds the base (the base then never read), or
+//! onto the base, merged with the file as it is now.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -66,11 +67,22 @@ pub struct Entry {
     pub edits: Vec<Edit>,
 }
 
-/// An entry read back with its base text.
+/// An entry read back; its base text is read only when asked for
+/// ([`Restored::base`]): a file that still holds it needs none of it.
 #[derive(Debug, Clone)]
 pub struct Restored {
     pub entry: Entry,
-    pub base: String,
+    base_path: PathBuf,
+}
+
+impl Restored {
+    /// The base text: the file as the edits found it.
+    pub fn base(&self) -> Result<String, JournalError> {
+        std::fs::read_to_string(&self.base_path).map_err(|source| JournalError::Io {
+            path: self.base_path.clone(),
+            source,
+        })
+    }
 }
 
 /// Why a journal could not be read back (it is left where it is).
@@ -207,11 +219,7 @@ pub fn read(folder: &Path, scene: &Path) -> Result<Option<Restored>, JournalErro
             base_path.display()
         )));
     }
-    let base = std::fs::read_to_string(&base_path).map_err(|source| JournalError::Io {
-        path: base_path.clone(),
-        source,
-    })?;
-    Ok(Some(Restored { entry, base }))
+    Ok(Some(Restored { entry, base_path }))
 }
 
 // ----- the entry as JSON -----
@@ -495,7 +503,7 @@ mod tests {
         write(dir.path(), &entry, Some(&write_base)).unwrap();
         let back = read(dir.path(), &scene_path).unwrap().unwrap();
         assert_eq!(back.entry, entry);
-        assert_eq!(back.base, base);
+        assert_eq!(back.base().unwrap(), base);
         #[cfg(unix)]
         {
             use std::os::unix::fs::PermissionsExt;

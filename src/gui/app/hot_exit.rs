@@ -173,7 +173,11 @@ impl RayOfLightApp {
         };
         let count = restored.entry.edits.len();
         let when = clock(restored.entry.saved_at);
-        match self.doc.restore(restored.base, &restored.entry.edits) {
+        let base = || restored.base().map_err(|e| e.to_string());
+        match self
+            .doc
+            .restore(restored.entry.base_fingerprint, base, &restored.entry.edits)
+        {
             Ok(reload) => {
                 let merged = match reload {
                     crate::gui::document::Reload::Merged => ", merged with the file's changes",
