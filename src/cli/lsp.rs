@@ -206,7 +206,7 @@ fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
                         let end = lines.offset(text, place(range.end)).max(start);
                         text.replace_range(start..end, &change.text);
                         lines.edit(text, start..end, change.text.len());
-                        marks.edited(start);
+                        marks.edited(start..end, change.text.len());
                     }
                     None => {
                         *lines = Lines::new(&change.text);

@@ -238,17 +238,32 @@ enum Spot<'t> {
 /// may start again instead of at the start: the elements open at places
 /// every [`Marks::DEFAULT_EVERY`] bytes or so, as a scan from the start
 /// found them. The state of the scan at a place depends only on the text
-/// before it, so a mark stays true until the text before it changes: kept
-/// beside an editor's text, [`Marks::edited`] drops the marks after an
-/// edit's start. A completion at the end of a million objects (214 MB)
-/// reads the whole text once (0.5 s), then only from the last mark.
+/// before it, so a mark stays true until the text before it changes.
+///
+/// Kept beside an editor's text, [`Marks::edited`] keeps the marks before
+/// an edit and holds those after it as unsure, moved by what the edit
+/// added or took away. The next scan reads on from the edit; where it
+/// comes to an unsure mark's place with the same elements open, it reads
+/// the rest of the text as before the edit, so every unsure mark is true
+/// again and the scan goes on from the last one. A completion at the end
+/// of a million objects (214 MB) reads the whole text once (0.5 s), then
+/// only from the last mark, even after an edit in the middle.
 #[derive(Debug, Clone)]
 pub struct Marks {
     every: usize,
-    /// In the order of the text: where, and the open elements' names
-    /// (their bytes in the text), outermost first.
-    marks: Vec<(usize, Vec<Range<usize>>)>,
+    /// In the order of the text.
+    marks: Vec<Mark>,
+    /// Marks after an edit, moved with the text after it, not yet found
+    /// true again; in order, all after `marks`.
+    unsure: Vec<Mark>,
+    /// How many places scans have passed (for tests of how far they read).
+    #[cfg(test)]
+    passed: usize,
 }
+
+/// A place a scan passed, and the open elements' names there (their bytes
+/// in the text), outermost first.
+type Mark = (usize, Vec<Range<usize>>);
 
 impl Default for Marks {
     fn default() -> Marks {
@@ -266,19 +281,54 @@ impl Marks {
         Marks {
             every: every.max(1),
             marks: Vec::new(),
+            unsure: Vec::new(),
+            #[cfg(test)]
+            passed: 0,
         }
     }
 
-    /// The text was changed from byte `start` on: the marks after it
-    /// are dropped.
-    pub fn edited(&mut self, start: usize) {
+    /// The bytes `replaced` of the text were replaced by `inserted` bytes:
+    /// the marks after the edit's start are unsure from now on, and those
+    /// after its end move with the text. A mark with an open element's
+    /// name starting or ending in the replaced bytes could not be moved:
+    /// it goes.
+    pub fn edited(&mut self, replaced: Range<usize>, inserted: usize) {
+        let Range { start, end } = replaced;
+        let end = end.max(start);
+        let moved = |at: usize| {
+            if at < start {
+                Some(at)
+            } else if at >= end {
+                (at - end).checked_add(start + inserted)
+            } else {
+                None
+            }
+        };
         let keep = self.marks.partition_point(|m| m.0 <= start);
-        self.marks.truncate(keep);
+        let mut later = self.marks.split_off(keep);
+        later.append(&mut self.unsure);
+        self.unsure = later
+            .into_iter()
+            .filter_map(|(at, open)| {
+                let at = if at <= start { at } else { moved(at)? };
+                let open = open
+                    .into_iter()
+                    .map(|name| {
+                        if name.end <= start {
+                            Some(name)
+                        } else {
+                            Some(moved(name.start)?..moved(name.end)?)
+                        }
+                    })
+                    .collect::<Option<Vec<_>>>()?;
+                Some((at, open))
+            })
+            .collect();
     }
 
     /// The last mark at or before `offset`: the scan's place and the open
     /// elements there (the start, with none, where there is no mark).
-    fn before(&self, offset: usize) -> (usize, Vec<Range<usize>>) {
+    fn before(&self, offset: usize) -> Mark {
         let k = self.marks.partition_point(|m| m.0 <= offset);
         k.checked_sub(1)
             .and_then(|k| self.marks.get(k))
@@ -287,12 +337,30 @@ impl Marks {
     }
 
     /// The scan is at `at` with `open` elements: a mark if the last is far
-    /// enough behind.
-    fn passing(&mut self, at: usize, open: &[Range<usize>]) {
+    /// enough behind. Where an unsure mark is at `at` with the same `open`,
+    /// the text from here on reads as it did when it was made: all the
+    /// unsure marks are true again, and `true` says the scan may go on
+    /// from the last before where it is going.
+    fn passing(&mut self, at: usize, open: &[Range<usize>]) -> bool {
+        #[cfg(test)]
+        {
+            self.passed += 1;
+        }
+        let passed = self.unsure.partition_point(|m| m.0 < at);
+        self.unsure.drain(..passed);
+        if self
+            .unsure
+            .first()
+            .is_some_and(|m| m.0 == at && m.1 == open)
+        {
+            self.marks.append(&mut self.unsure);
+            return true;
+        }
         let last = self.marks.last().map_or(0, |m| m.0);
         if at >= last.saturating_add(self.every) {
             self.marks.push((at, open.to_vec()));
         }
+        false
     }
 }
 
@@ -310,7 +378,9 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
     };
     let bytes = before.as_bytes();
     loop {
-        marks.passing(i, &open);
+        if marks.passing(i, &open) {
+            (i, open) = marks.before(offset);
+        }
         let Some(lt) = before[i..].find('<').map(|k| i + k) else {
             break;
         };
@@ -732,21 +802,82 @@ mod tests {
                 while !text.is_char_boundary(at) {
                     at += 1;
                 }
-                for edit in ["<!--", "\"", "</sphere>", "<camera ", "-->"] {
+                // Insertions that change what the text after them means,
+                // and replacements of more, as many or fewer bytes.
+                let mut edits: Vec<(Range<usize>, &str)> =
+                    ["<!--", "\"", "</sphere>", "<camera ", "-->", "<x>"]
+                        .into_iter()
+                        .map(|edit| (at..at, edit))
+                        .collect();
+                for (len, by) in [(1, "<a b='"), (4, "é!"), (9, "<!-- x --"), (12, "")] {
+                    let mut end = (at + len).min(text.len());
+                    while !text.is_char_boundary(end) {
+                        end += 1;
+                    }
+                    edits.push((at..end, by));
+                }
+                for (replaced, by) in edits {
                     let mut edited = text.to_owned();
-                    edited.insert_str(at, edit);
+                    edited.replace_range(replaced.clone(), by);
                     let mut m = marks.clone();
-                    m.edited(at);
+                    m.edited(replaced.clone(), by.len());
                     assert!(m.before(edited.len()).0 <= at);
+                    // Read from the unsure marks, and from the marks a reading
+                    // to the end leaves.
+                    let mut after = m.clone();
+                    spot(&edited, edited.len(), &mut after);
                     for offset in 0..=edited.len() {
-                        assert_eq!(
-                            spot(&edited, offset, &mut m.clone()),
-                            fresh(&edited, offset),
-                            "{edit:?} at {at}, {offset}"
-                        );
+                        let want = fresh(&edited, offset);
+                        let why = format!("{by:?} for {replaced:?}, {offset}");
+                        assert_eq!(spot(&edited, offset, &mut m.clone()), want, "{why}");
+                        assert_eq!(spot(&edited, offset, &mut after.clone()), want, "{why}");
                     }
                 }
             }
+        }
+    }
+
+    /// After an edit in the middle of a large text, a reading at its end
+    /// goes on from the marks after the edit as soon as it finds them true
+    /// again, and reads no more than it did before the edit.
+    #[test]
+    fn a_reading_after_an_edit_goes_on_from_the_marks_it_finds_again() {
+        let sphere = "<sphere>\n  <material ka=\"0.2\" kd=\"0.5\"/>\n</sphere>\n";
+        let text = format!("<scene>\n{}</scene>\n", sphere.repeat(2000));
+        let mut marks = Marks::every(1024);
+        spot(&text, text.len(), &mut marks);
+        let places = marks.passed;
+        let count = marks.marks.len();
+        assert!(
+            places > 4000 && count > 50,
+            "{places} places, {count} marks"
+        );
+        // An edit of a value, one that adds a whole object, one that takes
+        // two away; then another edit before the first, before any reading.
+        let middle = text.len() / 2;
+        let at = middle + text[middle..].find("0.5").unwrap();
+        let object = middle + text[middle..].find("<sphere>").unwrap();
+        for (replaced, by) in [
+            (at..at + 3, "0.75"),
+            (object..object, sphere),
+            (object..object + 2 * sphere.len(), ""),
+        ] {
+            let mut edited = text.clone();
+            edited.replace_range(replaced.clone(), by);
+            let mut m = marks.clone();
+            m.edited(replaced.clone(), by.len());
+            let between = "<scene>\n".len() + sphere.len() - 1;
+            edited.replace_range(between..between + 1, "<!-- - -->\n");
+            m.edited(between..between + 1, 11);
+            m.passed = 0;
+            let want = spot(&edited, edited.len(), &mut Marks::every(usize::MAX));
+            assert_eq!(spot(&edited, edited.len(), &mut m), want);
+            // From the mark before the first edit to one past the second.
+            assert!(m.passed < 100, "{by:?}: {} places read again", m.passed);
+            assert!(m.marks.len() + 2 >= count, "{} marks", m.marks.len());
+            m.passed = 0;
+            spot(&edited, edited.len(), &mut m);
+            assert!(m.passed < 40, "{by:?}: {} places", m.passed);
         }
     }
 
