@@ -29,6 +29,8 @@
 //!   reading and writing.
 //! - [`interrupt`]: SIGINT, SIGTERM and SIGHUP stop a write or a render
 //!   cleanly, nothing left behind.
+//! - [`allocator`]: glibc's malloc set at start, and asked to give back
+//!   what it holds free after a save.
 //! - [`resources`]: memory and open files asked for before the work that
 //!   needs them, refused in one line instead of an abort.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
@@ -42,10 +44,12 @@
 //!
 //! The core never prints and knows nothing of windows or terminals.
 
-// One module runs AVX instructions, with its safety argument:
-// geometry::avx, the only place `unsafe_code` is allowed.
+// Two modules call what the compiler cannot check, each with its safety
+// argument: geometry::avx (AVX instructions) and allocator (glibc's
+// malloc parameters). `unsafe_code` is allowed there only.
 #![deny(unsafe_code)]
 
+pub mod allocator;
 pub mod assemble;
 pub mod bench;
 pub mod desktop;

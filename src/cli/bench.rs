@@ -763,8 +763,7 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
 
     let error = |e: &dyn std::fmt::Display| e.to_string();
     let say = |stage: &str| {
-        let peak = PeakMemory::read_kb("VmHWM:").unwrap_or(0.0);
-        let now = PeakMemory::read_kb("VmRSS:").unwrap_or(0.0);
+        let [peak, now] = PeakMemory::read_kb(["VmHWM:", "VmRSS:"]).unwrap_or_default();
         println!("{stage} {peak:.0} {now:.0}");
     };
     let mut doc = Document::open(path).map_err(|e| error(&e))?;
@@ -799,13 +798,15 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
     say("after an edit");
 
     // On a thread of its own, as the app saves (the window goes on).
-    let job = doc.save_job().map_err(|e| error(&e))?;
-    let (job, outcome) = std::thread::spawn(move || {
-        let outcome = job.run();
-        (job, outcome)
-    })
-    .join()
-    .map_err(|_| "the save's thread panicked".to_owned())?;
+    let (tx, rx) = std::sync::mpsc::channel();
+    doc.save_job()
+        .map_err(|e| error(&e))?
+        .spawn(move |job, outcome| {
+            let _ = tx.send((job, outcome));
+        });
+    let (job, outcome) = rx
+        .recv()
+        .map_err(|_| "the save's thread panicked".to_owned())?;
     match doc.save_done(job, outcome).map_err(|e| error(&e))? {
         rayoflight::gui::document::SaveStep::Done(_) => {}
         rayoflight::gui::document::SaveStep::Again => {
@@ -848,22 +849,32 @@ struct PeakMemory {
 }
 
 impl PeakMemory {
-    fn read_kb(key: &str) -> Option<f64> {
+    /// The values of `keys` (`VmHWM:`, `VmRSS:`) in kB, from one reading
+    /// of the process's status: read apart, a page touched between the
+    /// two could show more resident than the peak.
+    fn read_kb<const N: usize>(keys: [&str; N]) -> Option<[f64; N]> {
         let status = std::fs::read_to_string("/proc/self/status").ok()?;
-        let line = status.lines().find(|l| l.starts_with(key))?;
-        line.split_whitespace().nth(1)?.parse().ok()
+        let value = |key: &str| {
+            let line = status.lines().find(|l| l.starts_with(key))?;
+            line.split_whitespace().nth(1)?.parse().ok()
+        };
+        let values = keys.map(value);
+        values
+            .iter()
+            .all(Option::is_some)
+            .then(|| values.map(|v| v.unwrap_or(0.0)))
     }
 
     fn start() -> Option<PeakMemory> {
         std::fs::write("/proc/self/clear_refs", "5").ok()?;
         Some(PeakMemory {
-            before_kb: Self::read_kb("VmRSS:")?,
+            before_kb: Self::read_kb(["VmRSS:"])?[0],
         })
     }
 
     /// The peak's excess over the resident memory at the start, in MB.
     fn extra_mb(&self) -> Option<f64> {
-        Some((Self::read_kb("VmHWM:")? - self.before_kb).max(0.0) / 1e3)
+        Some((Self::read_kb(["VmHWM:"])?[0] - self.before_kb).max(0.0) / 1e3)
     }
 }
 

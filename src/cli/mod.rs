@@ -3,7 +3,6 @@
 //! one-line messages on stderr and exit statuses (0 success, 1 a scene,
 //! render or output error, 2 a usage error).
 
-mod allocator;
 mod args;
 mod bench;
 mod cluster;
@@ -51,7 +50,7 @@ fn usage(message: String) -> Failure {
 }
 
 pub fn main() -> ExitCode {
-    allocator::tune();
+    rayoflight::allocator::tune();
     let code = report(run(std::env::args_os().skip(1)));
     // A signal that stopped the work: the status a shell gives a process
     // the signal ended (130 for Ctrl+C, 143 for SIGTERM).

@@ -145,8 +145,8 @@ impl RayOfLightApp {
         ))
     }
 
-    /// Starts saving on a thread of its own (a million objects take
-    /// seconds to write and check); `then` runs once the edits are saved.
+    /// Starts saving on a thread of its own ([`SaveJob::spawn`]); `then`
+    /// runs once the edits are saved.
     /// Editing goes on meanwhile; what is edited then stays unsaved.
     pub(super) fn save_then(&mut self, then: Option<Command>) {
         if self.saving.is_some() {
@@ -173,8 +173,7 @@ impl RayOfLightApp {
         });
         let tx = self.background_tx.clone();
         let ctx = self.ctx.clone();
-        std::thread::spawn(move || {
-            let outcome = job.run();
+        job.spawn(move |job, outcome| {
             let _ = tx.send(Background::Saved(Box::new(job), outcome));
             ctx.request_repaint();
         });

@@ -101,6 +101,19 @@ impl SaveJob {
         }
     }
 
+    /// Runs the job on a thread of its own, as the app saves (a million
+    /// objects take seconds to write and check), then hands `done` the job
+    /// and what it did. Before that, the memory the save freed goes back
+    /// to the system ([`crate::allocator::give_back`]): the thread's arena
+    /// would keep 5–6 MB of 200 000 objects' save one time in three.
+    pub fn spawn(self, done: impl FnOnce(SaveJob, SaveOutcome) + Send + 'static) {
+        std::thread::spawn(move || {
+            let outcome = self.run();
+            crate::allocator::give_back();
+            done(self, outcome);
+        });
+    }
+
     /// Writes the edited scene to the file unless another program changed
     /// it; never writes over text the app has not read.
     pub fn run(&self) -> SaveOutcome {

@@ -1,7 +1,8 @@
-//! The process's memory allocator, set once at start ([`tune`]), where it
-//! is glibc's malloc: a fixed threshold above which a block gets pages of
-//! its own from the kernel and gives them back when freed; and under an
-//! address-space limit, one arena for every thread.
+//! The process's memory allocator, where it is glibc's malloc: set once
+//! at start ([`tune`]): a fixed threshold above which a block gets pages
+//! of its own from the kernel and gives them back when freed, and under an
+//! address-space limit one arena for every thread; and asked to give back
+//! what it holds free after a large piece of work ([`give_back`]).
 //!
 //! The threshold. Left to itself, glibc raises it each time such a block
 //! is freed (up to 32 MiB), and with it the free memory each thread's
@@ -31,10 +32,21 @@
 //! parsing its pieces taking turns; a render allocates little: the
 //! mirrors at `--aa 2` as fast), and never reserve what they do not use.
 //!
+//! Giving back. Below the threshold, a thread's arena gives pages back to
+//! the system only from its top: a few live bytes above the blocks a save
+//! freed keep them all. The app's save of 200 000 spheres left 5–6 MB that
+//! way one run in three (0.8–1.9 MB the other runs); `malloc_trim` hands
+//! back the free pages of every arena wherever they are, in 0.2–0.5 ms.
+//! The app calls it as each save ends (`SaveJob::spawn`).
+//!
 //! A user who sets the allocator's own variables (`MALLOC_MMAP_THRESHOLD_`,
 //! `MALLOC_TRIM_THRESHOLD_`, `MALLOC_ARENA_MAX`, or `malloc` tunables in
 //! `GLIBC_TUNABLES`) keeps them. Other C libraries (musl) and systems:
-//! nothing is set.
+//! nothing is set, nothing given back.
+
+// The calls into glibc are this module's only `unsafe`, each with its
+// safety argument.
+#![allow(unsafe_code)]
 
 /// The size from which a block is mapped on its own and unmapped when
 /// freed: above the pieces a load reads (1 MiB and what is carried over),
@@ -42,7 +54,7 @@
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
 const MMAP_THRESHOLD: libc::c_int = 4 << 20;
 
-/// Fixes glibc's mmap threshold at [`MMAP_THRESHOLD`], and under an
+/// Fixes glibc's mmap threshold at `MMAP_THRESHOLD` (4 MiB), and under an
 /// address-space limit keeps to one arena, unless the user set the
 /// allocator's variables. Called first thing in `main`, before any thread.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
@@ -74,3 +86,19 @@ pub fn tune() {
 
 #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
 pub fn tune() {}
+
+/// Hands the pages the allocator holds free, in every arena, back to the
+/// system: after a piece of work that allocated much on a thread of its
+/// own and freed it (a save), so that it does not stay resident.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+pub fn give_back() {
+    // SAFETY: malloc_trim takes each arena's lock and only releases pages
+    // of free chunks (madvise) or shrinks the top; live blocks are
+    // untouched. Its result (whether anything was released) is not needed.
+    unsafe {
+        libc::malloc_trim(0);
+    }
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+pub fn give_back() {}
