@@ -34,7 +34,7 @@
 //! - [`resources`]: memory and open files asked for before the work that
 //!   needs them, refused in one line instead of an abort.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
-//! - [`bench`]: the benchmark scenes.
+//! - [`bench`](mod@bench): the benchmark scenes.
 //! - [`measure`]: render time, medians, image differences, CSV: measured
 //!   one way by the bench, the study, `-time` and the tests.
 //! - [`study`]: speed against accuracy: every method on the study scenes,

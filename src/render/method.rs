@@ -1,5 +1,5 @@
 //! Render methods: a name and how it renders — the same [`RenderOptions`]
-//! for every scene, or the options [`auto`](super::auto) plans for each.
+//! for every scene, or the options [`auto`](fn@super::auto) plans for each.
 //! The command line's `--method`, the app's preview and the study choose
 //! among [`methods`]; the study compares them all (speed against
 //! accuracy). A [`RenderRequest`](crate::request::RenderRequest) names one
@@ -16,7 +16,7 @@ pub struct Method {
 }
 
 /// How a method renders: the same options for every scene, or the options
-/// [`auto`](super::auto) plans for each scene.
+/// [`auto`](fn@super::auto) plans for each scene.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Options {
     Fixed(RenderOptions),

@@ -120,7 +120,7 @@ impl Offset {
 /// How to render. `RenderOptions::default()` gives the contract's image:
 /// one ray through each pixel centre, f64 throughout, with every exact
 /// shortcut allowed; [`RenderOptions::reference`] is the same image
-/// without shortcuts, and [`auto`] the options a given scene needs.
+/// without shortcuts, and [`auto`](fn@auto) the options a given scene needs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RenderOptions {
     /// Worker threads; `None` uses rayon's global pool (one per core).

@@ -26,7 +26,7 @@ pub enum Ended {
 }
 
 /// Sees a trace step by step: how the explained pixel's tree is recorded
-/// from the render's own loop ([`Prepared::explain`]). `()` sees nothing
+/// from the render's own loop ([`super::Prepared::explain`]). `()` sees nothing
 /// and compiles to nothing (renders).
 pub(super) trait Observer<L: Lanes>: LightObserver<L> {
     /// Bounce `bounce`'s rays (f64) leave.

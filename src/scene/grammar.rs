@@ -3,7 +3,7 @@
 //! attribute what it means, its type, its range, and whether it is required
 //! or what it defaults to.
 //!
-//! The loader ([`super::load`]) reads with these lists of names: an element
+//! The loader ([`super::load`](mod@super::load)) reads with these lists of names: an element
 //! or attribute not in them is refused. [`super::schema`] writes the whole
 //! table as an XML Schema for editors. The loader's own checks (required,
 //! ranges, defaults) and this table are held to each other by tests that

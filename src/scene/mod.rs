@@ -2,7 +2,7 @@
 //! illumination model, with defaults filled in and every value validated
 //! (contract sections 2–4 and 9).
 //!
-//! [`load`] reads a file, [`parse`] a string; both return a [`Scene`] or a
+//! [`load`](fn@load) reads a file, [`parse`] a string; both return a [`Scene`] or a
 //! [`LoadError`] that carries the file and the `line:column` of the culprit.
 //! A `Scene` holds no render state: `render::prepare` turns it into what the
 //! tracer needs.

@@ -11,9 +11,8 @@
 //! text is kept: comments, whitespace, attribute order and quoting, the
 //! spelling of unchanged numbers (`1.0` stays `1.0`), the XML declaration.
 //!
-//! [`plan_source`] does the same for a text held as a
-//! [`Source`](super::source::Source): one held packed is read twice, a
-//! block at a time, never unpacked whole.
+//! [`plan_source`] does the same for a text held as a [`Source`]: one
+//! held packed is read twice, a block at a time, never unpacked whole.
 //!
 //! [`to_xml`] writes a fresh, indented file for a scene that has no source
 //! text yet ("Save as" of the built-in example, a new scene).
@@ -350,7 +349,7 @@ impl Skeleton {
     /// Reads `source`, keeping whole the objects (numbered in text order)
     /// in `keep`. With `fold` (every object is where it was, with its own
     /// steps: an edit of values only), each run of unchanged objects but
-    /// its last is folded into one `<_/>` ([`Skeleton::numbers`]).
+    /// its last is folded into one `<_/>` ([`Folded`]).
     fn read(
         source: &Source,
         keep: &std::collections::HashSet<usize>,

@@ -57,7 +57,7 @@ impl RayOfLightApp {
     /// while-dragging method when one is set and a button is held.
     ///
     /// While the mouse moves the camera or drags a value, only one pass is
-    /// rendered, as coarse as keeps [`TARGET_FPS`](super::pace::TARGET_FPS)
+    /// rendered, as coarse as keeps [`TARGET_FPS`](crate::gui::pace::TARGET_FPS)
     /// pictures a second; the next request after the mouse stops refines
     /// from that scale.
     pub(super) fn request_render(&mut self) {

@@ -1,7 +1,9 @@
 //! View › Pass: one render pass (a term of the formula, or the normal,
 //! depth or object of the camera ray's hit) shown in place of the
-//! picture. The pass is rendered by the worker ([`Worker::render_pass`]:
-//! the library's [`render::render_pass`], the image's tile loop) once the
+//! picture. The pass is rendered by the worker
+//! ([`Worker::render_pass`](crate::gui::worker::Worker::render_pass): the
+//! library's [`render_pass`](crate::render::render_pass), the image's tile
+//! loop) once the
 //! picture's scene and camera settle, the newest request cancelling the
 //! older; the pixel inspector shows its values.
 

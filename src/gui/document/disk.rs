@@ -104,7 +104,8 @@ pub(super) fn fingerprint(bytes: &[u8]) -> u64 {
     f.finish()
 }
 
-/// The [`fingerprint`] of a text held as a [`Source`], read a block at a
+/// The [`fingerprint`] of a text held as a
+/// [`Source`](crate::scene::source::Source), read a block at a
 /// time.
 pub(super) fn fingerprint_source(source: &crate::scene::source::Source) -> u64 {
     use std::io::Read;

@@ -107,7 +107,7 @@ impl std::io::Write for FingerprintWriter<'_> {
     }
 }
 
-/// The [`fingerprint`] of a text, as [`fingerprint_file`] gives for a
+/// The [`fingerprint`] of a text, as [`super::fingerprint_file`] gives for a
 /// file holding it.
 pub fn fingerprint_text(text: &str) -> u64 {
     fingerprint(text.as_bytes())
