@@ -256,3 +256,86 @@ fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
     );
     assert_eq!(fs::read_to_string(&scene).unwrap(), TWO_SPHERES);
 }
+
+/// The server as a client starts it, on pipes, with `messages` written to
+/// its input in the protocol's framing; `close` closes its input after
+/// them. What it did within 5 s: its exit status (`None`: still running,
+/// then killed) and what it wrote.
+fn lsp_session(messages: &[serde_json::Value], close: bool) -> (Option<i32>, String) {
+    use std::io::{Read, Write};
+    let mut server = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .arg("lsp")
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut input = server.stdin.take().unwrap();
+    for message in messages {
+        let body = message.to_string();
+        write!(input, "Content-Length: {}\r\n\r\n{body}", body.len()).unwrap();
+    }
+    input.flush().unwrap();
+    // Held open, as an editor holds it, until the end, unless `close`.
+    let input = (!close).then_some(input);
+    let start = std::time::Instant::now();
+    let status = loop {
+        if let Some(status) = server.try_wait().unwrap() {
+            break status.code();
+        }
+        if start.elapsed() > std::time::Duration::from_secs(5) {
+            server.kill().unwrap();
+            server.wait().unwrap();
+            break None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    drop(input);
+    let mut said = String::new();
+    server
+        .stdout
+        .take()
+        .unwrap()
+        .read_to_string(&mut said)
+        .unwrap();
+    server
+        .stderr
+        .take()
+        .unwrap()
+        .read_to_string(&mut said)
+        .unwrap();
+    (status, said)
+}
+
+/// The server ends as the protocol says: at `exit`, with status 0 after a
+/// `shutdown` and 1 without; and when the editor goes without a word (its
+/// end of the pipe closed), with status 1. A server that stayed was left
+/// running by every editor that quit, with nobody to read what it wrote.
+#[test]
+fn the_server_ends_at_exit_and_when_the_editor_goes() {
+    use serde_json::json;
+    let initialize = json!({"jsonrpc": "2.0", "id": 1, "method": "initialize",
+        "params": {"capabilities": {}, "processId": null, "rootUri": null}});
+    let initialized = json!({"jsonrpc": "2.0", "method": "initialized", "params": {}});
+    let open = json!({"jsonrpc": "2.0", "method": "textDocument/didOpen", "params": {
+        "textDocument": {"uri": "file:///tmp/s.xml", "languageId": "xml", "version": 1,
+            "text": rayoflight::EXAMPLE_SCENE}}});
+    let shutdown = json!({"jsonrpc": "2.0", "id": 2, "method": "shutdown"});
+    let exit = json!({"jsonrpc": "2.0", "method": "exit"});
+    let start = [initialize, initialized, open];
+
+    let with = |more: &[&serde_json::Value]| {
+        let mut all: Vec<_> = start.to_vec();
+        all.extend(more.iter().map(|m| (*m).clone()));
+        all
+    };
+    let (status, said) = lsp_session(&with(&[&shutdown, &exit]), false);
+    assert_eq!(status, Some(0), "shutdown, exit: {said}");
+    assert!(said.contains(r#""id":2,"result":null"#), "{said}");
+    let (status, said) = lsp_session(&with(&[&exit]), false);
+    assert_eq!(status, Some(1), "exit without shutdown: {said}");
+    let (status, said) = lsp_session(&with(&[]), true);
+    assert_eq!(status, Some(1), "the editor gone: {said}");
+    let (status, said) = lsp_session(&with(&[&shutdown]), true);
+    assert_eq!(status, Some(1), "gone after shutdown: {said}");
+}

@@ -19,10 +19,14 @@
 //! on an object in an app comes back over the link and becomes a
 //! `window/showDocument` request for its element, which leaves the focus
 //! where it is.
+//!
+//! The server ends at the editor's `exit`, or when the editor's end of
+//! stdin closes; every thread sends through one sender, let go then, so
+//! that the thread writing to the editor ends too.
 
 use lsp_server::{Connection, Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
-    DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument,
+    DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument, Exit,
     Notification as _, PublishDiagnostics,
 };
 use lsp_types::notification::{LogMessage, ShowMessage};
@@ -105,7 +109,9 @@ const DIAGNOSE_EVERY: Duration = Duration::from_millis(100);
 /// How often the runtime folder is looked at for apps started since.
 const LOOK_FOR_APPS_EVERY: Duration = Duration::from_secs(1);
 
-/// Runs the server until the client says exit; an error is the protocol's.
+/// Runs the server until the client says exit or goes (its end of stdin
+/// closed); an error is the protocol's, or an end without a shutdown
+/// (status 1, as the protocol asks).
 pub fn run() -> Result<(), String> {
     let (connection, io_threads) = Connection::stdio();
     let capabilities = ServerCapabilities {
@@ -131,19 +137,31 @@ pub fn run() -> Result<(), String> {
     let client = connection
         .initialize(capabilities)
         .map_err(|e| format!("lsp: {e}"))?;
-    let sender = connection.sender.clone();
-    let send: Send = Arc::new(move |m| sender.send(m).is_ok());
+    // Every thread sends through this one sender, let go when the server
+    // ends: the thread that writes to the editor ends when no sender is
+    // left (a link to an app may still hold `send` then).
+    let sender = Arc::new(Mutex::new(Some(connection.sender.clone())));
+    let send: Send = {
+        let sender = Arc::clone(&sender);
+        Arc::new(move |m| {
+            let sender = sender.lock().unwrap_or_else(PoisonError::into_inner);
+            sender.as_ref().is_some_and(|s| s.send(m).is_ok())
+        })
+    };
     let documents: Documents = Arc::default();
     let shows = client["capabilities"]["window"]["showDocument"]["support"].as_bool() == Some(true);
     let from_apps = from_apps(Arc::clone(&documents), Arc::clone(&send), shows);
     let diagnose = diagnosis_thread(Arc::clone(&documents), send, from_apps);
+    let mut shut_down = false;
     for message in &connection.receiver {
         match message {
             Message::Request(request) => {
+                // A shutdown is answered, then the `exit` waited for.
                 if connection
                     .handle_shutdown(&request)
                     .map_err(|e| format!("lsp: {e}"))?
                 {
+                    shut_down = true;
                     break;
                 }
                 let response = if request.method == DocumentHighlightRequest::METHOD {
@@ -163,6 +181,7 @@ pub fn run() -> Result<(), String> {
                     .send(Message::Response(response))
                     .map_err(|e| format!("lsp: {e}"))?;
             }
+            Message::Notification(n) if n.method == Exit::METHOD => break,
             Message::Notification(n) => {
                 if let Some(change) = changed(&documents, n) {
                     // The thread has gone only if the server is ending.
@@ -173,7 +192,15 @@ pub fn run() -> Result<(), String> {
         }
     }
     drop(diagnose);
-    io_threads.join().map_err(|e| format!("lsp: {e}"))
+    sender.lock().unwrap_or_else(PoisonError::into_inner).take();
+    drop(connection);
+    io_threads.join().map_err(|e| format!("lsp: {e}"))?;
+    if shut_down {
+        Ok(())
+    } else {
+        // The protocol's status for an end without a shutdown.
+        Err("lsp: the editor ended the session without a shutdown".to_owned())
+    }
 }
 
 /// A document opened, changed, saved or closed: the key of the one that
