@@ -11,6 +11,9 @@
 //! says "interrupted: nothing was written" and exits with 128 + the
 //! signal's number, as a shell reports a process the signal ended.
 //!
+//! A write past the file-size limit fails instead of ending the process
+//! ([`writes_past_the_size_limit_fail`], SIGXFSZ).
+//!
 //! Without [`install`] (the desktop app, which saves its unsaved edits on
 //! these signals itself, and the library's tests) nothing is ever
 //! requested and guards cost an atomic increment.
@@ -66,6 +69,22 @@ pub fn install() -> std::io::Result<()> {
         signal_hook::flag::register_conditional_default(signal, Arc::clone(&handlers.unguarded))?;
     }
     let _ = HANDLERS.set(handlers);
+    Ok(())
+}
+
+/// Makes a write past the file-size limit (`ulimit -f`, `prlimit
+/// --fsize`) fail with "File too large" (EFBIG), undone like any failed
+/// write, instead of SIGXFSZ ending the process with its temporary file
+/// left beside the file it was to replace. The signal is caught and
+/// nothing is done with it. For every command, the app's included (its
+/// save is such a write).
+pub fn writes_past_the_size_limit_fail() -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        static IGNORED: OnceLock<Arc<AtomicBool>> = OnceLock::new();
+        let flag = IGNORED.get_or_init(Arc::default);
+        signal_hook::flag::register(signal_hook::consts::SIGXFSZ, Arc::clone(flag))?;
+    }
     Ok(())
 }
 

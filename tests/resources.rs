@@ -16,6 +16,8 @@
 //! - `assemble`: 2000 parts across a row under a soft limit of 1024 open
 //!   files (the soft limit is raised to the hard one); under a hard limit
 //!   too low, refused before any pixel is read, the limit named.
+//! - `edit` out of descriptors says so, blaming no other program.
+//! - A write past the file-size limit fails in one line, nothing left.
 #![cfg(target_os = "linux")]
 
 mod common;
@@ -379,4 +381,69 @@ fn assemble_raises_its_open_file_limit_or_refuses_before_reading() {
     );
     assert!(err.contains("hard limit 256"), "{err}");
     assert!(!d.join("whole.png").exists());
+}
+
+/// Under a file-size limit (`ulimit -f`, `prlimit --fsize`), a write that
+/// would pass it fails like any other: one line, status 1, the temporary
+/// file removed and the file it was to replace as it was. (SIGXFSZ ended
+/// the process with status 153, its temporary file left beside the file.)
+#[test]
+fn a_file_size_limit_fails_the_write_and_leaves_nothing_behind() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = sphere(64, 48);
+    fs::write(dir.path().join("scene.xml"), &scene).unwrap();
+    fs::write(dir.path().join("old.png"), b"the old image").unwrap();
+    let before = files_in(dir.path());
+    // The limit is below the scene's size: every write of it passes it.
+    let fsize = vec![format!("--fsize={}", scene.len() / 2)];
+    for args in [
+        &["scene.xml", "-out", "new.png"][..],
+        &["scene.xml", "-out", "old.png"],
+        &["edit", "scene.xml", "--set", "camera.width=65"],
+        &["export-pov", "scene.xml", "-out", "scene.pov"],
+    ] {
+        let o = run(limited(&fsize, dir.path(), args));
+        let err = one_line_refusal(&o, &args.join(" "));
+        assert!(err.contains("File too large"), "{args:?}: {err}");
+        assert_eq!(files_in(dir.path()), before, "{args:?}");
+        assert_eq!(
+            fs::read_to_string(dir.path().join("scene.xml")).unwrap(),
+            scene
+        );
+        assert_eq!(
+            fs::read(dir.path().join("old.png")).unwrap(),
+            b"the old image"
+        );
+    }
+}
+
+/// Under an open-file limit, `edit` either edits or says in one line that
+/// it ran out of descriptors, leaving the file as it was: never that
+/// another program changed the file (with 5 descriptors, reading the file
+/// again before the rename failed, and the failure was taken for a change
+/// 8 times over).
+#[test]
+fn out_of_descriptors_edit_says_so_and_blames_no_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = sphere(16, 12);
+    let mut edited_at = None;
+    // (Under 4 the dynamic loader itself fails.)
+    for nofile in 4..=12 {
+        fs::write(dir.path().join("scene.xml"), &scene).unwrap();
+        let limit = vec![format!("--nofile={nofile}")];
+        let args = ["edit", "scene.xml", "--set", "camera.width=17"];
+        let o = run(limited(&limit, dir.path(), &args));
+        let now = fs::read_to_string(dir.path().join("scene.xml")).unwrap();
+        assert_eq!(files_in(dir.path()), ["scene.xml"], "{nofile}");
+        if o.status.success() {
+            assert_eq!(now, scene.replace(r#"width="16""#, r#"width="17""#));
+            edited_at.get_or_insert(nofile);
+            continue;
+        }
+        let err = one_line_refusal(&o, &format!("--nofile={nofile}"));
+        assert!(err.contains("Too many open files"), "{nofile}: {err}");
+        assert!(!err.contains("another program"), "{nofile}: {err}");
+        assert_eq!(now, scene, "{nofile}");
+    }
+    assert!(edited_at.is_some_and(|n| n <= 8), "{edited_at:?}");
 }

@@ -89,6 +89,7 @@ fn report(result: Result<(), Failure>) -> ExitCode {
 
 fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure> {
     let command = args::parse(args)?;
+    interrupt::writes_past_the_size_limit_fail().map_err(fail)?;
     // SIGINT, SIGTERM and SIGHUP stop a render or a write cleanly (the
     // app, which saves unsaved edits on them, has its own handlers).
     if !matches!(&command, Command::Render(r) if opens_app(r)) {
@@ -390,16 +391,28 @@ fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
         let written = output::write_atomic_with(
             out,
             |w| w.write_all(new_text.as_bytes()),
-            |_| match in_place
-                && std::fs::read(&args.scene).ok().as_deref() != Some(text.as_bytes())
-            {
-                true => Err(Rewrite::Changed),
-                false => Ok(()),
+            |_| {
+                if !in_place {
+                    return Ok(());
+                }
+                // A file that cannot be read again (no descriptor left) is
+                // not one another program changed: say why, write nothing.
+                match std::fs::read(&args.scene) {
+                    Ok(now) if now == text.as_bytes() => Ok(()),
+                    Ok(_) => Err(Rewrite::Changed),
+                    Err(e) => Err(Rewrite::Unreadable(e)),
+                }
             },
         );
         match written {
             Ok(()) => return Ok(()),
             Err(Rewrite::Output(e)) => return Err(fail(e)),
+            Err(Rewrite::Unreadable(e)) => {
+                return Err(Failure::Error(format!(
+                    "{}: cannot read the file again before writing it: {e}; nothing was written",
+                    args.scene.display()
+                )));
+            }
             Err(Rewrite::Changed) => {}
         }
         // Another program wrote the file since it was read: replay the
@@ -433,6 +446,8 @@ enum Rewrite {
     Output(output::OutputError),
     /// The scene is not the text that was read any more.
     Changed,
+    /// The scene could not be read again to find out.
+    Unreadable(std::io::Error),
 }
 
 impl From<output::OutputError> for Rewrite {
