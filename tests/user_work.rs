@@ -1045,3 +1045,82 @@ fn item_3_discarding_the_edits_removes_their_journal() {
     let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
     assert!(!harness.state().document().has_unsaved_edits());
 }
+
+/// The selection stays on the object the user selected when another
+/// program changes the file: a sphere inserted above it moves it down the
+/// list, and the selection (and the panel's editor, and so the next edit)
+/// goes with it; an object the other program removed is no longer
+/// selected, rather than its neighbour. (The selection was a number: after
+/// an insertion above, it named another object, and a panel edit went to
+/// that one.) Unsaved edits merged onto the change keep it too.
+#[test]
+fn the_selection_follows_its_object_through_another_programs_change() {
+    let sphere = |name: &str, z: f64| {
+        format!(
+            "  <!-- {name} -->\n  <sphere><transformation><translate z=\"{z}\"/></transformation></sphere>\n"
+        )
+    };
+    let tail = "  <light x=\"0\" y=\"-3\" z=\"-3\"/>\n  <camera width=\"16\" height=\"12\" eyeDistance=\"2\"/>\n</scene>\n";
+    let text = format!(
+        "<scene>\n{}{}{}{tail}",
+        sphere("RED", 3.0),
+        sphere("GREEN", 4.0),
+        sphere("BLUE", 5.0)
+    );
+    let (_dir, path) = file_with(&text);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    until_done(&mut harness, Duration::from_secs(30));
+    harness.get_by_label("#2 GREEN sphere").click();
+    harness.run_steps(2);
+    assert_eq!(harness.state().selected_object(), Some(1));
+    assert!(harness.query_by_label("Edit #2 GREEN sphere").is_some());
+
+    // Another program puts a sphere first.
+    let theirs = text.replacen("<scene>\n", &format!("<scene>\n{}", sphere("NEW", 6.0)), 1);
+    replace_atomically(&path, &theirs);
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the new file",
+        |app| app.document().scene().objects.len() == 4,
+    );
+    harness.run_steps(2);
+    assert_eq!(
+        harness.state().selected_object(),
+        Some(2),
+        "GREEN is #3 now"
+    );
+    assert!(harness.query_by_label("Edit #3 GREEN sphere").is_some());
+
+    // An unsaved edit of GREEN, then another program inserts again: the
+    // edit is merged onto the file's change, the selection still GREEN.
+    harness.get_by_label("lambert").click();
+    harness.run_steps(2);
+    let theirs = theirs.replacen(
+        "<scene>\n",
+        &format!("<scene>\n{}", sphere("NEWER", 7.0)),
+        1,
+    );
+    replace_atomically(&path, &theirs);
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the merged file",
+        |app| app.document().scene().objects.len() == 5,
+    );
+    harness.run_steps(2);
+    assert_eq!(
+        harness.state().selected_object(),
+        Some(3),
+        "GREEN is #4 now"
+    );
+
+    // GREEN removed by the other program: nothing selected.
+    let green = sphere("GREEN", 4.0);
+    replace_atomically(&path, &theirs.replacen(&green, "", 1));
+    step_until(&mut harness, Duration::from_secs(10), "GREEN gone", |app| {
+        app.document().scene().objects.len() == 4
+    });
+    harness.run_steps(2);
+    assert_eq!(harness.state().selected_object(), None);
+}

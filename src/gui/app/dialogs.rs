@@ -185,7 +185,9 @@ impl RayOfLightApp {
         let Some(saving) = self.saving.take() else {
             return;
         };
-        match self.doc.save_done(job, outcome) {
+        // The file's version taken, or merged with the edits: the
+        // selection goes with its object.
+        match self.keeping_selection(|app| app.doc.save_done(job, outcome)) {
             Ok(SaveStep::Again) => {
                 // The file's changes were merged with the edits: write both.
                 self.after_edit();

@@ -205,7 +205,7 @@ impl RayOfLightApp {
         match message {
             Message::Buffer { path, text } if ours(&path) => {
                 let was = self.doc.is_following();
-                self.doc.follow(text);
+                self.keeping_selection(|app| app.doc.follow(text));
                 if !was && self.doc.is_following() {
                     self.notify("the panel waits while your editor has unsaved text".into());
                 }
@@ -219,7 +219,7 @@ impl RayOfLightApp {
                 }
             }
             Message::Released { path } if ours(&path) && self.doc.is_following() => {
-                self.doc.unfollow();
+                self.keeping_selection(|app| app.doc.unfollow());
                 self.notify("your editor let go of its text: the file again".into());
                 self.after_edit();
             }
@@ -230,7 +230,8 @@ impl RayOfLightApp {
     pub(super) fn file_event(&mut self, event: FileEvent) {
         self.reading = matches!(event, FileEvent::Reading);
         match event {
-            FileEvent::Loaded(read) => match self.doc.file_read(*read) {
+            FileEvent::Loaded(read) => match self.keeping_selection(|app| app.doc.file_read(*read))
+            {
                 Reload::Replaced => self.after_edit(),
                 Reload::Merged => {
                     self.notify("the file changed on disk: your edits were applied onto it".into());

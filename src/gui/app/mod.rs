@@ -355,6 +355,40 @@ impl RayOfLightApp {
         self.request_render();
     }
 
+    /// Runs `change`, which takes a version of the scene from outside (the
+    /// file another program wrote, the editor's text), and keeps the
+    /// selection on the object it named: found again in the new list by
+    /// its identity (`scene::identity`, as a merge finds an edit's
+    /// element), or let go where that object is gone — never left on
+    /// whatever object now has its number.
+    fn keeping_selection<R>(&mut self, change: impl FnOnce(&mut Self) -> R) -> R {
+        let before = self
+            .selection
+            .object
+            .map(|n| (n, self.doc.scene().objects.clone()));
+        let result = change(self);
+        let Some((n, old)) = before else {
+            return result;
+        };
+        let new = &self.doc.scene().objects;
+        if !old.same_list(new) {
+            let now = crate::scene::identity::objects(&old, new)
+                .get(n)
+                .copied()
+                .flatten();
+            if now != Some(n) {
+                self.selection = match now {
+                    Some(now) => Selection {
+                        object: Some(now),
+                        ..Selection::default()
+                    },
+                    None => Selection::default(),
+                };
+            }
+        }
+        result
+    }
+
     fn replace_document(&mut self, doc: Document) {
         self.doc = doc;
         self.selection = Selection::default();
