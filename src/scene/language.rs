@@ -212,13 +212,16 @@ pub enum CompletionKind {
 /// Where in the markup a byte offset is.
 #[derive(Debug, PartialEq, Eq)]
 enum Spot<'t> {
-    /// Between elements, inside `parent` (`None`: outside the root).
-    Content { parent: Option<&'t str> },
+    /// Between elements, inside the element whose name is at `parent`
+    /// (`None`: outside the root).
+    Content { parent: Option<Range<usize>> },
     /// Typing an element's name after `<`, inside `parent`.
     ElementName {
-        parent: Option<&'t str>,
+        parent: Option<Range<usize>>,
         typed: &'t str,
     },
+    /// In a comment, a declaration or a CDATA section: nothing to type.
+    Markup,
     /// In `element`'s start tag, where an attribute name goes; `present`
     /// are those it has.
     AttributeName {
@@ -374,7 +377,7 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
     let before = &text[..offset];
     let (mut i, mut open) = marks.before(offset);
     let content = |open: &[Range<usize>]| Spot::Content {
-        parent: open.last().map(|r| &before[r.clone()]),
+        parent: open.last().cloned(),
     };
     let bytes = before.as_bytes();
     loop {
@@ -388,14 +391,14 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
         if rest.starts_with("<!--") {
             match rest.find("-->") {
                 Some(end) => i = lt + end + 3,
-                None => return content(&open),
+                None => return Spot::Markup,
             }
             continue;
         }
         if rest.starts_with("<?") || rest.starts_with("<!") {
             match rest.find('>') {
                 Some(end) => i = lt + end + 1,
-                None => return content(&open),
+                None => return Spot::Markup,
             }
             continue;
         }
@@ -422,7 +425,7 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
         let mut j = lt + 1 + name_len;
         if j == before.len() {
             return Spot::ElementName {
-                parent: open.last().map(|r| &before[r.clone()]),
+                parent: open.last().cloned(),
                 typed: name,
             };
         }
@@ -490,6 +493,98 @@ fn tag_end(bytes: &[u8], from: usize) -> Option<usize> {
     }
 }
 
+/// The elements that may be added at `offset` in the element whose name
+/// is at `parent` (`None`: the root): its children but those it has and
+/// may have only one of ([`grammar::Repeat`]), before or after `offset`
+/// (the tag being typed there aside).
+fn may_add(
+    text: &str,
+    parent: Option<Range<usize>>,
+    offset: usize,
+) -> impl Iterator<Item = &'static &'static str> + '_ {
+    let element = parent.clone().and_then(|p| grammar::element(&text[p]));
+    let children = children_of(parent.clone().map(|p| &text[p]));
+    // The tag being typed at `offset`, if any: from its `<`.
+    let typing = text[..offset.min(text.len())]
+        .rfind(['<', '>'])
+        .filter(|&k| text.as_bytes()[k] == b'<');
+    let once: Vec<&str> = match element.map(|e| e.repeat) {
+        Some(grammar::Repeat::EachOnce) => parent
+            .map(|p| direct_children(text, p.end, typing))
+            .unwrap_or_default(),
+        Some(grammar::Repeat::Scene { one, at_most_one }) => [one, at_most_one]
+            .into_iter()
+            .filter(|name| anywhere(text, name, typing))
+            .collect(),
+        Some(grammar::Repeat::Any) | None => Vec::new(),
+    };
+    children.iter().filter(move |name| !once.contains(name))
+}
+
+/// The names of the elements directly inside the one whose start tag's
+/// name ends at `from`, but the tag that starts at `typing`: read
+/// leniently up to its end tag (or any end tag at its level, or the end).
+fn direct_children(text: &str, from: usize, typing: Option<usize>) -> Vec<&str> {
+    let bytes = text.as_bytes();
+    let Some(mut i) = tag_end(bytes, from).map(|end| end + 1) else {
+        return Vec::new();
+    };
+    if bytes[i - 2] == b'/' {
+        return Vec::new();
+    }
+    let mut names = Vec::new();
+    let mut depth = 0usize;
+    while let Some(lt) = memchr::memchr(b'<', &bytes[i..]).map(|k| i + k) {
+        let rest = &text[lt..];
+        if Some(lt) == typing {
+            // Not a tag yet: what follows may be the next one.
+            i = lt + 1;
+            continue;
+        }
+        if rest.starts_with("<!--") {
+            let Some(end) = rest.find("-->") else { break };
+            i = lt + end + 3;
+            continue;
+        }
+        let Some(end) = tag_end(bytes, lt + 1) else {
+            break;
+        };
+        i = end + 1;
+        if rest.starts_with("</") {
+            if depth == 0 {
+                break;
+            }
+            depth -= 1;
+        } else if !rest.starts_with("<!") && !rest.starts_with("<?") {
+            let name = &rest[1..];
+            let name = &name[..name.find(|c: char| !is_name_char(c)).unwrap_or(name.len())];
+            if depth == 0 {
+                names.push(name);
+            }
+            if bytes[end - 1] != b'/' {
+                depth += 1;
+            }
+        }
+    }
+    names
+}
+
+/// Whether a start tag of `name` is anywhere in `text` but at `typing`:
+/// the root's children that must be one (the camera, the model) are found
+/// by a search rather than a reading (a million objects' text is searched
+/// in milliseconds from its end, where they usually are). Comments are not
+/// told apart.
+fn anywhere(text: &str, name: &str, typing: Option<usize>) -> bool {
+    let tag = format!("<{name}");
+    memchr::memmem::rfind_iter(text.as_bytes(), tag.as_bytes()).any(|at| {
+        Some(at) != typing
+            && text[at + tag.len()..]
+                .chars()
+                .next()
+                .is_none_or(|c| !is_name_char(c))
+    })
+}
+
 /// The elements that may go in `parent` (`None`: the root).
 fn children_of(parent: Option<&str>) -> &'static [&'static str] {
     match parent {
@@ -512,15 +607,14 @@ pub fn completions(text: &str, offset: usize, marks: &mut Marks) -> Vec<Completi
         doc: element_doc(name),
     };
     match spot(text, offset, marks) {
-        Spot::Content { parent } => children_of(parent)
-            .iter()
+        Spot::Content { parent } => may_add(text, parent, offset)
             .map(|name| element(name, format!("<{name}")))
             .collect(),
-        Spot::ElementName { parent, typed } => children_of(parent)
-            .iter()
+        Spot::ElementName { parent, typed } => may_add(text, parent, offset)
             .filter(|name| name.starts_with(typed))
             .map(|name| element(name, (*name).to_owned()))
             .collect(),
+        Spot::Markup => Vec::new(),
         Spot::AttributeName {
             element,
             present,
@@ -733,6 +827,63 @@ mod tests {
         assert!(diagnostics(crate::EXAMPLE_SCENE).is_empty());
         let no_camera = diagnostics("<scene>\n</scene>");
         assert_eq!(no_camera[0].range, 0..6);
+    }
+
+    /// Completion offers only what the loader takes there: not a second
+    /// camera or model, nor a second colour in a sphere, whether the one
+    /// there is before the cursor or after it; and nothing in a comment.
+    #[test]
+    fn completion_leaves_out_what_may_be_there_once_and_is() {
+        let at_bar = |text: &str| -> Vec<String> {
+            let offset = text.find('|').unwrap();
+            let text = text.replace('|', "");
+            completions(&text, offset, &mut Marks::default())
+                .into_iter()
+                .map(|c| c.label)
+                .collect()
+        };
+        let all = ["sphere", "plane", "light", "camera", "model"];
+        assert_eq!(at_bar("<scene>\n  |\n</scene>"), all);
+        let scene = "<scene>\n  <model type=\"phong\"/>\n  |\n  <sphere/>\n  \
+                     <camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>\n</scene>";
+        assert_eq!(at_bar(scene), ["sphere", "plane", "light"]);
+        assert_eq!(
+            at_bar(&scene.replace('|', "<|")),
+            ["sphere", "plane", "light"]
+        );
+        // The tag being typed is not one that is there.
+        assert_eq!(
+            at_bar("<scene>\n  <cam|\n  <sphere/>\n</scene>"),
+            ["camera"]
+        );
+        assert_eq!(at_bar("<scene>\n  <camera|\n</scene>"), ["camera"]);
+        // Not found in a longer name or by its element alone.
+        assert_eq!(at_bar("<scene><cameras/>|</scene>"), all);
+        // In a sphere: colour before the cursor, material after; the
+        // transformation's steps are its own.
+        let sphere = "<scene><sphere><color red=\"1\"/>\n|<material kd=\"1\"/>\
+                      <transformation><scale factor=\"2\"/></transformation></sphere>\
+                      <sphere><color/></sphere></scene>";
+        assert_eq!(at_bar(sphere), Vec::<String>::new());
+        assert_eq!(
+            at_bar(&sphere.replace("<material kd=\"1\"/>", "")),
+            ["material"]
+        );
+        assert_eq!(
+            at_bar(&sphere.replace("\n|", "\n<|\n")),
+            Vec::<String>::new()
+        );
+        assert_eq!(
+            at_bar("<scene><sphere><transformation><scale/>|</transformation></sphere></scene>"),
+            ["translate", "rotate-x", "rotate-y", "rotate-z", "scale"]
+        );
+        // In a comment, before the root or in it, nothing.
+        assert_eq!(at_bar("<!-- a comment <|"), Vec::<String>::new());
+        assert_eq!(
+            at_bar("<scene>\n<!-- type < here |-->\n</scene>"),
+            Vec::<String>::new()
+        );
+        assert_eq!(at_bar("<scene>\n<!-- done -->\n|</scene>"), all);
     }
 
     #[test]
