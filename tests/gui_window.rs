@@ -3,7 +3,8 @@
 //! `import`). The scene file is changed by atomic rename and the new colour
 //! must be on screen within 2 s (3x allowed on a noisy CI machine); a broken
 //! save keeps the old picture and shows the error banner; a fix recovers.
-//! Screenshots are kept in target/tmp/gui-screenshots/ for people to see.
+//! Screenshots are kept in target/tmp/gui-screenshots/ for people to see,
+//! with what each app wrote on stderr (`SCENE.stderr`).
 //!
 //! Finally a render of whitted depth 10 000 between two mirrors at 4K is
 //! started and the window closed with Ctrl+Q: the process must exit within
@@ -121,6 +122,24 @@ fn start_app(path: &Path, display: &str, home: &Path) -> Killed {
 }
 
 fn start_app_with(path: &Path, display: &str, home: &Path, vars: &[(&str, &str)]) -> Killed {
+    // What the app says goes beside the screenshots (`SCENE.stderr`, each
+    // start appended), for a test that fails to be read.
+    let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
+    std::fs::create_dir_all(&shots).unwrap();
+    let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+    let mut stderr = std::fs::File::options()
+        .create(true)
+        .append(true)
+        .open(shots.join(format!("{stem}.stderr")))
+        .unwrap();
+    let since_epoch = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap_or_default();
+    std::io::Write::write_all(
+        &mut stderr,
+        format!("== started at {} s (Unix time)\n", since_epoch.as_secs()).as_bytes(),
+    )
+    .unwrap();
     let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
         .arg(path)
         .envs(vars.iter().copied())
@@ -130,7 +149,7 @@ fn start_app_with(path: &Path, display: &str, home: &Path, vars: &[(&str, &str)]
         .env("XDG_STATE_HOME", home.join("state"))
         .env("LIBGL_ALWAYS_SOFTWARE", "1")
         .stdout(Stdio::null())
-        .stderr(Stdio::null())
+        .stderr(stderr)
         .spawn()
         .unwrap();
     Killed(app)
@@ -241,7 +260,8 @@ fn wait_for(
         }
         assert!(
             start.elapsed() < limit,
-            "{what}: not on screen after {limit:?}; see {}",
+            "{what}: not on screen after {limit:?}; see {} (and what the app said, \
+             SCENE.stderr beside it)",
             shot.display()
         );
         std::thread::sleep(Duration::from_millis(50));
