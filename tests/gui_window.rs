@@ -94,7 +94,7 @@ impl Window {
 
     /// [`Window::open`] with these variables in the app's environment.
     fn open_with(name: &str, text: &str, vars: &[(&str, &str)]) -> Window {
-        let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
+        let shots = shots_folder();
         std::fs::create_dir_all(&shots).unwrap();
         let one = ONE_AT_A_TIME
             .lock()
@@ -117,6 +117,11 @@ impl Window {
 }
 
 /// The app on `path` on `display`, its settings and its journal in `home`.
+/// Where screenshots go, and what the apps write on stderr.
+fn shots_folder() -> PathBuf {
+    PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots")
+}
+
 fn start_app(path: &Path, display: &str, home: &Path) -> Killed {
     start_app_with(path, display, home, &[])
 }
@@ -124,7 +129,7 @@ fn start_app(path: &Path, display: &str, home: &Path) -> Killed {
 fn start_app_with(path: &Path, display: &str, home: &Path, vars: &[(&str, &str)]) -> Killed {
     // What the app says goes beside the screenshots (`SCENE.stderr`, each
     // start appended), for a test that fails to be read.
-    let shots = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gui-screenshots");
+    let shots = shots_folder();
     std::fs::create_dir_all(&shots).unwrap();
     let stem = path.file_stem().unwrap_or_default().to_string_lossy();
     let mut stderr = std::fs::File::options()

@@ -1075,16 +1075,22 @@ fn the_selection_follows_its_object_through_another_programs_change() {
     assert_eq!(harness.state().selected_object(), Some(1));
     assert!(harness.query_by_label("Edit #2 GREEN sphere").is_some());
 
+    // Another program writes `text`; the app has taken it once its scene
+    // holds `objects` objects.
+    let theirs_with = |harness: &mut Harness<'_, RayOfLightApp>, text: &str, objects: usize| {
+        replace_atomically(&path, text);
+        step_until(
+            harness,
+            Duration::from_secs(10),
+            "the file's change",
+            |app| app.document().scene().objects.len() == objects,
+        );
+        harness.run_steps(2);
+    };
+
     // Another program puts a sphere first.
     let theirs = text.replacen("<scene>\n", &format!("<scene>\n{}", sphere("NEW", 6.0)), 1);
-    replace_atomically(&path, &theirs);
-    step_until(
-        &mut harness,
-        Duration::from_secs(10),
-        "the new file",
-        |app| app.document().scene().objects.len() == 4,
-    );
-    harness.run_steps(2);
+    theirs_with(&mut harness, &theirs, 4);
     assert_eq!(
         harness.state().selected_object(),
         Some(2),
@@ -1101,14 +1107,7 @@ fn the_selection_follows_its_object_through_another_programs_change() {
         &format!("<scene>\n{}", sphere("NEWER", 7.0)),
         1,
     );
-    replace_atomically(&path, &theirs);
-    step_until(
-        &mut harness,
-        Duration::from_secs(10),
-        "the merged file",
-        |app| app.document().scene().objects.len() == 5,
-    );
-    harness.run_steps(2);
+    theirs_with(&mut harness, &theirs, 5);
     assert_eq!(
         harness.state().selected_object(),
         Some(3),
@@ -1116,11 +1115,10 @@ fn the_selection_follows_its_object_through_another_programs_change() {
     );
 
     // GREEN removed by the other program: nothing selected.
-    let green = sphere("GREEN", 4.0);
-    replace_atomically(&path, &theirs.replacen(&green, "", 1));
-    step_until(&mut harness, Duration::from_secs(10), "GREEN gone", |app| {
-        app.document().scene().objects.len() == 4
-    });
-    harness.run_steps(2);
+    theirs_with(
+        &mut harness,
+        &theirs.replacen(&sphere("GREEN", 4.0), "", 1),
+        4,
+    );
     assert_eq!(harness.state().selected_object(), None);
 }

@@ -858,11 +858,11 @@ impl PeakMemory {
             let line = status.lines().find(|l| l.starts_with(key))?;
             line.split_whitespace().nth(1)?.parse().ok()
         };
-        let values = keys.map(value);
-        values
-            .iter()
-            .all(Option::is_some)
-            .then(|| values.map(|v| v.unwrap_or(0.0)))
+        let mut values = [0.0; N];
+        for (v, key) in values.iter_mut().zip(keys) {
+            *v = value(key)?;
+        }
+        Some(values)
     }
 
     fn start() -> Option<PeakMemory> {

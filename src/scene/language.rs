@@ -403,10 +403,7 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
             continue;
         }
         if let Some(closing) = rest.strip_prefix("</") {
-            let name_len = closing
-                .find(|c: char| !is_name_char(c))
-                .unwrap_or(closing.len());
-            let name = &closing[..name_len];
+            let name = name_at(closing);
             if let Some(k) = open.iter().rposition(|o| &before[o.clone()] == name) {
                 open.truncate(k);
             }
@@ -417,12 +414,8 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
             continue;
         }
         // A start tag: its name, then attributes, up to `>` outside quotes.
-        let after = &rest[1..];
-        let name_len = after
-            .find(|c: char| !is_name_char(c))
-            .unwrap_or(after.len());
-        let name = &after[..name_len];
-        let mut j = lt + 1 + name_len;
+        let name = name_at(&rest[1..]);
+        let mut j = lt + 1 + name.len();
         if j == before.len() {
             return Spot::ElementName {
                 parent: open.last().cloned(),
@@ -433,7 +426,7 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
         // a million objects is read this way but for its last tag).
         if let Some(end) = tag_end(bytes, j) {
             if bytes[end - 1] != b'/' {
-                open.push(lt + 1..lt + 1 + name_len);
+                open.push(lt + 1..lt + 1 + name.len());
             }
             i = end + 1;
             continue;
@@ -468,7 +461,7 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
                 let typed_start = before
                     .rfind(|c: char| !is_name_char(c))
                     .map_or(0, |k| k + 1);
-                let typed = &before[typed_start.max(lt + 1 + name_len)..];
+                let typed = &before[typed_start.max(lt + 1 + name.len())..];
                 Spot::AttributeName {
                     element: name,
                     present,
@@ -478,6 +471,11 @@ fn spot<'t>(text: &'t str, offset: usize, marks: &mut Marks) -> Spot<'t> {
         };
     }
     content(&open)
+}
+
+/// The name `s` starts with (empty where it starts with something else).
+fn name_at(s: &str) -> &str {
+    &s[..s.find(|c: char| !is_name_char(c)).unwrap_or(s.len())]
 }
 
 /// The `>` that ends the tag whose attributes start at `from`: the first
@@ -556,8 +554,7 @@ fn direct_children(text: &str, from: usize, typing: Option<usize>) -> Vec<&str> 
             }
             depth -= 1;
         } else if !rest.starts_with("<!") && !rest.starts_with("<?") {
-            let name = &rest[1..];
-            let name = &name[..name.find(|c: char| !is_name_char(c)).unwrap_or(name.len())];
+            let name = name_at(&rest[1..]);
             if depth == 0 {
                 names.push(name);
             }
