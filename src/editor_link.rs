@@ -24,7 +24,7 @@
 //! followed by N bytes of text for a buffer.
 
 use std::io::{self, BufRead, Read, Write};
-use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+use std::os::unix::fs::PermissionsExt;
 use std::os::unix::net::{UnixListener, UnixStream};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -52,8 +52,8 @@ pub enum Message {
 pub enum LinkError {
     #[error("no runtime folder: XDG_RUNTIME_DIR is not set")]
     NoRuntimeDir,
-    #[error("{}: not ours, or others may enter it (mode {mode:o}): not used", path.display())]
-    Unsafe { path: PathBuf, mode: u32 },
+    #[error(transparent)]
+    Unsafe(#[from] crate::files::OwnFolderError),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: io::Error },
 }
@@ -69,27 +69,18 @@ pub fn folder() -> Result<PathBuf, LinkError> {
     folder_in(&path)
 }
 
-/// [`folder`] at `path`.
+/// [`folder`] at `path`: the user's own, closed to others, and so is the
+/// folder it is in ([`crate::files::own_folder`]).
 pub fn folder_in(path: &Path) -> Result<PathBuf, LinkError> {
     let io = |source| LinkError::Io {
         path: path.to_owned(),
         source,
     };
-    match std::fs::DirBuilder::new().mode(0o700).create(path) {
-        Ok(()) => {}
-        Err(e) if e.kind() == io::ErrorKind::AlreadyExists => {}
-        Err(e) => return Err(io(e)),
-    }
-    let meta = std::fs::symlink_metadata(path).map_err(io)?;
-    let mode = meta.permissions().mode() & 0o7777;
-    let ours = meta.is_dir() && meta.uid() == rustix::process::geteuid().as_raw();
-    if !ours || mode & 0o077 != 0 {
-        return Err(LinkError::Unsafe {
-            path: path.to_owned(),
-            mode,
-        });
-    }
-    Ok(path.to_owned())
+    let (Some(home), Some(name)) = (path.parent(), path.file_name().and_then(|n| n.to_str()))
+    else {
+        return Err(io(io::Error::other("not a folder's path")));
+    };
+    Ok(crate::files::own_folder(home, &[name], true)?)
 }
 
 /// Whether the process at the other end of `stream` is this user's.
@@ -376,7 +367,7 @@ mod tests {
         let open = dir.path().join("open");
         std::fs::create_dir(&open).unwrap();
         std::fs::set_permissions(&open, std::fs::Permissions::from_mode(0o755)).unwrap();
-        assert!(matches!(folder_in(&open), Err(LinkError::Unsafe { .. })));
+        assert!(matches!(folder_in(&open), Err(LinkError::Unsafe(_))));
 
         let listener = Listener::bind(&folder).unwrap();
         assert_eq!(apps(&folder), [listener.path().to_owned()]);

@@ -25,6 +25,8 @@
 //!   installed for the user and removed again.
 //! - [`editor_link`]: the editor's unsaved text from `rayoflight lsp` to
 //!   the app, over a socket of the user's own.
+//! - [`escape`]: text from outside (file names, comments) with its control
+//!   characters made visible, for the terminal and for CSV files.
 //! - [`files`]: special files, symbolic links, permissions and locks, for
 //!   reading and writing.
 //! - [`interrupt`]: SIGINT, SIGTERM and SIGHUP stop a write or a render
@@ -55,6 +57,7 @@ pub mod bench;
 pub mod desktop;
 #[cfg(unix)]
 pub mod editor_link;
+pub mod escape;
 pub mod files;
 pub mod geometry;
 #[cfg(feature = "gui")]

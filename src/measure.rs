@@ -281,7 +281,8 @@ pub fn pixel_differences(image: &RgbImage, reference: &RgbImage) -> Vec<u8> {
 }
 
 /// CSV text: a header line, then a line a row; a field holding a comma, a
-/// quote or a line break is quoted.
+/// quote or a line break is quoted, its other control characters
+/// escaped ([`crate::escape::visible`]).
 #[derive(Debug, Clone)]
 pub struct Csv {
     text: String,
@@ -310,12 +311,15 @@ impl Csv {
             if k > 0 {
                 self.text.push(',');
             }
+            // A name from outside: its controls shown, not obeyed by the
+            // terminal a `cat` of the file drives.
+            let field = crate::escape::visible(field, true);
             if field.contains([',', '"', '\n', '\r']) {
                 self.text.push('"');
                 self.text.push_str(&field.replace('"', "\"\""));
                 self.text.push('"');
             } else {
-                self.text.push_str(field);
+                self.text.push_str(&field);
             }
         }
         self.text.push('\n');

@@ -1,14 +1,19 @@
 //! Writing images: the format follows the file's extension, and files are
 //! written atomically (a temporary file in the target directory, renamed
 //! into place), so a failure never leaves a partial file nor touches an
-//! existing one. [`write_atomic_with`] is every file's one way out: links
+//! existing one. [`write_atomic_with`] is every file's one way out: the
+//! path walked to a folder held by its descriptor, links in every part
 //! followed only as the kernel would for another user's link
-//! ([`crate::files::follow_for_writing`]), a file the caller may not
-//! write refused ([`crate::files::may_write`]), a replaced file's owner,
-//! group, mode and extended attributes kept, a file of several hard links
-//! updated in place, and a signal ([`crate::interrupt`]) stopping it with
-//! the temporary file removed.
+//! ([`crate::files::Place`]), the file in the way opened once and
+//! compared with what was checked, a file the caller may not write
+//! refused, a replaced file's owner, group, mode and extended attributes
+//! kept, a file of several hard links updated in place through the
+//! descriptor that was checked, and a signal ([`crate::interrupt`])
+//! stopping it with the temporary file removed. Nothing is written
+//! through a path once its folder is held: renaming names meanwhile can
+//! make a write fail ([`OutputError::Moved`]), never land elsewhere.
 
+use crate::files::{Kind, Place, PlaceError};
 use crate::part::Part;
 use crate::render::{KeptPass, Pass, PassForm, PassImage, PassPixels};
 use image::codecs::jpeg::JpegEncoder;
@@ -85,6 +90,13 @@ pub enum OutputError {
     Interrupted { path: PathBuf },
     #[error("{}: already exists; nothing was written", path.display())]
     Exists { path: PathBuf },
+    /// The name was given to another file between the look at it and
+    /// the write (another program, or another user racing renames).
+    #[error(
+        "{}: another program replaced the file while it was written; nothing was written",
+        path.display()
+    )]
+    Moved { path: PathBuf },
     #[error(
         "{}: {format} cannot hold a {width}×{height} image ({})",
         path.display(),
@@ -163,12 +175,12 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
         });
     }
     // A device or a pipe would be written directly: never an image.
-    let target = follow(path)?;
-    if let Some(meta) = existing(path, &target)?
+    let place = place(path)?;
+    if let Some((_, meta)) = in_the_way(path, &place)?
         && let Some(kind) = crate::files::special_kind(&meta)
     {
         // Through /dev/stdout or /proc/self/fd/N: the shell's pipe.
-        let kind = if kind == "a FIFO" && target.starts_with("/proc") {
+        let kind = if kind == "a FIFO" && place.is_magic() {
             "a pipe"
         } else {
             kind
@@ -192,61 +204,17 @@ pub fn check_file_target(path: &Path) -> Result<(), OutputError> {
     if path.as_os_str().is_empty() {
         return Err(OutputError::EmptyName);
     }
-    let target = follow(path)?;
-    existing(path, &target)?;
-    let folder = match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    match std::fs::metadata(&folder) {
-        Err(_) => {
-            return Err(OutputError::NoFolder {
-                path: path.to_owned(),
-                folder,
-            });
-        }
-        Ok(meta) if !meta.is_dir() => {
-            return Err(OutputError::NotAFolder {
-                path: path.to_owned(),
-                folder,
-            });
-        }
-        Ok(_) => {}
-    }
+    let place = place(path)?;
+    in_the_way(path, &place)?;
     let _cleanly = crate::interrupt::cleanly();
-    tempfile::Builder::new()
-        .prefix(".rayoflight-")
-        .suffix(".tmp")
-        .tempfile_in(&folder)
+    place
+        .new_file(".rayoflight-", ".tmp")
         .map(drop)
-        .map_err(|e| OutputError::FolderNotWritable {
+        .map_err(|source| OutputError::FolderNotWritable {
             path: path.to_owned(),
-            source: system_error(e),
-            folder,
-        })?;
-    Ok(())
-}
-
-/// The system's error in an error of `tempfile`, which adds the path of
-/// its temporary file to the message (`… at path "/d/.rayoflight-x1.tmp"`)
-/// and hides the error number: the error as the system gave it, for a
-/// message that names the user's path only.
-fn system_error(e: std::io::Error) -> std::io::Error {
-    if let Some(code) = e.raw_os_error() {
-        return std::io::Error::from_raw_os_error(code);
-    }
-    let text = e.to_string();
-    let code = text
-        .split_once("(os error ")
-        .and_then(|(_, rest)| rest.split_once(')'))
-        .and_then(|(n, _)| n.parse().ok());
-    match code {
-        Some(code) => std::io::Error::from_raw_os_error(code),
-        None => match text.rsplit_once(" at path ") {
-            Some((words, _)) => std::io::Error::new(e.kind(), words.to_owned()),
-            None => e,
-        },
-    }
+            folder: place.folder_path().to_owned(),
+            source,
+        })
 }
 
 /// The supported extensions, comma separated, for messages.
@@ -481,15 +449,16 @@ pub fn save_exr(
 /// it is going to, where `check_target` found room for a new file), or
 /// the system's temporary folder where that cannot hold one (a device).
 fn scratch_file(path: &Path) -> std::io::Result<std::fs::File> {
-    let target = crate::files::through_links(path);
-    let folder = match target.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
-        _ => PathBuf::from("."),
-    };
-    let regular = std::fs::metadata(&target).map_or(true, |m| m.is_file());
-    match regular.then(|| tempfile::tempfile_in(&folder)) {
-        Some(Ok(file)) => Ok(file),
-        _ => tempfile::tempfile(),
+    let in_folder = Place::reach(path).ok().and_then(|place| {
+        let regular = place
+            .look()
+            .ok()?
+            .is_none_or(|(kind, _)| kind == Kind::Regular);
+        regular.then(|| place.unnamed_file()).flatten()
+    });
+    match in_folder {
+        Some(file) => Ok(file),
+        None => tempfile::tempfile(),
     }
 }
 
@@ -567,50 +536,61 @@ fn encode_gif(image: &RgbImage) -> Result<Vec<u8>, image::ImageError> {
     Ok(bytes)
 }
 
-/// The file writing to `path` writes ([`crate::files::follow_for_writing`]).
-fn follow(path: &Path) -> Result<PathBuf, OutputError> {
-    crate::files::follow_for_writing(path).map_err(|source| OutputError::Link {
-        path: path.to_owned(),
-        source,
-    })
+/// The place writing `path` goes ([`Place::reach`]), its errors naming
+/// `path` as given.
+fn place(path: &Path) -> Result<Place, OutputError> {
+    Place::reach(path).map_err(|e| place_error(path, e))
 }
 
-/// What is in the way of writing `target` (where `path` leads): nothing
+/// Why `path` leads to no place to write, as an output error naming it.
+fn place_error(path: &Path, e: PlaceError) -> OutputError {
+    let path = path.to_owned();
+    match e {
+        PlaceError::Link(source) => OutputError::Link { path, source },
+        PlaceError::NoFolder(folder) => OutputError::NoFolder { path, folder },
+        PlaceError::NotAFolder(folder) => OutputError::NotAFolder { path, folder },
+        PlaceError::IsDirectory => OutputError::IsDirectory { path },
+        PlaceError::Io(source) => OutputError::Io { path, source },
+    }
+}
+
+/// What is in the way of writing at `place` (where `path` leads): nothing
 /// (`None`), or an existing file the caller may replace or a special file
-/// to write into (its metadata). A directory, a read-only file and a file
-/// the caller may not write are refused, naming `path`.
-fn existing(path: &Path, target: &Path) -> Result<Option<std::fs::Metadata>, OutputError> {
-    let Ok(meta) = std::fs::metadata(target) else {
+/// to write into (what it is). A directory, a read-only file and a file
+/// the caller may not write are refused, naming `path`; so is a link that
+/// appeared since the walk followed the one there.
+fn in_the_way(
+    path: &Path,
+    place: &Place,
+) -> Result<Option<(Kind, std::fs::Metadata)>, OutputError> {
+    let seen = place.look().map_err(|source| OutputError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let Some((kind, meta)) = seen else {
         return Ok(None);
     };
-    if meta.is_dir() {
-        return Err(OutputError::IsDirectory {
-            path: path.to_owned(),
-        });
-    }
-    if meta.is_file() {
+    let path = path.to_owned();
+    match kind {
+        Kind::Directory => return Err(OutputError::IsDirectory { path }),
+        Kind::Link => return Err(OutputError::Moved { path }),
         // Renaming over a file ignores the file's own permissions: refuse
         // what writing into it would refuse (for root too, a file without
         // any write bit).
-        if meta.permissions().readonly() {
-            return Err(OutputError::ReadOnly {
-                path: path.to_owned(),
-            });
+        Kind::Regular if meta.permissions().readonly() => {
+            return Err(OutputError::ReadOnly { path });
         }
-        if !crate::files::may_write(target) {
-            return Err(OutputError::NotWritable {
-                path: path.to_owned(),
-            });
-        }
+        Kind::Regular if !place.may_write() => return Err(OutputError::NotWritable { path }),
+        Kind::Regular | Kind::Special => {}
     }
-    Ok(Some(meta))
+    Ok(Some((kind, meta)))
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same directory,
 /// synced, then renamed over `path`. On any failure the temporary file is
 /// removed and an existing `path` is left as it was. A symbolic link is
-/// followed (as [`crate::files::follow_for_writing`] allows): the file it
-/// points to is replaced, the link is kept.
+/// followed (as [`Place::reach`] allows): the file it points to is
+/// replaced, the link is kept.
 ///
 /// An existing path that is not a regular file (`/dev/stdout`, a FIFO,
 /// `/dev/full`) is written directly: renaming over it would replace the
@@ -630,12 +610,10 @@ pub fn write_new(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
     if path.as_os_str().is_empty() {
         return Err(OutputError::EmptyName);
     }
-    let mut file = match std::fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(path)
-    {
-        Ok(file) => file,
+    let place = Place::reach_name(path).map_err(|e| place_error(path, e))?;
+    let _cleanly = crate::interrupt::cleanly();
+    let mut new = match place.create_new() {
+        Ok(new) => new,
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
             return Err(OutputError::Exists {
                 path: path.to_owned(),
@@ -643,30 +621,38 @@ pub fn write_new(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         }
         Err(e) => return Err(io_error(e)),
     };
-    match file.write_all(bytes).and_then(|()| file.sync_all()) {
-        Ok(()) => Ok(()),
-        Err(e) => {
-            let _ = std::fs::remove_file(path);
-            Err(io_error(e))
-        }
-    }
+    // Dropped on a failure: the new file is removed.
+    new.file
+        .write_all(bytes)
+        .and_then(|()| new.file.sync_all())
+        .map_err(io_error)?;
+    new.keep();
+    Ok(())
 }
 
+/// How many times a write looks at and opens a name that another program
+/// keeps replacing between the two, before it gives up.
+const MAX_TRIES: usize = 8;
+
 /// [`write_atomic`] of what `write` streams, without the bytes in memory
-/// at once. Before the new file replaces the old one, `check` is given its
-/// temporary path to read it back, and may refuse it: the temporary file
-/// is removed and the old file left as it was. A path that is not a
-/// regular file is written directly and not checked.
+/// at once. Before the new file replaces the old one, `check` is given a
+/// path to read it back by (its descriptor's), and may refuse it: the
+/// temporary file is removed and the old file left as it was. A path that
+/// is not a regular file is written directly and not checked.
 ///
-/// A replaced file keeps its owner and group (as far as the caller may
-/// give them), its mode and its extended attributes. A file with several
-/// hard links is not replaced but rewritten in place once the new bytes
-/// are complete and checked, so that every name keeps showing the same
-/// file; a copy of the old bytes (`.NAME.XXXXXX.rayoflight-backup`) waits
-/// beside it until then, and stays, named in the error, if the rewrite
-/// fails and the old bytes cannot be put back. A signal
-/// ([`crate::interrupt`]) stops the write with
-/// [`OutputError::Interrupted`], nothing changed.
+/// The file in the way is opened once, without following a link, and
+/// must be the one that was looked at; just before it is replaced, its
+/// name must still name it, and where there was no file none may have
+/// appeared: else [`OutputError::Moved`], nothing written. A replaced
+/// file keeps its owner and group (as far as the caller may give them),
+/// its mode and its extended attributes. A file with several hard links
+/// is not replaced but rewritten in place, through the descriptor that
+/// was opened and checked, once the new bytes are complete and checked,
+/// so that every name keeps showing the same file; a copy of the old
+/// bytes (`.NAME.XXXXXX.rayoflight-backup`) waits beside it until then,
+/// and stays, named in the error, if the rewrite fails and the old bytes
+/// cannot be put back. A signal ([`crate::interrupt`]) stops the write
+/// with [`OutputError::Interrupted`], nothing changed.
 pub fn write_atomic_with<E: From<OutputError>>(
     path: &Path,
     write: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -686,81 +672,81 @@ pub fn write_atomic_with<E: From<OutputError>>(
             }
         }
     };
-    let interrupted = || {
-        E::from(OutputError::Interrupted {
-            path: path.to_owned(),
-        })
+    let moved = || OutputError::Moved {
+        path: path.to_owned(),
     };
     // From here a signal is recorded, not fatal: the temporary file must go.
     let _cleanly = crate::interrupt::cleanly();
-    let target = follow(path)?;
-    let old = existing(path, &target)?;
-    let path = target.as_path();
-    if let Some(meta) = old.as_ref().filter(|m| !m.is_file()) {
-        // A FIFO nobody reads would block the open forever: probe it
-        // without blocking first. The probe stays open until the bytes are
-        // written, so that the reader does not see the end of the data
-        // when it closes.
-        #[cfg(unix)]
-        let _probe = if std::os::unix::fs::FileTypeExt::is_fifo(&meta.file_type()) {
-            use std::os::unix::fs::OpenOptionsExt;
-            Some(
-                std::fs::OpenOptions::new()
-                    .write(true)
-                    .custom_flags(libc::O_NONBLOCK)
-                    .open(path)
-                    .map_err(|e| match e.raw_os_error() {
-                        Some(libc::ENXIO) => {
-                            io_error(std::io::Error::other("a FIFO that no program is reading"))
-                        }
-                        _ => io_error(e),
-                    })?,
-            )
-        } else {
-            let _ = meta;
-            None
+    let place = place(path)?;
+    let mut old = None;
+    for _ in 0..MAX_TRIES {
+        let Some((kind, meta)) = in_the_way(path, &place)? else {
+            old = Some(None);
+            break;
         };
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
-            .map_err(io_error)?;
+        // Written through: a device or pipe, a file of several names, or
+        // what a link of /proc stands for (the shell's redirection).
+        let into = kind == Kind::Special || several_names(&meta) || place.is_magic();
+        let opened = place
+            .open(kind, &meta, into)
+            .map_err(|e| match e.raw_os_error() {
+                #[cfg(unix)]
+                Some(libc::ENXIO) if kind == Kind::Special => {
+                    io_error(std::io::Error::other("a FIFO that no program is reading"))
+                }
+                _ => io_error(e),
+            })?;
+        if let Some(file) = opened {
+            old = Some(Some((kind, meta, file)));
+            break;
+        }
+    }
+    let Some(old) = old else {
+        return Err(moved().into());
+    };
+    if let Some((kind, meta, file)) = &old
+        && (*kind == Kind::Special || place.is_magic())
+    {
+        if meta.is_file() {
+            file.set_len(0).map_err(io_error)?;
+        }
         let mut w = crate::interrupt::Checked(file);
         write(&mut w).map_err(io_error)?;
         return Ok(w.flush().map_err(io_error)?);
     }
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut builder = tempfile::Builder::new();
-    builder.prefix(".rayoflight-").suffix(".tmp");
-    // A new file gets the usual mode (0666 less the umask, as the kernel
-    // applies it at creation), not tempfile's private 0600.
-    #[cfg(unix)]
-    builder.permissions(std::os::unix::fs::PermissionsExt::from_mode(0o666));
-    // tempfile names its own temporary path in its errors: report the
-    // system's error for the path the user gave.
-    let mut file = builder
-        .tempfile_in(dir)
-        .map_err(|e| io_error(system_error(e)))?;
-    if let Some(meta) = &old {
-        crate::files::keep_attributes(path, meta, file.as_file()).map_err(io_error)?;
+    let mut new = place.new_file(".rayoflight-", ".tmp").map_err(&io_error)?;
+    if let Some((_, meta, file)) = &old {
+        crate::files::keep_attributes(file, meta, &new.file).map_err(io_error)?;
     }
     {
-        let mut w = BufWriter::new(crate::interrupt::Checked(file.as_file_mut()));
+        let mut w = BufWriter::new(crate::interrupt::Checked(&mut new.file));
         write(&mut w).map_err(io_error)?;
         w.flush().map_err(io_error)?;
     }
-    file.as_file().sync_all().map_err(io_error)?;
-    check(file.path())?;
+    new.file.sync_all().map_err(io_error)?;
+    check(&new.path_to_read())?;
     if crate::interrupt::requested() {
-        return Err(interrupted());
+        return Err(OutputError::Interrupted {
+            path: path.to_owned(),
+        }
+        .into());
     }
-    if old.as_ref().is_some_and(several_names) {
-        rewrite_in_place(path, dir, file.as_file_mut()).map_err(io_error)?;
-        return Ok(());
+    match old {
+        Some((_, meta, mut file)) => {
+            if !place.still_names(&file).map_err(io_error)? {
+                return Err(moved().into());
+            }
+            if several_names(&meta) {
+                rewrite_in_place(&place, &mut file, &mut new.file).map_err(io_error)?;
+            } else {
+                new.rename_over(true).map_err(io_error)?;
+            }
+        }
+        None => match new.rename_over(false) {
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(moved().into()),
+            other => other.map_err(io_error)?,
+        },
     }
-    file.persist(path).map_err(|e| io_error(e.error))?;
     Ok(())
 }
 
@@ -777,27 +763,25 @@ fn several_names(meta: &std::fs::Metadata) -> bool {
     }
 }
 
-/// Puts `new`'s bytes into the file `path` itself (its inode, which other
-/// hard links share), as vim's `backupcopy=yes` does: a copy of the old
-/// bytes is made beside it first, the new bytes written over the old and
-/// synced, then the copy removed. If that write fails (a full disk) the
-/// old bytes are put back; if even that fails, the copy stays and the
-/// error names it.
-fn rewrite_in_place(path: &Path, dir: &Path, new: &mut std::fs::File) -> std::io::Result<()> {
+/// Puts `new`'s bytes into `file` itself (the file at `place`, whose
+/// inode other hard links share), as vim's `backupcopy=yes` does: a copy
+/// of the old bytes is made beside it first, the new bytes written over
+/// the old and synced, then the copy removed. If that write fails (a full
+/// disk) the old bytes are put back; if even that fails, the copy stays
+/// and the error names it. Only descriptors are written: whatever the
+/// names in the folder became meanwhile, the file written is the one that
+/// was opened and checked.
+fn rewrite_in_place(
+    place: &Place,
+    file: &mut std::fs::File,
+    new: &mut std::fs::File,
+) -> std::io::Result<()> {
     use std::io::{Seek, SeekFrom};
-    let name = path
-        .file_name()
-        .map_or_else(|| "file".to_owned(), |n| n.to_string_lossy().into_owned());
-    let mut backup = tempfile::Builder::new()
-        .prefix(&format!(".{name}."))
-        .suffix(".rayoflight-backup")
-        .tempfile_in(dir)?;
-    let mut file = std::fs::OpenOptions::new()
-        .read(true)
-        .write(true)
-        .open(path)?;
-    let old_len = std::io::copy(&mut file, backup.as_file_mut())?;
-    backup.as_file().sync_all()?;
+    let name = place.name().to_string_lossy().into_owned();
+    let mut backup = place.new_file(&format!(".{name}."), ".rayoflight-backup")?;
+    file.seek(SeekFrom::Start(0))?;
+    let old_len = std::io::copy(file, &mut backup.file)?;
+    backup.file.sync_all()?;
     if crate::interrupt::requested() {
         return Err(crate::interrupt::error());
     }
@@ -810,9 +794,9 @@ fn rewrite_in_place(path: &Path, dir: &Path, new: &mut std::fs::File) -> std::io
         to.set_len(len)?;
         to.sync_all()
     };
-    if let Err(e) = copy(new, &mut file) {
-        if copy(backup.as_file_mut(), &mut file).is_err() || file.metadata()?.len() != old_len {
-            let kept = backup.keep().map(|(_, p)| p).unwrap_or_default();
+    if let Err(e) = copy(new, file) {
+        if copy(&mut backup.file, file).is_err() || file.metadata()?.len() != old_len {
+            let kept = backup.keep();
             return Err(std::io::Error::new(
                 e.kind(),
                 format!(
@@ -970,7 +954,11 @@ mod tests {
         let err = write_atomic(&gone, b"x").unwrap_err().to_string();
         assert_eq!(
             err,
-            format!("{}: No such file or directory (os error 2)", gone.display())
+            format!(
+                "{}: the folder {} does not exist",
+                gone.display(),
+                dir.path().join("gone").display()
+            )
         );
         let err = check_file_target(&gone).unwrap_err().to_string();
         assert!(
@@ -1083,7 +1071,7 @@ mod tests {
         let missing = dir.path().join("no/such/dir/out.png");
         assert!(matches!(
             save(&sample(), &missing),
-            Err(OutputError::Io { .. })
+            Err(OutputError::NoFolder { .. })
         ));
     }
 }

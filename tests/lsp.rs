@@ -339,3 +339,121 @@ fn the_server_ends_at_exit_and_when_the_editor_goes() {
     let (status, said) = lsp_session(&with(&[&shutdown]), true);
     assert_eq!(status, Some(1), "gone after shutdown: {said}");
 }
+
+/// Writes one message of the protocol's framing whose body is `body`
+/// with `fill` bytes of `a` in the middle, streamed (never held whole).
+fn write_framed(
+    input: &mut impl std::io::Write,
+    head: &str,
+    fill: usize,
+    tail: &str,
+) -> std::io::Result<()> {
+    write!(
+        input,
+        "Content-Length: {}\r\n\r\n{head}",
+        head.len() + fill + tail.len()
+    )?;
+    let chunk = vec![b'a'; 1 << 20];
+    let mut left = fill;
+    while left > 0 {
+        let n = left.min(chunk.len());
+        input.write_all(&chunk[..n])?;
+        left -= n;
+    }
+    input.write_all(tail.as_bytes())
+}
+
+/// Issue 43, item 4: a header cannot exhaust the server. A length of a
+/// terabyte announced, with or without its bytes, aborted it ("memory
+/// allocation of 1000000000000 bytes failed"); now the message is
+/// refused for its size, said to the editor and on stderr, and the
+/// session goes on. Under an address-space limit, a document too large
+/// for the memory left is refused the same way, not an abort.
+#[test]
+fn a_message_too_large_is_refused_and_the_session_goes_on() {
+    use std::io::{Read, Write};
+    use std::process::Stdio;
+    let initialize = r#"{"jsonrpc":"2.0","id":1,"method":"initialize","params":{"capabilities":{},"processId":null,"rootUri":null}}"#;
+    let end = [
+        r#"{"jsonrpc":"2.0","id":2,"method":"shutdown"}"#,
+        r#"{"jsonrpc":"2.0","method":"exit"}"#,
+    ];
+    let open_head = r#"{"jsonrpc":"2.0","method":"textDocument/didOpen","params":{"textDocument":{"uri":"file:///tmp/big.xml","languageId":"xml","version":1,"text":"<!-- "#;
+    let open_tail = r#" -->"}}}"#;
+    // (limit of the address space, bytes announced, bytes sent)
+    for (limit, announced, fill) in [
+        (None, Some(1_000_000_000_000u64), 0),
+        (Some(512u64 << 20), None, 300usize << 20),
+    ] {
+        let mut cmd = match limit {
+            Some(bytes) => {
+                let mut c = Command::new("prlimit");
+                c.arg(format!("--as={bytes}"))
+                    .arg("--")
+                    .arg(env!("CARGO_BIN_EXE_rayoflight"));
+                c
+            }
+            None => Command::new(env!("CARGO_BIN_EXE_rayoflight")),
+        };
+        let mut server = cmd
+            .arg("lsp")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let mut input = server.stdin.take().unwrap();
+        let mut out = server.stdout.take().unwrap();
+        let reading = std::thread::spawn(move || {
+            let mut said = String::new();
+            out.read_to_string(&mut said).unwrap();
+            said
+        });
+        write_framed(&mut input, initialize, 0, "").unwrap();
+        write_framed(
+            &mut input,
+            r#"{"jsonrpc":"2.0","method":"initialized","params":{}}"#,
+            0,
+            "",
+        )
+        .unwrap();
+        match announced {
+            // The length announced and its bytes never sent: the server
+            // waits for them holding nothing, and the editor ends.
+            Some(n) => write!(input, "Content-Length: {n}\r\n\r\n").unwrap(),
+            None => {
+                write_framed(&mut input, open_head, fill, open_tail).unwrap();
+                for m in end {
+                    write_framed(&mut input, m, 0, "").unwrap();
+                }
+            }
+        }
+        drop(input);
+        let status = server.wait().unwrap();
+        let said = reading.join().unwrap();
+        let mut err = String::new();
+        server
+            .stderr
+            .take()
+            .unwrap()
+            .read_to_string(&mut err)
+            .unwrap();
+        assert!(!err.contains("memory allocation"), "{err}");
+        match announced {
+            Some(_) => {
+                assert_eq!(status.code(), Some(1), "the editor gone: {err}");
+                assert!(said.contains(r#""id":1"#), "{said}");
+            }
+            None => {
+                assert_eq!(status.code(), Some(0), "{err}");
+                let length = open_head.len() + fill + open_tail.len();
+                let why = format!("rayoflight lsp: a message of {length} bytes needs");
+                assert!(err.starts_with(&why), "{err}");
+                assert!(err.contains("; the message was dropped"), "{err}");
+                assert!(said.contains(r#""method":"window/showMessage""#), "{said}");
+                assert!(said.contains(&why), "{said}");
+                assert!(said.contains(r#""id":2,"result":null"#), "{said}");
+            }
+        }
+    }
+}

@@ -1,7 +1,8 @@
-//! The CLI at the system's edges (issue 26), through the built binary:
-//! links another user planted in a shared folder, files of other users,
-//! hard links, concurrent writers, signals, names that hold code or
-//! terminal escapes, a loop of links.
+//! The CLI at the system's edges (issues 26 and 43), through the built
+//! binary: links another user planted in a shared folder, as the last
+//! part of a path or a folder part, renames racing a write, files of
+//! other users, hard links, concurrent writers, signals, names that hold
+//! code or terminal escapes, a loop of links.
 //!
 //! Tests that act as other users need root (CI runs as root): they make
 //! those users' files themselves and run the binary with `setpriv`. The
@@ -698,4 +699,207 @@ fn an_edit_waiting_for_the_lock_still_obeys_a_signal() {
     drop(lock);
     assert_eq!(fs::read_to_string(&path).unwrap(), TINY);
     assert_eq!(files_in(dir.path()), ["q.xml"]);
+}
+
+/// Runs `attack` on a thread of its own as user `uid` (its group the
+/// same number): what it makes is that user's, as another user on the
+/// machine would make it. The test process keeps root.
+fn as_user<T: Send + 'static>(uid: u32, attack: impl FnOnce() -> T + Send + 'static) -> T {
+    std::thread::spawn(move || {
+        use rustix::process::{Gid, Uid};
+        let (gid, uid) = (Gid::from_raw(uid), Uid::from_raw(uid));
+        rustix::thread::set_thread_res_gid(gid, gid, gid).unwrap();
+        rustix::thread::set_thread_res_uid(uid, uid, uid).unwrap();
+        attack()
+    })
+    .join()
+    .unwrap()
+}
+
+/// A folder of root's that no one else may enter, with a file in it: what
+/// another user must never have written.
+fn victim_file() -> (tempfile::TempDir, PathBuf) {
+    let dir = tempfile::tempdir().unwrap();
+    let victim = dir.path().join("victim.txt");
+    fs::write(&victim, "export PATH=/usr/bin\n").unwrap();
+    mode(&victim, 0o644);
+    (dir, victim)
+}
+
+/// A scene of `width`×`height` pixels (TINY's, larger): a write long
+/// enough for a racer to act during it.
+fn tiny_at(width: u32, height: u32) -> String {
+    TINY.replace(
+        r#"width="16" height="12""#,
+        &format!(r#"width="{width}" height="{height}""#),
+    )
+}
+
+/// Issue 43, item 1: a write can be redirected by no rename. In a sticky
+/// folder that everyone may write, user 65534 keeps `out.png` (hard
+/// linked, so rewritten in place) and `s.xml` (likewise), and as soon as
+/// root's temporary file appears renames its own link to root's private
+/// file over the name. Before, the rewrite opened the path again and
+/// wrote the image or the attacker's scene text into root's file. Now the
+/// write goes through the descriptor that was checked: root's file is
+/// never touched; the write fails ("another program replaced the file")
+/// or lands in the attacker's own file.
+#[test]
+fn a_rename_race_redirects_no_write() {
+    if !root_or_skip("a_rename_race_redirects_no_write") {
+        return;
+    }
+    let (_private, victim) = victim_file();
+    let dir = open_dir();
+    let shared = dir.path().join("shared");
+    fs::create_dir(&shared).unwrap();
+    mode(&shared, 0o1777);
+    fs::write(dir.path().join("scene.xml"), tiny_at(600, 450)).unwrap();
+    let before = fs::read(&victim).unwrap();
+    let mut outcomes = Vec::new();
+    for (round, target) in ["out.png", "s.xml", "out.png", "s.xml", "out.png", "s.xml"]
+        .into_iter()
+        .enumerate()
+    {
+        let (s, v, t) = (shared.clone(), victim.clone(), target.to_owned());
+        // The attacker's file, a second name for it, and its link to
+        // root's file, all its own.
+        as_user(65534, move || {
+            for name in [&t, ".evil", "second"] {
+                let _ = fs::remove_file(s.join(name));
+            }
+            // A scene of 4 MB (a comment): its write lasts a while.
+            let text = match t.as_str() {
+                "s.xml" => tiny_at(600, 450) + &format!("<!-- {} -->\n", "x".repeat(4 << 20)),
+                _ => String::from("mine"),
+            };
+            fs::write(s.join(&t), text).unwrap();
+            fs::set_permissions(s.join(&t), fs::Permissions::from_mode(0o666)).unwrap();
+            fs::hard_link(s.join(&t), s.join("second")).unwrap();
+            symlink(&v, s.join(".evil")).unwrap();
+        });
+        let args: Vec<String> = match target {
+            "s.xml" => ["edit", "shared/s.xml", "--set", "camera.width=601"]
+                .map(String::from)
+                .to_vec(),
+            _ => ["scene.xml", "-out", "shared/out.png", "-q"]
+                .map(String::from)
+                .to_vec(),
+        };
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let mut child = spawn(dir.path(), &args);
+        let s = shared.clone();
+        let t = target.to_owned();
+        let raced = wait_for_temporary(&shared, &mut child)
+            && as_user(65534, move || {
+                fs::rename(s.join(".evil"), s.join(&t)).is_ok()
+            });
+        let o = child.wait_with_output().unwrap();
+        assert!(
+            fs::read(&victim).unwrap() == before,
+            "round {round}: {target} redirected into root's file ({})",
+            stderr(&o)
+        );
+        assert!(
+            files_in(&shared)
+                .iter()
+                .all(|n| !n.starts_with(".rayoflight-")),
+            "round {round}: {:?}",
+            files_in(&shared)
+        );
+        outcomes.push((target, raced, o.status.code(), stderr(&o)));
+    }
+    // The race was run: the rename landed during the write every round,
+    // and the write said it did not happen. (`edit` reads the file now at
+    // the name to merge onto it, as it does when an editor saves by
+    // rename: root's file, which is no scene.)
+    for (target, raced, code, err) in &outcomes {
+        assert!(raced, "{outcomes:#?}");
+        assert_eq!(*code, Some(1), "{outcomes:#?}");
+        let expected = match *target {
+            "s.xml" => "shared/s.xml:1:1: unexpected text",
+            _ => {
+                "shared/out.png: another program replaced the file while it was written; nothing was written\n"
+            }
+        };
+        assert!(err.starts_with(expected), "{outcomes:#?}");
+    }
+}
+
+/// Issue 43, item 3: the kernel's rule holds for a link in any part of a
+/// path, not only the last. User 65534 plants, in the shared folder,
+/// links to folders of root's; every command that writes a file or makes
+/// a folder refuses to go through them, and nothing lands in root's
+/// folders. The caller's own folder link is followed.
+#[test]
+fn links_another_user_planted_as_folders_are_not_followed() {
+    if !root_or_skip("links_another_user_planted_as_folders_are_not_followed") {
+        return;
+    }
+    let private = tempfile::tempdir().unwrap();
+    let theirs = private.path().join("dir");
+    fs::create_dir(&theirs).unwrap();
+    let page = theirs.join("rayoflight.1");
+    fs::write(&page, "root's page\n").unwrap();
+    let dir = open_dir();
+    let root = dir.path();
+    fs::write(root.join("scene.xml"), TINY).unwrap();
+    let shared = root.join("shared");
+    fs::create_dir(&shared).unwrap();
+    mode(&shared, 0o1777);
+    for name in ["d", "studydir", "mandir"] {
+        symlink(&theirs, shared.join(name)).unwrap();
+        chown(&shared.join(name), 65534, 65534);
+    }
+    let refused = |link: &str| {
+        format!(
+            "not followed: the symbolic link shared/{link} is another user's, in the shared \
+             folder shared (sticky and writable by all): the kernel's fs.protected_symlinks rule"
+        )
+    };
+    for (args, link) in [
+        (vec!["scene.xml", "-out", "shared/d/out.png"], "d"),
+        (
+            vec!["export-pov", "scene.xml", "-out", "shared/d/out.pov"],
+            "d",
+        ),
+        (
+            vec![
+                "edit",
+                "scene.xml",
+                "--set",
+                "camera.width=8",
+                "-out",
+                "shared/d/s.xml",
+            ],
+            "d",
+        ),
+        (
+            vec![
+                "study",
+                "--out",
+                "shared/studydir",
+                "--runs",
+                "1",
+                "scene.xml",
+            ],
+            "studydir",
+        ),
+        (vec!["man", "--dir", "shared/mandir"], "mandir"),
+    ] {
+        let o = rayoflight(root, &args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&refused(link)),
+            "{args:?}: {}",
+            stderr(&o)
+        );
+        assert_eq!(files_in(&theirs), ["rayoflight.1"], "{args:?}");
+        assert_eq!(fs::read_to_string(&page).unwrap(), "root's page\n");
+    }
+    // Root's own link to a folder is followed.
+    symlink(&theirs, shared.join("mine")).unwrap();
+    let o = rayoflight(root, &["scene.xml", "-out", "shared/mine/out.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(theirs.join("out.png").exists());
 }

@@ -541,6 +541,12 @@ fn app_on(doc: Document, journal: Option<&Path>) -> Harness<'static, RayOfLightA
         journal: journal.map(Path::to_owned),
         ..Persisted::in_memory()
     };
+    app_keeping(doc, persisted)
+}
+
+/// The app on `doc`, keeping what it remembers as `persisted`, three
+/// frames drawn.
+fn app_keeping(doc: Document, persisted: Persisted) -> Harness<'static, RayOfLightApp> {
     let app = RayOfLightApp::new(&egui::Context::default(), doc, persisted);
     let mut harness = Harness::builder()
         .with_size(egui::vec2(1200.0, 900.0))
@@ -580,6 +586,68 @@ fn journal_entries(folder: &Path) -> Vec<PathBuf> {
 
 fn status_says(harness: &Harness<'_, RayOfLightApp>, words: &str) -> bool {
     harness.query_by_label_contains(words).is_some()
+}
+
+/// Issue 43, item 2: a journal folder that another user owns, or that
+/// others may write in, is not used: edits planted there are never
+/// restored (so never saved into the scene by Ctrl+S), and the status
+/// says why. The same folder made the user's own again gives them back.
+#[cfg(unix)]
+#[test]
+fn a_journal_folder_others_may_write_is_not_used() {
+    use std::os::unix::fs::PermissionsExt;
+    let (dir, path) = file_with(EXAMPLE);
+    let state = dir.path().join("state");
+    let folder = Persisted::in_homes(None, Some(&state)).journal.unwrap();
+    assert_eq!(folder, state.join("rayoflight/journal"));
+    // A journal written as the app writes one: the edit it holds is what
+    // another user would plant.
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(&folder).is_empty(),
+    );
+    std::mem::forget(harness);
+    let set_mode =
+        |m: u32| std::fs::set_permissions(&folder, std::fs::Permissions::from_mode(m)).unwrap();
+    set_mode(0o777);
+    let root = rustix::process::geteuid().is_root();
+    if root {
+        std::os::unix::fs::chown(&folder, Some(65534), Some(65534)).unwrap();
+    }
+    let persisted = Persisted::in_homes(None, Some(&state));
+    assert_eq!(persisted.journal, None);
+    let why = match root {
+        true => format!(
+            "unsaved edits journal off: {}: not used: it is another user's (uid 65534), not yours",
+            folder.display()
+        ),
+        false => format!(
+            "unsaved edits journal off: {}: not used: others may write in it (mode 777)",
+            folder.display()
+        ),
+    };
+    assert_eq!(persisted.refused, std::slice::from_ref(&why));
+    let harness = app_keeping(Document::open(&path).unwrap(), persisted);
+    assert!(!harness.state().document().has_unsaved_edits());
+    assert!(status_says(&harness, &why), "the status says why");
+    assert!(!status_says(&harness, "restored"));
+    drop(harness);
+
+    // The user's own again: the journal is used.
+    if root {
+        std::os::unix::fs::chown(&folder, Some(0), Some(0)).unwrap();
+    }
+    set_mode(0o700);
+    let persisted = Persisted::in_homes(None, Some(&state));
+    assert!(persisted.refused.is_empty(), "{:?}", persisted.refused);
+    let harness = app_keeping(Document::open(&path).unwrap(), persisted);
+    assert!(harness.state().document().has_unsaved_edits());
+    assert_eq!(read(&path), EXAMPLE);
 }
 
 #[test]

@@ -6,9 +6,9 @@
 //! write 1.5 GB of JSON).
 
 use super::args::ExplainArgs;
-use super::terminal::shown;
 use super::{Failure, edit, fail, refused};
 use glam::DVec3;
+use rayoflight::escape::visible as shown;
 use rayoflight::geometry::Ray;
 use rayoflight::render::explain::{
     Bounce, Ended, PixelValue, Sample, describe_ray, draft_note, number as n, vector as v,
@@ -109,7 +109,9 @@ impl Names<'_> {
             .objects
             .get(n)
             .map_or("object", |o| o.shape.name());
-        names::object_name(n, shape, self.comments.get(n))
+        // A comment may hold a line break: one line still.
+        let name = names::object_name(n, shape, self.comments.get(n));
+        shown(&name, false).into_owned()
     }
 }
 
@@ -279,9 +281,11 @@ fn words_to(
     names: &Names,
     scene: &str,
 ) -> io::Result<()> {
-    // The scene's name and its comments come from outside: escaped.
+    // The scene's name and its comments come from outside: escaped, a
+    // line break in them too (it would start a line of its own).
     let head = format!(
-        "pixel ({x}, {y}) of {scene}: {} model\n",
+        "pixel ({x}, {y}) of {}: {} model\n",
+        shown(scene, false),
         p.illumination().name()
     );
     out.write_all(shown(&head, true).as_bytes())?;

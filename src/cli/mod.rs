@@ -13,7 +13,6 @@ mod lsp;
 mod progress;
 mod stdout;
 mod study;
-mod terminal;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
 use rayoflight::part::Part;
@@ -142,7 +141,7 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             stdout::write(&page).map_err(Failure::Error)
         }
         Command::Man { dir: Some(dir), .. } => {
-            std::fs::create_dir_all(&dir)
+            files::make_folders(&dir)
                 .map_err(|e| Failure::Error(format!("{}: {e}", dir.display())))?;
             for (name, page) in generated::man_pages().map_err(Failure::Error)? {
                 output::write_atomic(&dir.join(name), page.as_bytes()).map_err(fail)?;
@@ -237,7 +236,7 @@ fn interrupted() -> Failure {
 
 /// An error on stderr: one line, whatever the file names in it hold.
 fn error_line(message: &str) {
-    eprintln!("{}", terminal::shown(message, false));
+    eprintln!("{}", rayoflight::escape::visible(message, false));
 }
 
 fn render_scene(r: RenderArgs) -> Result<(), Failure> {
@@ -406,6 +405,8 @@ fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
         );
         match written {
             Ok(()) => return Ok(()),
+            // Another file put at the name meanwhile: read it and merge.
+            Err(Rewrite::Output(output::OutputError::Moved { .. })) => {}
             Err(Rewrite::Output(e)) => return Err(fail(e)),
             Err(Rewrite::Unreadable(e)) => {
                 return Err(Failure::Error(format!(

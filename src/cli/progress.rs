@@ -113,8 +113,10 @@ impl Steps {
         self.bar.set_position(done);
         let left = render::time_left(elapsed, done, self.bar.length().unwrap_or(done))
             .map_or_else(String::new, |left| format!(" · {} left", seconds(left)));
-        self.bar
-            .set_message(format!("{}{left}", super::terminal::shown(name, false)));
+        self.bar.set_message(format!(
+            "{}{left}",
+            rayoflight::escape::visible(name, false)
+        ));
     }
 
     /// Prints `text` to stdout ([`super::stdout::write`]) without tearing

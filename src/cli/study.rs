@@ -5,6 +5,7 @@
 //! reference | difference ×8).
 
 use super::progress::Steps;
+use rayoflight::escape::visible;
 use rayoflight::study::chart;
 use rayoflight::{output, study};
 use std::path::PathBuf;
@@ -34,7 +35,7 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
     }
     .map_err(|e| e.to_string())?;
     // Fail on an unusable output folder before the long part.
-    std::fs::create_dir_all(&args.out)
+    rayoflight::files::make_folders(&args.out)
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.out.display()))?;
     let (csv, png) = (args.out.join("study.csv"), args.out.join("study.png"));
     for file in [&csv, &png] {
@@ -73,9 +74,10 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
                     picture_error = Some(e.to_string());
                 }
             }
+            // A scene's name is a file's: one line whatever it holds.
             let line = out(&format!(
                 "{:<18} {:<15} {:>10.2} {:>11} {:>4} {:>9.4} {:>9.4}  {}\n",
-                r.scene,
+                visible(&r.scene, false),
                 r.method,
                 r.time.as_secs_f64() * 1e3,
                 r.rays,
@@ -101,15 +103,22 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
     let failed: Vec<String> = rows
         .iter()
         .filter(|r| r.failed)
-        .map(|r| format!("{} on {} ({:.4})", r.method, r.scene, r.within1))
+        .map(|r| {
+            format!(
+                "{} on {} ({:.4})",
+                r.method,
+                visible(&r.scene, false),
+                r.within1
+            )
+        })
         .collect();
     out(&format!(
         "\n{} failures{}{}\nwrote {}, {} and {} failure pictures in {:.1} s\n",
         failed.len(),
         if failed.is_empty() { "" } else { ": " },
         failed.join(", "),
-        csv.display(),
-        png.display(),
+        visible(&csv.display().to_string(), false),
+        visible(&png.display().to_string(), false),
         failed.len(),
         start.elapsed().as_secs_f64()
     ))

@@ -44,14 +44,14 @@ pub const DELAY: Duration = Duration::from_millis(300);
 /// What the journal's first key says: the format, for later versions.
 const FORMAT: &str = "rayoflight unsaved edits 1";
 
-/// The journal folder: `$XDG_STATE_HOME/rayoflight/journal` (an absolute
-/// `XDG_STATE_HOME` only), else `~/.local/state/rayoflight/journal`.
-pub fn user_folder() -> Option<PathBuf> {
-    std::env::var_os("XDG_STATE_HOME")
-        .map(PathBuf::from)
-        .filter(|p| p.is_absolute())
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".local/state")))
-        .map(|base| base.join("rayoflight").join("journal"))
+/// The journal folder in the state home `home` (`$XDG_STATE_HOME`, else
+/// `~/.local/state`): `home/rayoflight/journal`, made where missing, and
+/// refused unless it and the folders above it up to `home` are the
+/// user's and closed to others' writes, the journal itself closed to
+/// others ([`crate::files::own_folder`]): else another user could plant
+/// edits that a save writes into the user's scene.
+pub fn folder_in(home: &Path) -> Result<PathBuf, crate::files::OwnFolderError> {
+    crate::files::own_folder(home, &["rayoflight", "journal"], true)
 }
 
 /// The unsaved edits of one scene, as journaled.

@@ -16,13 +16,13 @@ use std::path::{Path, PathBuf};
 
 const MAX_RECENT: usize = 10;
 
-/// The file `name` in the app's config directory, if there is a home.
-pub fn config_file(name: &str) -> Option<PathBuf> {
-    std::env::var_os("XDG_CONFIG_HOME")
+/// An XDG base folder: the variable `var` when it is an absolute path,
+/// else `$HOME/default`; `None` without a home.
+fn xdg_home(var: &str, default: &str) -> Option<PathBuf> {
+    std::env::var_os(var)
         .map(PathBuf::from)
         .filter(|p| p.is_absolute())
-        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".config")))
-        .map(|base| base.join("rayoflight").join(name))
+        .or_else(|| std::env::var_os("HOME").map(|h| PathBuf::from(h).join(default)))
 }
 
 /// Everything persisted.
@@ -33,15 +33,52 @@ pub struct Persisted {
     /// The folder of the journal of unsaved edits
     /// ([`crate::gui::journal`]); `None`: no journal.
     pub journal: Option<PathBuf>,
+    /// Why a folder of the user's state is not used (another user's, or
+    /// open to others' writes), for the app to say once.
+    pub refused: Vec<String>,
 }
 
 impl Persisted {
-    /// The user's, from the config directory.
+    /// The user's: settings and recent files in `$XDG_CONFIG_HOME` (or
+    /// `~/.config`), the journal in `$XDG_STATE_HOME` (or
+    /// `~/.local/state`).
     pub fn user() -> Persisted {
+        Persisted::in_homes(
+            xdg_home("XDG_CONFIG_HOME", ".config").as_deref(),
+            xdg_home("XDG_STATE_HOME", ".local/state").as_deref(),
+        )
+    }
+
+    /// What is kept in `config/rayoflight/` (settings, recent files) and
+    /// `state/rayoflight/journal/`. Each folder is made where missing and
+    /// used only if it and those above it up to its home are the user's
+    /// and closed to others' writes ([`crate::files::own_folder`]):
+    /// another user's `recent.txt` would choose the file the app opens,
+    /// their journal the edits a save writes. A folder refused is left
+    /// alone and said in [`Persisted::refused`].
+    pub fn in_homes(config: Option<&Path>, state: Option<&Path>) -> Persisted {
+        let mut refused = Vec::new();
+        let mut usable = |found: Option<Result<PathBuf, crate::files::OwnFolderError>>,
+                          what: &str| match found? {
+            Ok(folder) => Some(folder),
+            Err(e) => {
+                refused.push(format!("{what} off: {e}"));
+                None
+            }
+        };
+        let config = usable(
+            config.map(|home| crate::files::own_folder(home, &["rayoflight"], false)),
+            "settings and recent files",
+        );
+        let journal = usable(
+            state.map(crate::gui::journal::folder_in),
+            "unsaved edits journal",
+        );
         Persisted {
-            settings: Settings::load(config_file("settings.txt")),
-            recent: Recent::user(),
-            journal: crate::gui::journal::user_folder(),
+            settings: Settings::load(config.as_ref().map(|d| d.join("settings.txt"))),
+            recent: Recent::load(config.as_ref().map(|d| d.join("recent.txt"))),
+            journal,
+            refused,
         }
     }
 
@@ -182,9 +219,8 @@ pub struct Recent {
 }
 
 impl Recent {
-    /// The user's list, from the config directory.
-    pub fn user() -> Recent {
-        let store = config_file("recent.txt");
+    /// The list kept in `store` (`None`: in memory only).
+    pub fn load(store: Option<PathBuf>) -> Recent {
         let paths = store
             .as_ref()
             .and_then(|f| std::fs::read_to_string(f).ok())

@@ -222,6 +222,7 @@ impl RayOfLightApp {
             settings,
             recent,
             journal,
+            refused,
         } = persisted;
         let wake_ctx = ctx.clone();
         let worker = Worker::spawn(Worker::default_threads(), move || {
@@ -282,6 +283,15 @@ impl RayOfLightApp {
             ctx: ctx.clone(),
         };
         app.restore_journal();
+        // A folder of the user's state that is not safe to use, said once
+        // (after what a restored journal says, if anything).
+        if !refused.is_empty() {
+            let mut text = refused.join("; ");
+            if let Some((restored, _)) = app.notice.take() {
+                text = format!("{restored}; {text}");
+            }
+            app.notify(text);
+        }
         app.watch();
         app.request_render();
         app

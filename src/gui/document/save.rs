@@ -142,8 +142,12 @@ impl SaveJob {
     fn write(&self, expected: Option<u64>) -> SaveOutcome {
         match write_scene(&self.path, &self.version, expected, self.announce.as_ref()) {
             Ok(written) => SaveOutcome::Written(written),
-            // A program that takes no lock wrote it meanwhile: merge.
-            Err(SaveError::ChangedMeanwhile) => self.read_theirs(),
+            // A program that takes no lock wrote it meanwhile, or put
+            // another file at its name: merge.
+            Err(
+                SaveError::ChangedMeanwhile
+                | SaveError::Output(crate::output::OutputError::Moved { .. }),
+            ) => self.read_theirs(),
             Err(e) => SaveOutcome::Failed(e),
         }
     }

@@ -1,16 +1,19 @@
-//! What reaches the terminal. File names and the scene's comments come
-//! from outside: an ESC byte in one would drive the terminal (colours, a
-//! moved cursor, a changed title), a newline would make one error look like
-//! two, and a right-to-left override would show another name than the one
-//! meant. Every line the CLI prints goes through [`shown`], which writes
-//! such characters as visible escapes (`\n`, `\e`, `\x07`, `\u{202e}`).
+//! Text from outside made visible. File names and the scene's comments
+//! come from outside: an ESC byte in one would drive the terminal that
+//! shows it (colours, a moved cursor, a changed title), a newline would
+//! make one line look like two, and a right-to-left override would show
+//! another name than the one meant. Every line the CLI prints goes
+//! through [`visible`], and so does every field of the CSV files the core
+//! writes ([`crate::measure::Csv`], read with `cat` as often as by a
+//! program): such characters are written as visible escapes (`\n`, `\e`,
+//! `\x07`, `\u{202e}`).
 
 use std::borrow::Cow;
 
 /// `text` with its control characters escaped; line breaks and tabs kept
 /// where `lines` (the many-line outputs of `plan` and `explain`), escaped
 /// too otherwise (an error is one line).
-pub fn shown(text: &str, lines: bool) -> Cow<'_, str> {
+pub fn visible(text: &str, lines: bool) -> Cow<'_, str> {
     let odd = |c: char| !(lines && matches!(c, '\n' | '\t')) && needs_escape(c);
     if !text.chars().any(odd) {
         return Cow::Borrowed(text);
@@ -46,12 +49,12 @@ mod tests {
 
     #[test]
     fn controls_are_shown_not_obeyed() {
-        assert_eq!(shown("a.xml: fine", false), "a.xml: fine");
+        assert_eq!(visible("a.xml: fine", false), "a.xml: fine");
         assert_eq!(
-            shown("x\u{1b}]0;pwned\u{7}\ny\r\u{202e}z\u{85}", false),
+            visible("x\u{1b}]0;pwned\u{7}\ny\r\u{202e}z\u{85}", false),
             "x\\e]0;pwned\\x07\\ny\\r\\u{202e}z\\u{85}"
         );
-        assert_eq!(shown("one\ntwo\u{1b}[2J", true), "one\ntwo\\e[2J");
-        assert!(matches!(shown("plain\ntext", true), Cow::Borrowed(_)));
+        assert_eq!(visible("one\ntwo\u{1b}[2J", true), "one\ntwo\\e[2J");
+        assert!(matches!(visible("plain\ntext", true), Cow::Borrowed(_)));
     }
 }

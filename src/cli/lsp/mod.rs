@@ -20,11 +20,14 @@
 //! `window/showDocument` request for its element, which leaves the focus
 //! where it is.
 //!
-//! The server ends at the editor's `exit`, or when the editor's end of
-//! stdin closes; every thread sends through one sender, let go then, so
+//! Messages come and go through [`transport`], which bounds a message's
+//! size and memory before taking it. The server ends at the editor's
+//! `exit`, or when the editor's end of stdin closes; every thread sends through one sender, let go then, so
 //! that the thread writing to the editor ends too.
 
-use lsp_server::{Connection, Message, Notification, Request, RequestId, Response};
+mod transport;
+
+use lsp_server::{Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument, Exit,
     Notification as _, PublishDiagnostics,
@@ -113,7 +116,7 @@ const LOOK_FOR_APPS_EVERY: Duration = Duration::from_secs(1);
 /// closed); an error is the protocol's, or an end without a shutdown
 /// (status 1, as the protocol asks).
 pub fn run() -> Result<(), String> {
-    let (connection, io_threads) = Connection::stdio();
+    let (connection, io_threads) = transport::stdio();
     let capabilities = ServerCapabilities {
         position_encoding: Some(PositionEncodingKind::UTF16),
         text_document_sync: Some(TextDocumentSyncCapability::Options(

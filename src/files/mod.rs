@@ -1,12 +1,19 @@
 //! Facts about the files the core reads and writes that the standard
 //! library leaves to each caller: what kind of special file a path is
 //! (scenes and images must be regular files: a FIFO would block, a device
-//! never ends), where a chain of symbolic links leads and which links may
-//! be followed for writing (the kernel's `fs.protected_symlinks` rule),
-//! whether the caller may write a file (`access(W_OK)`, not mode bits),
-//! the owner, group and extended attributes a replaced file keeps, the
-//! lock every read-modify-write of a scene holds, and whether two paths
-//! are one file.
+//! never ends), where a chain of symbolic links leads for reading, the
+//! owner, group and extended attributes a replaced file keeps, the lock
+//! every read-modify-write of a scene holds, and whether two paths are
+//! one file; the folders the user's own state lives in (settings, the
+//! journal, the editor link's sockets), which must be the user's and
+//! writable by no one else ([`own_folder`]). Where a write lands, held by
+//! descriptors so that no rename can redirect it, is [`place`]'s.
+
+mod place;
+
+#[cfg(unix)]
+pub use place::NewFile;
+pub use place::{Kind, Place, PlaceError, make_folders};
 
 use std::fs::Metadata;
 use std::path::{Path, PathBuf};
@@ -74,7 +81,7 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 
 /// The file `path` names once symbolic links are followed (at most 40, as
 /// the kernel does); a dangling link gives the path it points to. For
-/// reading and watching; writing goes through [`follow_for_writing`].
+/// reading and watching; writing goes through [`Place::reach`].
 pub fn through_links(path: &Path) -> PathBuf {
     let mut p = path.to_owned();
     for _ in 0..40 {
@@ -103,77 +110,97 @@ pub enum LinkError {
     Protected { link: PathBuf, folder: PathBuf },
 }
 
-/// The file that writing to `path` writes: symbolic links followed as the
-/// kernel follows them, with its `fs.protected_symlinks` rule applied
-/// whatever the system's setting: in a sticky folder that everyone may
-/// write (`/tmp`), a link is followed only when it belongs to the caller
-/// or to the folder's owner — else another user could plant
-/// `/tmp/x.png -> ~victim/notes.txt` and have our output replace it. A
-/// loop is refused. A link the kernel resolves by itself (`/dev/stdout`'s
-/// `/proc/self/fd/1 -> pipe:[…]`) ends the chain: the link is the path.
-pub fn follow_for_writing(path: &Path) -> Result<PathBuf, LinkError> {
-    let mut p = path.to_owned();
-    // 40 links followed, and the path they lead to looked at.
-    for _ in 0..=40 {
-        let Ok(meta) = std::fs::symlink_metadata(&p) else {
-            return Ok(p);
-        };
-        if !meta.file_type().is_symlink() {
-            return Ok(p);
-        }
-        let folder = match p.parent() {
-            Some(dir) if !dir.as_os_str().is_empty() => dir.to_owned(),
-            _ => PathBuf::from("."),
-        };
-        if !may_follow(&meta, &folder) {
-            return Err(LinkError::Protected { link: p, folder });
-        }
-        let Ok(target) = std::fs::read_link(&p) else {
-            return Ok(p);
-        };
-        let next = folder.join(target);
-        // A "magic" link of /proc names no path: the kernel opens it.
-        if std::fs::symlink_metadata(&next).is_err() && std::fs::metadata(&p).is_ok() {
-            return Ok(p);
-        }
-        p = next;
-    }
-    Err(LinkError::Loop)
+/// Why a folder of the user's own state is not used.
+#[derive(Debug, thiserror::Error)]
+pub enum OwnFolderError {
+    #[error("{}: not used: it is another user's (uid {owner}), not yours", path.display())]
+    NotYours { path: PathBuf, owner: u32 },
+    #[error("{}: not used: others may {what} it (mode {mode:o})", path.display())]
+    Open {
+        path: PathBuf,
+        mode: u32,
+        what: &'static str,
+    },
+    #[error("{}: not used: not a folder", path.display())]
+    NotAFolder { path: PathBuf },
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
 }
 
-/// The kernel's `may_follow_link`: a link in a sticky, world-writable
-/// folder is followed only by its owner or when the folder's owner owns it.
-fn may_follow(link: &Metadata, folder: &Path) -> bool {
+/// The folder `home/below…` where the app keeps state of the user's own
+/// (`home` an XDG base such as `$XDG_STATE_HOME`), made where missing
+/// (mode 0700), and used only if `home` and every folder below it are the
+/// user's and no one else may write in them — else another user could
+/// plant files there (a journal of edits that a save then writes into
+/// the user's scene) or swap names. `private`: the last folder must be
+/// closed to others altogether (it holds copies of the user's files, or
+/// sockets). Links are followed: a folder the user linked elsewhere is
+/// checked where it is.
+pub fn own_folder(home: &Path, below: &[&str], private: bool) -> Result<PathBuf, OwnFolderError> {
+    let make = |path: &Path, recursive: bool| -> Result<(), OwnFolderError> {
+        let mut builder = std::fs::DirBuilder::new();
+        builder.recursive(recursive);
+        #[cfg(unix)]
+        std::os::unix::fs::DirBuilderExt::mode(&mut builder, 0o700);
+        match builder.create(path) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Ok(()),
+            Err(source) => Err(OwnFolderError::Io {
+                path: path.to_owned(),
+                source,
+            }),
+        }
+    };
+    make(home, true)?;
+    check_own(home, private && below.is_empty())?;
+    let mut path = home.to_owned();
+    for (i, part) in below.iter().enumerate() {
+        path.push(part);
+        // Made in a folder no one else may write: no one else can swap it
+        // between this and the check.
+        make(&path, false)?;
+        check_own(&path, private && i + 1 == below.len())?;
+    }
+    Ok(path)
+}
+
+/// [`own_folder`]'s rule for one folder.
+fn check_own(path: &Path, private: bool) -> Result<(), OwnFolderError> {
+    let meta = std::fs::metadata(path).map_err(|source| OwnFolderError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    if !meta.is_dir() {
+        return Err(OwnFolderError::NotAFolder {
+            path: path.to_owned(),
+        });
+    }
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
-        let Ok(dir) = std::fs::metadata(folder) else {
-            return true;
-        };
-        let shared = dir.mode() & 0o1002 == 0o1002;
-        !shared || link.uid() == rustix::process::geteuid().as_raw() || link.uid() == dir.uid()
+        let path = path.to_owned();
+        let mode = meta.mode() & 0o7777;
+        if meta.uid() != rustix::process::geteuid().as_raw() {
+            return Err(OwnFolderError::NotYours {
+                path,
+                owner: meta.uid(),
+            });
+        }
+        if mode & 0o022 != 0 {
+            let what = "write in";
+            return Err(OwnFolderError::Open { path, mode, what });
+        }
+        if private && mode & 0o077 != 0 {
+            let what = "enter";
+            return Err(OwnFolderError::Open { path, mode, what });
+        }
     }
     #[cfg(not(unix))]
-    {
-        let _ = (link, folder);
-        true
-    }
-}
-
-/// Whether the caller may write the existing file `path`, as the kernel
-/// decides it (`faccessat(W_OK, AT_EACCESS)`: owner, group, others, ACLs,
-/// a read-only mount), not from the mode bits alone: in a group-writable
-/// folder a user can rename over another's private file, and must not.
-pub fn may_write(path: &Path) -> bool {
-    #[cfg(unix)]
-    {
-        use rustix::fs::{Access, AtFlags, CWD, accessat};
-        accessat(CWD, path, Access::WRITE_OK, AtFlags::EACCESS).is_ok()
-    }
-    #[cfg(not(unix))]
-    {
-        std::fs::metadata(path).is_ok_and(|m| !m.permissions().readonly())
-    }
+    let _ = private;
+    Ok(())
 }
 
 /// Gives `new` (a file about to replace `old`, whose metadata is `meta`)
@@ -182,7 +209,11 @@ pub fn may_write(path: &Path) -> bool {
 /// anyone), its mode (set after the owner, which clears set-id bits) and
 /// its extended attributes (ACLs, SELinux labels, user attributes). What
 /// the system refuses is left as a new file has it.
-pub fn keep_attributes(old: &Path, meta: &Metadata, new: &std::fs::File) -> std::io::Result<()> {
+pub fn keep_attributes(
+    old: &std::fs::File,
+    meta: &Metadata,
+    new: &std::fs::File,
+) -> std::io::Result<()> {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
@@ -191,14 +222,19 @@ pub fn keep_attributes(old: &Path, meta: &Metadata, new: &std::fs::File) -> std:
         }
         copy_xattrs(old, new);
     }
+    #[cfg(not(unix))]
+    let _ = old;
     new.set_permissions(meta.permissions())
 }
 
 /// Copies `old`'s extended attributes to `new`, each one that the
 /// system lets us read and set.
 #[cfg(unix)]
-fn copy_xattrs(old: &Path, new: &std::fs::File) {
-    use rustix::fs::{XattrFlags, fsetxattr, getxattr, getxattr_query, listxattr, listxattr_query};
+fn copy_xattrs(old: &std::fs::File, new: &std::fs::File) {
+    use rustix::fs::{
+        XattrFlags, fgetxattr as getxattr, fgetxattr_query as getxattr_query,
+        flistxattr as listxattr, flistxattr_query as listxattr_query, fsetxattr,
+    };
     let Ok(len) = listxattr_query(old) else {
         return;
     };
@@ -284,6 +320,49 @@ fn identity_of(meta: &Metadata) -> (u64, u64) {
 #[cfg(all(test, unix))]
 mod tests {
     use super::*;
+
+    #[test]
+    fn own_folders_are_made_private_and_others_refused() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let home = dir.path().join("state");
+        let made = own_folder(&home, &["rayoflight", "journal"], true).unwrap();
+        assert_eq!(made, home.join("rayoflight/journal"));
+        let mode = |p: &Path| std::fs::metadata(p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode(&made), 0o700);
+        assert_eq!(mode(&home), 0o700);
+        // Open to others' writes: refused, at any level.
+        let set = |p: &Path, m: u32| {
+            std::fs::set_permissions(p, std::fs::Permissions::from_mode(m)).unwrap()
+        };
+        set(&home.join("rayoflight"), 0o777);
+        let err = own_folder(&home, &["rayoflight", "journal"], true).unwrap_err();
+        assert!(
+            matches!(&err, OwnFolderError::Open { path, .. } if path == &home.join("rayoflight")),
+            "{err}"
+        );
+        set(&home.join("rayoflight"), 0o755);
+        // Readable by others: fine for settings, not for a private one.
+        set(&made, 0o755);
+        own_folder(&home, &["rayoflight", "journal"], false).unwrap();
+        let err = own_folder(&home, &["rayoflight", "journal"], true).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!(
+                "{}: not used: others may enter it (mode 755)",
+                made.display()
+            )
+        );
+        if rustix::process::geteuid().is_root() {
+            std::os::unix::fs::chown(&made, Some(65534), Some(65534)).unwrap();
+            set(&made, 0o700);
+            let err = own_folder(&home, &["rayoflight", "journal"], true).unwrap_err();
+            assert!(
+                matches!(err, OwnFolderError::NotYours { owner: 65534, .. }),
+                "{err}"
+            );
+        }
+    }
 
     #[test]
     fn special_files_are_named() {

@@ -1,0 +1,745 @@
+//! Where a write lands: the folder a path names, held open by its
+//! descriptor, and the one name in it that the write replaces or creates.
+//!
+//! A path is walked a part at a time from `/` or the current folder, each
+//! folder opened relative to the one before (`openat`, never by its whole
+//! path again), and every symbolic link on the way, in a folder part as in
+//! the last part, is followed only as the kernel's `fs.protected_symlinks`
+//! rule allows, whatever the system's setting: in a sticky folder that
+//! everyone may write (`/tmp`), only a link of the caller's or of the
+//! folder's owner. From then on everything a write does, it does through
+//! descriptors: the file in the way is opened once without following a
+//! link and its `fstat` compared with what was looked at, the temporary
+//! file is made in the held folder and renamed there, and a file of
+//! several hard links is rewritten through the descriptor that was
+//! checked. Another user renaming names meanwhile can make a write fail;
+//! it cannot send it anywhere else.
+//!
+//! A link that `/proc` makes (`/dev/stdout` → `/proc/self/fd/1` →
+//! `pipe:[…]`) names no path: the kernel opens what it stands for, and
+//! the write goes into that open file (a pipe, a terminal, the file the
+//! shell redirected to).
+
+use std::ffi::{OsStr, OsString};
+use std::fs::File;
+use std::path::{Component, Path, PathBuf};
+
+use super::LinkError;
+
+/// Why a path leads to no place to write.
+#[derive(Debug, thiserror::Error)]
+pub enum PlaceError {
+    #[error(transparent)]
+    Link(#[from] LinkError),
+    /// A folder part of the path does not exist.
+    #[error("the folder {} does not exist", .0.display())]
+    NoFolder(PathBuf),
+    /// A folder part of the path is a file.
+    #[error("{} is not a folder", .0.display())]
+    NotAFolder(PathBuf),
+    /// The path names a folder (`dir/..`, `.`).
+    #[error("is a directory, not a file")]
+    IsDirectory,
+    #[error(transparent)]
+    Io(#[from] std::io::Error),
+}
+
+#[cfg(unix)]
+impl From<rustix::io::Errno> for PlaceError {
+    fn from(e: rustix::io::Errno) -> PlaceError {
+        PlaceError::Io(e.into())
+    }
+}
+
+/// The folder a write goes into, held open, and the name in it.
+#[derive(Debug)]
+pub struct Place {
+    #[cfg(unix)]
+    folder: std::os::fd::OwnedFd,
+    /// The folder's path as the walk spelled it (links replaced by their
+    /// targets), for messages and for what must have a path; never
+    /// opened again to write.
+    folder_path: PathBuf,
+    /// One part: no `/`, never `.` or `..`.
+    name: OsString,
+    /// The name is a link `/proc` makes: opened by following it.
+    magic: bool,
+}
+
+/// What is at a place's name, looked at without following a link.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    Regular,
+    Directory,
+    /// A FIFO, a device or a socket: written into, never replaced.
+    Special,
+    Link,
+}
+
+/// Links followed in one walk at most, as the kernel allows.
+const MAX_LINKS: usize = 40;
+
+impl Place {
+    /// Walks `path` to the folder it writes into; see the module's doc.
+    /// A link as the last part is followed too (the rule applied): the
+    /// place is where it leads, and a dangling link leads to a new file.
+    pub fn reach(path: &Path) -> Result<Place, PlaceError> {
+        imp::reach(path, true)
+    }
+
+    /// [`Place::reach`] with the last part taken as it is, a link there
+    /// not followed: for a file that must be new ([`Place::create_new`]).
+    pub fn reach_name(path: &Path) -> Result<Place, PlaceError> {
+        imp::reach(path, false)
+    }
+
+    /// The path of the file this place names, as the walk spelled it: for
+    /// messages and for reading, never for writing.
+    pub fn path(&self) -> PathBuf {
+        self.folder_path.join(&self.name)
+    }
+
+    /// The folder's path as the walk spelled it (for messages).
+    pub fn folder_path(&self) -> &Path {
+        &self.folder_path
+    }
+
+    /// The name in the folder.
+    pub fn name(&self) -> &OsStr {
+        &self.name
+    }
+
+    /// Whether the name is one of `/proc`'s links (`/dev/stdout`).
+    pub fn is_magic(&self) -> bool {
+        self.magic
+    }
+}
+
+#[cfg(unix)]
+mod imp {
+    use super::*;
+    use rustix::fs::{AtFlags, CWD, FileType, Mode, OFlags, openat, readlinkat, statat};
+    use rustix::io::Errno;
+    use std::collections::VecDeque;
+    use std::os::fd::{AsFd, BorrowedFd, OwnedFd};
+    use std::os::unix::ffi::OsStrExt;
+
+    /// The flags a folder of the walk is held with: enough to name files
+    /// in it (`*at` calls), nothing read or written through it.
+    fn folder_flags() -> OFlags {
+        path_only() | OFlags::DIRECTORY | OFlags::NOFOLLOW | OFlags::CLOEXEC
+    }
+
+    /// `O_PATH` where there is one: a descriptor that names a file (even
+    /// a link, with `O_NOFOLLOW`) without opening it for anything.
+    fn path_only() -> OFlags {
+        #[cfg(any(target_os = "linux", target_os = "android"))]
+        return OFlags::PATH;
+        #[cfg(not(any(target_os = "linux", target_os = "android")))]
+        return OFlags::RDONLY;
+    }
+
+    fn open_folder(at: BorrowedFd<'_>, name: &OsStr) -> rustix::io::Result<OwnedFd> {
+        openat(at, name, folder_flags(), Mode::empty())
+    }
+
+    fn kind(st: &rustix::fs::Stat) -> Kind {
+        match FileType::from_raw_mode(st.st_mode as _) {
+            FileType::RegularFile => Kind::Regular,
+            FileType::Directory => Kind::Directory,
+            FileType::Symlink => Kind::Link,
+            _ => Kind::Special,
+        }
+    }
+
+    /// The kernel's `may_follow_link`: a link in a sticky, world-writable
+    /// folder is followed only by its owner or when the folder's owner
+    /// owns it.
+    fn may_follow(link: &rustix::fs::Stat, folder: BorrowedFd<'_>) -> bool {
+        let Ok(dir) = rustix::fs::fstat(folder) else {
+            return false;
+        };
+        let shared = dir.st_mode & 0o1002 == 0o1002;
+        !shared || link.st_uid == rustix::process::geteuid().as_raw() || link.st_uid == dir.st_uid
+    }
+
+    /// Whether the folder is `/proc`'s, whose links the kernel resolves.
+    fn is_proc(folder: BorrowedFd<'_>) -> bool {
+        const PROC_SUPER_MAGIC: i64 = 0x9fa0;
+        // f_type's type differs between targets (a long, an u32).
+        #[allow(clippy::unnecessary_cast)]
+        rustix::fs::fstatfs(folder).is_ok_and(|fs| fs.f_type as i64 == PROC_SUPER_MAGIC)
+    }
+
+    /// The parts of `path` to walk, in order; `..` kept, `.` dropped.
+    fn parts(path: &Path) -> VecDeque<OsString> {
+        path.components()
+            .filter_map(|c| match c {
+                Component::Normal(p) => Some(p.to_owned()),
+                Component::ParentDir => Some(OsString::from("..")),
+                _ => None,
+            })
+            .collect()
+    }
+
+    pub(super) fn reach(path: &Path, follow_last: bool) -> Result<Place, PlaceError> {
+        let start = |absolute: bool| -> Result<(OwnedFd, PathBuf), PlaceError> {
+            match absolute {
+                true => Ok((open_folder(CWD, OsStr::new("/"))?, PathBuf::from("/"))),
+                false => Ok((open_folder(CWD, OsStr::new("."))?, PathBuf::new())),
+            }
+        };
+        let (mut folder, mut shown) = start(path.has_root())?;
+        let mut pending = parts(path);
+        let mut links = 0;
+        while let Some(part) = pending.pop_front() {
+            if part == ".." {
+                folder = open_folder(folder.as_fd(), &part)?;
+                shown.push("..");
+                continue;
+            }
+            let last = pending.is_empty();
+            let here = shown.join(&part);
+            let st = match statat(&folder, &part, AtFlags::SYMLINK_NOFOLLOW) {
+                Ok(st) => st,
+                Err(Errno::NOENT) if last => return Ok(place(folder, shown, part, false)),
+                // The folder the file was to go in, named whole.
+                Err(Errno::NOENT) => {
+                    let folder = pending.range(..pending.len() - 1);
+                    return Err(PlaceError::NoFolder(folder.fold(here, |p, q| p.join(q))));
+                }
+                Err(e) => return Err(PlaceError::Io(e.into())),
+            };
+            match kind(&st) {
+                Kind::Link if last && !follow_last => {
+                    return Ok(place(folder, shown, part, false));
+                }
+                Kind::Link => {
+                    let in_folder = if shown.as_os_str().is_empty() {
+                        PathBuf::from(".")
+                    } else {
+                        shown.clone()
+                    };
+                    if !may_follow(&st, folder.as_fd()) {
+                        return Err(LinkError::Protected {
+                            link: here,
+                            folder: in_folder,
+                        }
+                        .into());
+                    }
+                    links += 1;
+                    if links > MAX_LINKS {
+                        return Err(LinkError::Loop.into());
+                    }
+                    if last && is_proc(folder.as_fd()) {
+                        return Ok(place(folder, shown, part, true));
+                    }
+                    let target = readlinkat(&folder, &part, Vec::new())?;
+                    let target = Path::new(OsStr::from_bytes(target.as_bytes()));
+                    if target.has_root() {
+                        (folder, shown) = start(true)?;
+                    }
+                    for p in parts(target).into_iter().rev() {
+                        pending.push_front(p);
+                    }
+                    // A link to `/` or `.` as the last part: a folder.
+                    if pending.is_empty() {
+                        return Err(PlaceError::IsDirectory);
+                    }
+                }
+                _ if last => return Ok(place(folder, shown, part, false)),
+                Kind::Directory => match open_folder(folder.as_fd(), &part) {
+                    Ok(next) => {
+                        folder = next;
+                        shown = here;
+                    }
+                    // Made a link since it was looked at: look again.
+                    Err(Errno::LOOP | Errno::NOTDIR) => {
+                        links += 1;
+                        if links > MAX_LINKS {
+                            return Err(LinkError::Loop.into());
+                        }
+                        pending.push_front(part);
+                    }
+                    Err(Errno::NOENT) => return Err(PlaceError::NoFolder(here)),
+                    Err(e) => return Err(PlaceError::Io(e.into())),
+                },
+                _ => return Err(PlaceError::NotAFolder(here)),
+            }
+        }
+        Err(PlaceError::IsDirectory)
+    }
+
+    fn place(folder: OwnedFd, shown: PathBuf, name: OsString, magic: bool) -> Place {
+        let folder_path = if shown.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            shown
+        };
+        Place {
+            folder,
+            folder_path,
+            name,
+            magic,
+        }
+    }
+
+    impl Place {
+        /// What is at the name now, looked at without following it (a
+        /// `/proc` link: what it stands for); `None` when nothing is.
+        pub fn look(&self) -> std::io::Result<Option<(Kind, std::fs::Metadata)>> {
+            let mut flags = path_only() | OFlags::CLOEXEC;
+            if !self.magic {
+                flags |= OFlags::NOFOLLOW;
+            }
+            let file = match openat(&self.folder, &self.name, flags, Mode::empty()) {
+                Ok(fd) => File::from(fd),
+                Err(Errno::NOENT) => return Ok(None),
+                Err(e) => return Err(e.into()),
+            };
+            let meta = file.metadata()?;
+            let t = meta.file_type();
+            let kind = if t.is_symlink() {
+                Kind::Link
+            } else if t.is_file() {
+                Kind::Regular
+            } else if t.is_dir() {
+                Kind::Directory
+            } else {
+                Kind::Special
+            };
+            Ok(Some((kind, meta)))
+        }
+
+        /// Whether the caller may write the file at the name, as the
+        /// kernel decides it (`faccessat(W_OK, AT_EACCESS)`: owner, group,
+        /// others, ACLs, a read-only mount), not from the mode bits alone.
+        pub fn may_write(&self) -> bool {
+            use rustix::fs::{Access, accessat};
+            let flags = match self.magic {
+                true => AtFlags::EACCESS,
+                false => AtFlags::EACCESS | AtFlags::SYMLINK_NOFOLLOW,
+            };
+            match accessat(&self.folder, &self.name, Access::WRITE_OK, flags) {
+                Ok(()) => true,
+                // A kernel before 5.8 (no faccessat2) takes no flag but
+                // AT_EACCESS: the name was just seen to be no link, and
+                // the open that follows compares the file's identity.
+                Err(Errno::INVAL | Errno::NOSYS) => {
+                    accessat(&self.folder, &self.name, Access::WRITE_OK, AtFlags::EACCESS).is_ok()
+                }
+                Err(_) => false,
+            }
+        }
+
+        /// Opens the file at the name, which must be of `kind` and the
+        /// very file `meta` describes (same device and inode): a name
+        /// swapped between the look and the open gives `Ok(None)`. A
+        /// regular file is opened for reading and, with `write`, for
+        /// writing too; a special file for writing, without waiting (a
+        /// FIFO nobody reads: `ENXIO`), then made blocking.
+        pub fn open(
+            &self,
+            kind: Kind,
+            meta: &std::fs::Metadata,
+            write: bool,
+        ) -> std::io::Result<Option<File>> {
+            use std::os::unix::fs::MetadataExt;
+            let access = match (kind, write) {
+                (Kind::Special, _) => OFlags::WRONLY,
+                (_, true) => OFlags::RDWR,
+                (_, false) => OFlags::RDONLY,
+            };
+            let mut flags = access | OFlags::NONBLOCK | OFlags::NOCTTY | OFlags::CLOEXEC;
+            if !self.magic {
+                flags |= OFlags::NOFOLLOW;
+            }
+            let fd = match openat(&self.folder, &self.name, flags, Mode::empty()) {
+                Ok(fd) => fd,
+                // A file the caller may write but not read: written, not
+                // read (no copy of it can be kept).
+                Err(Errno::ACCESS) if kind == Kind::Regular => {
+                    let flags = (flags - access) | OFlags::WRONLY;
+                    openat(&self.folder, &self.name, flags, Mode::empty())?
+                }
+                Err(Errno::LOOP | Errno::NOENT) => return Ok(None),
+                Err(e) => return Err(e.into()),
+            };
+            let file = File::from(fd);
+            let now = file.metadata()?;
+            if now.dev() != meta.dev() || now.ino() != meta.ino() {
+                return Ok(None);
+            }
+            if kind == Kind::Special {
+                let flags = rustix::fs::fcntl_getfl(&file)?;
+                rustix::fs::fcntl_setfl(&file, flags - OFlags::NONBLOCK)?;
+            }
+            Ok(Some(file))
+        }
+
+        /// Whether the name still names `file` (its device and inode),
+        /// looked at without following a link.
+        pub fn still_names(&self, file: &File) -> std::io::Result<bool> {
+            use std::os::unix::fs::MetadataExt;
+            let held = file.metadata()?;
+            // st_dev and st_ino are narrower on some targets.
+            #[allow(clippy::unnecessary_cast)]
+            match statat(&self.folder, &self.name, AtFlags::SYMLINK_NOFOLLOW) {
+                Ok(st) => Ok(st.st_dev as u64 == held.dev() && st.st_ino as u64 == held.ino()),
+                Err(Errno::NOENT) => Ok(false),
+                Err(e) => Err(e.into()),
+            }
+        }
+
+        /// A new file in the folder named `PREFIX<random>SUFFIX`, made
+        /// with the usual mode (0666 less the umask) and removed when the
+        /// returned value is dropped, unless it is renamed or kept.
+        pub fn new_file(&self, prefix: &str, suffix: &str) -> std::io::Result<NewFile<'_>> {
+            for _ in 0..128 {
+                let mut name = OsString::from(prefix);
+                name.push(random_part());
+                name.push(suffix);
+                match openat(
+                    &self.folder,
+                    &name,
+                    OFlags::RDWR
+                        | OFlags::CREATE
+                        | OFlags::EXCL
+                        | OFlags::NOFOLLOW
+                        | OFlags::CLOEXEC,
+                    Mode::from_raw_mode(0o666),
+                ) {
+                    Ok(fd) => {
+                        return Ok(NewFile {
+                            place: self,
+                            name: Some(name),
+                            file: File::from(fd),
+                        });
+                    }
+                    Err(Errno::EXIST) => continue,
+                    Err(e) => return Err(e.into()),
+                }
+            }
+            Err(std::io::Error::from(std::io::ErrorKind::AlreadyExists))
+        }
+
+        /// A new file at the name itself, never over anything there (a
+        /// file, a link, even a dangling one): `AlreadyExists`.
+        pub fn create_new(&self) -> std::io::Result<NewFile<'_>> {
+            let fd = openat(
+                &self.folder,
+                &self.name,
+                OFlags::WRONLY | OFlags::CREATE | OFlags::EXCL | OFlags::NOFOLLOW | OFlags::CLOEXEC,
+                Mode::from_raw_mode(0o666),
+            )?;
+            Ok(NewFile {
+                place: self,
+                name: Some(self.name.clone()),
+                file: File::from(fd),
+            })
+        }
+
+        /// An unnamed file in the folder (`O_TMPFILE`), for scratch data
+        /// on the disk the write goes to; `None` where the file system
+        /// has no such files.
+        pub fn unnamed_file(&self) -> Option<File> {
+            #[cfg(any(target_os = "linux", target_os = "android"))]
+            {
+                openat(
+                    &self.folder,
+                    ".",
+                    OFlags::RDWR | OFlags::TMPFILE | OFlags::CLOEXEC,
+                    Mode::from_raw_mode(0o600),
+                )
+                .ok()
+                .map(File::from)
+            }
+            #[cfg(not(any(target_os = "linux", target_os = "android")))]
+            None
+        }
+
+        /// Unlinks the name (a file, never a folder).
+        pub fn remove(&self) -> std::io::Result<()> {
+            Ok(rustix::fs::unlinkat(
+                &self.folder,
+                &self.name,
+                AtFlags::empty(),
+            )?)
+        }
+    }
+
+    /// A file made in a place's folder, removed when dropped unless
+    /// [`NewFile::rename_over`] or [`NewFile::keep`] took it.
+    #[derive(Debug)]
+    pub struct NewFile<'p> {
+        place: &'p Place,
+        name: Option<OsString>,
+        pub file: File,
+    }
+
+    impl NewFile<'_> {
+        /// A path that opens this very file for reading (its descriptor
+        /// in `/proc/self/fd`), whatever is renamed meanwhile; its path
+        /// in the folder where there is no `/proc`.
+        pub fn path_to_read(&self) -> PathBuf {
+            use std::os::fd::AsRawFd;
+            let by_fd = PathBuf::from(format!("/proc/self/fd/{}", self.file.as_raw_fd()));
+            if by_fd.exists() {
+                return by_fd;
+            }
+            self.place
+                .folder_path
+                .join(self.name.as_deref().unwrap_or_default())
+        }
+
+        /// Renames the file over the place's name in the same folder. With
+        /// `replace` false, nothing may be at the name (a file that
+        /// appeared meanwhile is not written over): `AlreadyExists`.
+        pub fn rename_over(mut self, replace: bool) -> std::io::Result<()> {
+            use rustix::fs::{RenameFlags, renameat, renameat_with};
+            let Some(name) = self.name.as_ref() else {
+                return Ok(());
+            };
+            let folder = &self.place.folder;
+            let done = match replace {
+                true => renameat(folder, name, folder, &self.place.name),
+                false => {
+                    match renameat_with(
+                        folder,
+                        name,
+                        folder,
+                        &self.place.name,
+                        RenameFlags::NOREPLACE,
+                    ) {
+                        // A file system without RENAME_NOREPLACE: a link
+                        // fails on an existing name as well.
+                        Err(Errno::INVAL | Errno::NOSYS) => rustix::fs::linkat(
+                            folder,
+                            name,
+                            folder,
+                            &self.place.name,
+                            AtFlags::empty(),
+                        )
+                        .and_then(|()| rustix::fs::unlinkat(folder, name, AtFlags::empty())),
+                        other => other,
+                    }
+                }
+            };
+            match done {
+                Ok(()) => {
+                    self.name = None;
+                    Ok(())
+                }
+                Err(e) => Err(e.into()),
+            }
+        }
+
+        /// Leaves the file where it is; returns its path (for a message).
+        pub fn keep(mut self) -> PathBuf {
+            let name = self.name.take().unwrap_or_default();
+            self.place.folder_path.join(name)
+        }
+    }
+
+    impl Drop for NewFile<'_> {
+        fn drop(&mut self) {
+            if let Some(name) = &self.name {
+                let _ = rustix::fs::unlinkat(&self.place.folder, name, AtFlags::empty());
+            }
+        }
+    }
+
+    /// Six letters or digits, different each call (a counter and the
+    /// process's randomly keyed hasher, mixed with the time).
+    fn random_part() -> String {
+        use std::hash::{BuildHasher, Hasher};
+        use std::sync::atomic::{AtomicU64, Ordering};
+        static COUNT: AtomicU64 = AtomicU64::new(0);
+        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+        h.write_u64(COUNT.fetch_add(1, Ordering::Relaxed));
+        h.write_u128(
+            std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0, |d| d.as_nanos()),
+        );
+        h.write_u32(std::process::id());
+        let mut n = h.finish();
+        const LETTERS: &[u8] = b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+        (0..6)
+            .map(|_| {
+                let c = LETTERS[(n % LETTERS.len() as u64) as usize];
+                n /= LETTERS.len() as u64;
+                c as char
+            })
+            .collect()
+    }
+
+    /// Makes the folder `path` and any folder above it that is missing
+    /// (mode 0777 less the umask), walking it as [`Place::reach`] does:
+    /// a link in any part followed only as the rule allows.
+    pub fn make_folders(path: &Path) -> Result<(), PlaceError> {
+        let (mut folder, mut shown) = match path.has_root() {
+            true => (open_folder(CWD, OsStr::new("/"))?, PathBuf::from("/")),
+            false => (open_folder(CWD, OsStr::new("."))?, PathBuf::new()),
+        };
+        let mut pending = parts(path);
+        let mut links = 0;
+        while let Some(part) = pending.pop_front() {
+            let here = shown.join(&part);
+            match statat(&folder, &part, AtFlags::SYMLINK_NOFOLLOW) {
+                Ok(st) if kind(&st) == Kind::Link => {
+                    let in_folder = if shown.as_os_str().is_empty() {
+                        PathBuf::from(".")
+                    } else {
+                        shown.clone()
+                    };
+                    if !may_follow(&st, folder.as_fd()) {
+                        return Err(LinkError::Protected {
+                            link: here,
+                            folder: in_folder,
+                        }
+                        .into());
+                    }
+                    links += 1;
+                    if links > MAX_LINKS {
+                        return Err(LinkError::Loop.into());
+                    }
+                    let target = readlinkat(&folder, &part, Vec::new())?;
+                    let target = Path::new(OsStr::from_bytes(target.as_bytes()));
+                    if target.has_root() {
+                        folder = open_folder(CWD, OsStr::new("/"))?;
+                        shown = PathBuf::from("/");
+                    }
+                    for p in parts(target).into_iter().rev() {
+                        pending.push_front(p);
+                    }
+                    continue;
+                }
+                Ok(st) if kind(&st) != Kind::Directory => {
+                    return Err(PlaceError::NotAFolder(here));
+                }
+                Ok(_) => {}
+                Err(Errno::NOENT) => {
+                    match rustix::fs::mkdirat(&folder, &part, Mode::from_raw_mode(0o777)) {
+                        Ok(()) | Err(Errno::EXIST) => {}
+                        Err(e) => return Err(PlaceError::Io(e.into())),
+                    }
+                }
+                Err(e) => return Err(PlaceError::Io(e.into())),
+            }
+            match open_folder(folder.as_fd(), &part) {
+                Ok(next) => {
+                    folder = next;
+                    shown = here;
+                }
+                Err(Errno::LOOP) => {
+                    links += 1;
+                    if links > MAX_LINKS {
+                        return Err(LinkError::Loop.into());
+                    }
+                    pending.push_front(part);
+                }
+                Err(e) => return Err(PlaceError::Io(e.into())),
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(unix)]
+pub use imp::NewFile;
+pub use imp::make_folders;
+
+#[cfg(not(unix))]
+mod imp {
+    //! Elsewhere a place is its folder's path: the system has no
+    //! `openat` to hold it by, nor symbolic links a user plants.
+    use super::*;
+
+    pub(super) fn reach(path: &Path, _follow_last: bool) -> Result<Place, PlaceError> {
+        let name = match path.components().next_back() {
+            Some(Component::Normal(name)) => name.to_owned(),
+            Some(_) => return Err(PlaceError::IsDirectory),
+            None => return Err(PlaceError::IsDirectory),
+        };
+        let folder_path = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+            _ => PathBuf::from("."),
+        };
+        match std::fs::metadata(&folder_path) {
+            Err(_) => return Err(PlaceError::NoFolder(folder_path)),
+            Ok(m) if !m.is_dir() => return Err(PlaceError::NotAFolder(folder_path)),
+            Ok(_) => {}
+        }
+        Ok(Place {
+            folder_path,
+            name,
+            magic: false,
+        })
+    }
+
+    /// Makes the folder `path` and any folder above it that is missing.
+    pub fn make_folders(path: &Path) -> Result<(), PlaceError> {
+        Ok(std::fs::create_dir_all(path)?)
+    }
+}
+
+#[cfg(test)]
+#[cfg(unix)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folder_links_are_followed_and_named() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("real")).unwrap();
+        std::os::unix::fs::symlink("real", dir.path().join("via")).unwrap();
+        let place = Place::reach(&dir.path().join("via/out.png")).unwrap();
+        assert_eq!(place.path(), dir.path().join("real/out.png"));
+        assert!(place.look().unwrap().is_none());
+    }
+
+    #[test]
+    fn a_missing_folder_and_a_file_as_folder_are_named() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("f"), "x").unwrap();
+        let err = Place::reach(&dir.path().join("no/such/out.png")).unwrap_err();
+        assert!(matches!(err, PlaceError::NoFolder(p) if p == dir.path().join("no/such")));
+        let err = Place::reach(&dir.path().join("f/out.png")).unwrap_err();
+        assert!(matches!(err, PlaceError::NotAFolder(p) if p == dir.path().join("f")));
+        let err = Place::reach(&dir.path().join("..")).unwrap_err();
+        assert!(matches!(err, PlaceError::IsDirectory));
+    }
+
+    #[test]
+    fn a_loop_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        std::os::unix::fs::symlink("b", dir.path().join("a")).unwrap();
+        std::os::unix::fs::symlink("a", dir.path().join("b")).unwrap();
+        let err = Place::reach(&dir.path().join("a/x")).unwrap_err();
+        assert!(matches!(err, PlaceError::Link(LinkError::Loop)));
+    }
+
+    #[test]
+    fn standard_output_is_a_magic_place() {
+        let place = Place::reach(Path::new("/proc/self/fd/0")).unwrap();
+        assert!(place.is_magic());
+    }
+
+    #[test]
+    fn new_files_go_when_dropped_and_stay_when_renamed() {
+        let dir = tempfile::tempdir().unwrap();
+        let place = Place::reach(&dir.path().join("out.txt")).unwrap();
+        drop(place.new_file(".t-", ".tmp").unwrap());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+        let mut new = place.new_file(".t-", ".tmp").unwrap();
+        std::io::Write::write_all(&mut new.file, b"hello").unwrap();
+        assert_eq!(std::fs::read(new.path_to_read()).unwrap(), b"hello");
+        new.rename_over(false).unwrap();
+        assert_eq!(std::fs::read(dir.path().join("out.txt")).unwrap(), b"hello");
+        let again = place.new_file(".t-", ".tmp").unwrap();
+        let err = again.rename_over(false).unwrap_err();
+        assert_eq!(err.kind(), std::io::ErrorKind::AlreadyExists);
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+    }
+}
