@@ -522,3 +522,55 @@ fn a_refused_set_on_a_render_writes_no_image() {
         stderr(&o)
     );
 }
+
+/// Issue 43, item 9: a file whose lines end with a lone CR (classic Mac
+/// OS) gets an added element on a line of its own, ended the same way, as
+/// LF and CRLF files do: the result is the LF file's, its endings CR. (It
+/// was glued to the line before: `</sphere><sphere/>`.)
+#[test]
+fn an_added_element_has_a_line_of_its_own_in_every_line_ending() {
+    let edit = |text: &str| {
+        let dir = tempfile::tempdir().unwrap();
+        fs::write(dir.path().join("s.xml"), text).unwrap();
+        succeeds(&rayoflight(
+            dir.path(),
+            &["edit", "s.xml", "--add", "sphere", "--add", "plane"],
+        ));
+        fs::read_to_string(dir.path().join("s.xml")).unwrap()
+    };
+    let lf = edit(SCENE);
+    assert!(lf.contains("  </sphere>\n  <sphere/>\n"), "{lf}");
+    for ending in ["\r\n", "\r"] {
+        let got = edit(&SCENE.replace('\n', ending));
+        assert_eq!(got, lf.replace('\n', ending), "{ending:?}");
+    }
+}
+
+/// Issue 43, item 9: a file in UTF-16 without a byte order mark is named
+/// as such (scenes are UTF-8), not `unexpected text "\u{0}"` at 1:1.
+#[test]
+fn a_utf16_file_is_named_as_such() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in [
+        (
+            "le.xml",
+            SCENE
+                .encode_utf16()
+                .flat_map(u16::to_le_bytes)
+                .collect::<Vec<u8>>(),
+        ),
+        (
+            "be.xml",
+            SCENE.encode_utf16().flat_map(u16::to_be_bytes).collect(),
+        ),
+    ] {
+        fs::write(dir.path().join(name), bytes).unwrap();
+        let o = rayoflight(dir.path(), &["--no-gui", name, "-out", "x.png"]);
+        assert_eq!(o.status.code(), Some(1), "{name}");
+        assert!(
+            stderr(&o).contains("looks like UTF-16") && stderr(&o).contains("UTF-8"),
+            "{name}: {}",
+            stderr(&o)
+        );
+    }
+}

@@ -903,3 +903,98 @@ fn links_another_user_planted_as_folders_are_not_followed() {
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(theirs.join("out.png").exists());
 }
+
+/// Issue 43, item 8: a file name cannot forge a line of output. `explain`
+/// printed a name's line break raw (a file named `a\nFAKE LINE: render
+/// ok.xml` made a line "FAKE LINE: render ok"), and so did `study`'s
+/// table and failure summary; `study.csv` kept raw ESC and BEL bytes.
+/// Now every name is one line, its controls shown as escapes, on the
+/// terminal and in the CSV.
+#[test]
+fn file_names_forge_no_line_of_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "a\nFAKE LINE: render ok\u{1b}[2J\u{7}.xml";
+    let shown = "a\\nFAKE LINE: render ok\\e[2J\\x07.xml";
+    // A scene far from the origin, on which the study's f32 fails: the
+    // failure summary names it too.
+    let far = fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/study/example-1e7.xml"),
+    )
+    .unwrap();
+    fs::write(dir.path().join(name), far).unwrap();
+    let o = rayoflight(dir.path(), &["explain", name, "0", "0"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = common::stdout(&o);
+    assert!(out.lines().all(|l| !l.starts_with("FAKE LINE")), "{out}");
+    assert!(out.contains(shown), "{out}");
+
+    let o = rayoflight(dir.path(), &["study", "--out", "st", "--runs", "1", name]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = common::stdout(&o);
+    assert!(!out.contains('\u{1b}') && !out.contains('\u{7}'), "{out:?}");
+    assert!(out.lines().all(|l| !l.starts_with("FAKE LINE")), "{out}");
+    let summary = out
+        .lines()
+        .find(|l| l.contains(" failures: "))
+        .expect("failures");
+    // The study names a scene by its file's stem.
+    let stem = shown.trim_end_matches(".xml");
+    assert!(summary.contains(&format!("f32 on {stem} (")), "{summary}");
+    let csv = fs::read_to_string(dir.path().join("st/study.csv")).unwrap();
+    assert!(!csv.contains('\u{1b}') && !csv.contains('\u{7}'), "{csv:?}");
+    assert!(
+        csv.contains("\"a\nFAKE LINE: render ok\\e[2J\\x07\","),
+        "{csv}"
+    );
+}
+
+/// Issue 43, item 7: `sheet` stopped by a signal while it decodes its
+/// inputs (before any write) says so and exits 128 + the signal's number,
+/// as every other command; the default action ended it silently.
+#[test]
+fn a_signal_while_the_sheet_decodes_is_said() {
+    use rustix::process::Signal;
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("big.xml"), tiny_at(2400, 1800)).unwrap();
+    let o = rayoflight(dir.path(), &["--no-gui", "big.xml", "-out", "a.png"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let inputs: Vec<String> = (0..12).map(|k| format!("in{k}.png")).collect();
+    for name in &inputs {
+        fs::copy(dir.path().join("a.png"), dir.path().join(name)).unwrap();
+    }
+    let mut args = vec!["sheet", "-out", "sheet.png"];
+    args.extend(inputs.iter().map(String::as_str));
+    for (sig, status) in [(Signal::INT, 130), (Signal::TERM, 143), (Signal::HUP, 129)] {
+        let mut child = spawn(dir.path(), &args);
+        // The signal lands once an input is open: the sheet is reading
+        // the images, nothing written yet.
+        let fds = PathBuf::from(format!("/proc/{}/fd", child.id()));
+        let start = Instant::now();
+        let reading = || {
+            fs::read_dir(&fds)
+                .into_iter()
+                .flatten()
+                .flatten()
+                .any(|fd| {
+                    fs::read_link(fd.path())
+                        .is_ok_and(|to| to.extension().is_some_and(|e| e == "png"))
+                })
+        };
+        while !reading() {
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "{sig:?}: it ended first"
+            );
+            assert!(start.elapsed() < Duration::from_secs(30));
+        }
+        signal(&child, sig);
+        let o = child.wait_with_output().unwrap();
+        assert_eq!(o.status.code(), Some(status), "{sig:?}: {}", stderr(&o));
+        assert_eq!(
+            stderr(&o),
+            "sheet.png: interrupted: nothing was written\n",
+            "{sig:?}"
+        );
+        assert!(!dir.path().join("sheet.png").exists());
+    }
+}

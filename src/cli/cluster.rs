@@ -50,6 +50,14 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 /// checked before anything is decoded; then the images are decoded one at
 /// a time, each dropped once placed.
 pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
+    // A signal stops it between two images (or in the write), saying so,
+    // as every other command: the default action ended it silently.
+    let _cleanly = rayoflight::interrupt::cleanly();
+    let interrupted = || {
+        fail(output::OutputError::Interrupted {
+            path: out.to_owned(),
+        })
+    };
     output::format_for(out).map_err(fail)?;
     // The folder takes the sheet, checked before any image is read; its
     // size is checked once it is known.
@@ -62,7 +70,10 @@ pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(
     }
     let headers = images
         .iter()
-        .map(|path| SheetImage::read(path))
+        .map(|path| match rayoflight::interrupt::requested() {
+            true => Err(interrupted()),
+            false => SheetImage::read(path),
+        })
         .collect::<Result<Vec<_>, Failure>>()?;
     let sizes: Vec<(u32, u32)> = headers.iter().map(|h| h.size).collect();
     let layout = sheet::Layout::new(&sizes, columns).map_err(fail)?;
@@ -84,8 +95,14 @@ pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(
     })?;
     let names: Vec<&str> = headers.iter().map(|h| h.name.as_str()).collect();
     let sheet = sheet::draw(&layout, &names, |k| {
+        if rayoflight::interrupt::requested() {
+            return Err(interrupted());
+        }
         headers[k].decode().map(std::borrow::Cow::Owned)
     })?;
+    if rayoflight::interrupt::requested() {
+        return Err(interrupted());
+    }
     output::save(&sheet, out).map_err(fail)
 }
 

@@ -77,6 +77,13 @@ pub enum LoadErrorKind {
     /// The file is larger than [`MAX_FILE_BYTES`](super::MAX_FILE_BYTES).
     #[error("the file is {size} bytes, more than the limit of {limit} bytes")]
     FileTooLarge { size: u64, limit: u64 },
+    /// The file looks like UTF-16 text.
+    #[error(
+        "the file looks like {encoding} text{}: scenes are UTF-8 \
+         (iconv -f {encoding} -t UTF-8 converts it)",
+        if *mark { "" } else { " without a byte order mark" }
+    )]
+    Utf16 { encoding: &'static str, mark: bool },
     /// The file is not UTF-8 text.
     #[error("the file is not UTF-8 text (invalid byte at offset {offset})")]
     NotUtf8 { offset: usize },

@@ -82,6 +82,22 @@ pub fn load_like(path: &Path, like: &Objects) -> Result<Scene, LoadError> {
     load_sharing(path, like).map(|(_, scene)| scene)
 }
 
+/// The encoding of a text that looks like UTF-16 (a byte order mark, or
+/// its first characters, up to 16, ASCII with a zero byte beside each, as
+/// `<scene>` is in UTF-16 without a mark), and whether it has a mark, for
+/// a message that says so; `None` for anything else.
+fn utf16_order(bytes: &[u8]) -> Option<(&'static str, bool)> {
+    let pairs: Vec<&[u8]> = bytes.chunks_exact(2).take(16).collect();
+    let all = |f: fn(u8, u8) -> bool| !pairs.is_empty() && pairs.iter().all(|p| f(p[0], p[1]));
+    match bytes {
+        [0xff, 0xfe, ..] => Some(("UTF-16LE", true)),
+        [0xfe, 0xff, ..] => Some(("UTF-16BE", true)),
+        _ if all(|a, b| b == 0 && a != 0 && a.is_ascii()) => Some(("UTF-16LE", false)),
+        _ if all(|a, b| a == 0 && b != 0 && b.is_ascii()) => Some(("UTF-16BE", false)),
+        _ => None,
+    }
+}
+
 /// A large file loaded with its text, which is never held whole
 /// ([`load_packed`]).
 pub struct PackedLoad {
@@ -439,6 +455,13 @@ pub fn load_counting(
     let read = u64::try_from(bytes.len()).unwrap_or(u64::MAX);
     if read > MAX_FILE_BYTES {
         return Err(too_large(read));
+    }
+    if let Some((encoding, mark)) = utf16_order(&bytes) {
+        return Err(LoadError::new(
+            path,
+            Some(Position::at_offset("", 0)),
+            LoadErrorKind::Utf16 { encoding, mark },
+        ));
     }
     let text = String::from_utf8(bytes).map_err(|e| {
         let offset = e.utf8_error().valid_up_to();

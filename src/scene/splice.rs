@@ -131,6 +131,19 @@ fn loads_as(loaded: Result<Scene, LoadError>, scene: &Scene) -> Result<(), EditE
     }
 }
 
+/// The line ending new lines get in `text`: CRLF where it has one, LF
+/// where it has one, a lone CR where it has only those (a file of classic
+/// Mac OS), else LF.
+fn line_ending(text: &str) -> &'static str {
+    if text.contains("\r\n") {
+        "\r\n"
+    } else if text.contains('\n') || !text.contains('\r') {
+        "\n"
+    } else {
+        "\r"
+    }
+}
+
 /// A scene file's text with splices to apply: [`Rewrite::write_to`]
 /// streams the new text without building it.
 #[derive(Debug)]
@@ -1190,7 +1203,7 @@ impl<'t> Doc<'t> {
             (Some(root), true) => root,
             _ => return Err(internal("unbalanced elements")),
         };
-        let nl = if text.contains("\r\n") { "\r\n" } else { "\n" };
+        let nl = line_ending(text);
         let mut doc = Doc {
             text,
             base,
@@ -1265,7 +1278,11 @@ impl<'t> Doc<'t> {
     /// Offset of the start of the line holding `pos`.
     fn line_start(&self, pos: usize) -> usize {
         let before = self.text.get(..pos).unwrap_or_default();
-        before.rfind('\n').map_or(0, |i| i + 1).max(self.base)
+        // A lone CR (classic Mac OS) ends a line too.
+        before
+            .rfind(['\n', '\r'])
+            .map_or(0, |i| i + 1)
+            .max(self.base)
     }
 
     /// The indentation before `pos` when only spaces and tabs precede it on
@@ -1286,7 +1303,7 @@ impl<'t> Doc<'t> {
         let after = &rest[spaces..];
         let ending = if after.starts_with("\r\n") {
             2
-        } else if after.starts_with('\n') {
+        } else if after.starts_with(['\n', '\r']) {
             1
         } else if after.is_empty() {
             0
@@ -1869,7 +1886,7 @@ impl Editor<'_, '_> {
         match (doc.own_indent(start), doc.line_end_after(end)) {
             (Some(indent), Some(after)) => {
                 let mut text = block(doc, indent, items);
-                if !doc.text[..after].ends_with('\n') {
+                if !doc.text[..after].ends_with(['\n', '\r']) {
                     // The text ends on this line: start a new one.
                     text = format!("{}{}", doc.nl, text.trim_end_matches(['\r', '\n']));
                 }
