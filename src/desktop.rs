@@ -5,10 +5,13 @@
 //! `~/.local/share`), and `--uninstall` removes exactly what it wrote.
 //!
 //! The files are the repository's `assets/linux/`, built in. What was
-//! written, and which folders were created for it, is kept in
-//! `$XDG_DATA_HOME/rayoflight/installed-files`: an uninstall removes those
-//! and nothing else, and an install never writes over a file it did not
-//! write. The desktop databases are brought up to date when their tools
+//! written (each file with a fingerprint of its bytes), and which folders
+//! were created for it (the data folder itself included, in a fresh
+//! home), is kept in `$XDG_DATA_HOME/rayoflight/installed-files`: an
+//! uninstall removes the files whose bytes are still the ones it wrote
+//! and names the others, left as they are; an install never writes over
+//! a file it did not write or that changed since, nor through a symbolic
+//! link it did not make, in the file's name or in a folder's. The desktop databases are brought up to date when their tools
 //! (update-desktop-database, update-mime-database) are installed; when the
 //! last user type or entry goes, the caches they generated go too.
 //!
@@ -16,7 +19,6 @@
 //! only for its own type, `application/x-rayoflight-scene`: it never claims
 //! every XML file (other formats use a bare `<scene>` root too).
 
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -91,6 +93,11 @@ pub enum DesktopError {
     Write(#[from] crate::output::OutputError),
     #[error("{}: the record of what install-desktop wrote is damaged (line {line}); nothing was removed", path.display())]
     Manifest { path: PathBuf, line: usize },
+    #[error(
+        "{}: a symbolic link install-desktop did not make; nothing was written (it writes only into real folders)",
+        path.display()
+    )]
+    Link { path: PathBuf },
 }
 
 /// What an install or an uninstall did.
@@ -102,6 +109,35 @@ pub struct Done {
     pub ran: Vec<String>,
     /// Tools that were not found, so not run.
     pub missing: Vec<&'static str>,
+    /// Files an uninstall left: changed since they were written (another
+    /// program's now, or the user's).
+    pub kept: Vec<PathBuf>,
+}
+
+/// A fingerprint of bytes written (64-bit FNV-1a: the same in every
+/// build, unlike std's hasher), to know them again at an uninstall.
+fn fingerprint(bytes: &[u8]) -> u64 {
+    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
+    })
+}
+
+/// Whether `path` is a regular file (not a link) whose bytes have the
+/// fingerprint `print`; for a file recorded without one (an install by
+/// an earlier version) its bytes are compared with `expected`, what this
+/// version writes there.
+fn still_ours(path: &Path, print: Option<u64>, expected: Option<&[u8]>) -> bool {
+    let regular = std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_file());
+    if !regular {
+        return false;
+    }
+    let Ok(bytes) = std::fs::read(path) else {
+        return false;
+    };
+    match print {
+        Some(print) => fingerprint(&bytes) == print,
+        None => expected.is_some_and(|e| e == bytes),
+    }
 }
 
 /// The per-user data folder: `$XDG_DATA_HOME`, else `$HOME/.local/share`.
@@ -200,11 +236,15 @@ fn files(exec: &Path) -> Vec<(PathBuf, Vec<u8>)> {
     files
 }
 
-/// What the manifest records: the files written, the folders created.
+/// What the manifest records: the files written (with the fingerprint of
+/// their bytes; none from an earlier version), the folders created under
+/// the data folder, and the data folder and those above it that the
+/// install created (absolute).
 #[derive(Debug, Default)]
 struct Manifest {
-    files: Vec<PathBuf>,
+    files: Vec<(PathBuf, Option<u64>)>,
     folders: Vec<PathBuf>,
+    made: Vec<PathBuf>,
 }
 
 impl Manifest {
@@ -221,8 +261,25 @@ impl Manifest {
                 path: path.clone(),
                 line: i + 1,
             };
-            let (kind, relative) = line.split_once(' ').ok_or_else(damaged)?;
+            let (kind, mut relative) = line.split_once(' ').ok_or_else(damaged)?;
+            let mut print = None;
+            if kind == "file"
+                && let Some((hex, rest)) = relative.split_once(' ')
+                && hex.len() == 16
+                && let Ok(p) = u64::from_str_radix(hex, 16)
+            {
+                print = Some(p);
+                relative = rest;
+            }
             let relative = PathBuf::from(relative);
+            if kind == "made" {
+                // Only the data folder and folders above it.
+                if !(relative.is_absolute() && home.starts_with(&relative)) {
+                    return Err(damaged());
+                }
+                manifest.made.push(relative);
+                continue;
+            }
             // Only paths inside the data folder, never `..`.
             let inside = relative.is_relative()
                 && relative
@@ -232,7 +289,7 @@ impl Manifest {
                 return Err(damaged());
             }
             match kind {
-                "file" => manifest.files.push(relative),
+                "file" => manifest.files.push((relative, print)),
                 "folder" => manifest.folders.push(relative),
                 _ => return Err(damaged()),
             }
@@ -242,40 +299,85 @@ impl Manifest {
 
     fn text(&self) -> String {
         let mut text = String::new();
-        for f in &self.files {
-            text.push_str(&format!("file {}\n", f.display()));
+        for (f, print) in &self.files {
+            match print {
+                Some(p) => text.push_str(&format!("file {p:016x} {}\n", f.display())),
+                None => text.push_str(&format!("file {}\n", f.display())),
+            }
         }
         for d in &self.folders {
             text.push_str(&format!("folder {}\n", d.display()));
+        }
+        for d in &self.made {
+            text.push_str(&format!("made {}\n", d.display()));
         }
         text
     }
 }
 
 /// Installs the desktop files for `exec` (the binary's absolute path)
-/// under the data folder `home`. An earlier install is replaced; a file
-/// in the way that it did not write is refused before anything is written.
+/// under the data folder `home`, made if missing. An earlier install is
+/// replaced; a file in the way that it did not write, or that changed
+/// since, and a symbolic link in the way (the file's or a folder's), are
+/// refused before anything is written.
 pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
     let mut done = Done::default();
     let earlier = Manifest::read(home)?.unwrap_or_default();
     let files = files(exec);
-    for (relative, _) in &files {
-        let path = home.join(relative);
-        if std::fs::symlink_metadata(&path).is_ok() && !earlier.files.contains(relative) {
-            return Err(DesktopError::NotOurs { path });
-        }
-    }
     let io = |path: &Path| {
         let path = path.to_owned();
         move |source| DesktopError::Io { path, source }
     };
+    let mut to_write: Vec<(PathBuf, Vec<u8>)> = files;
+    to_write.push((PathBuf::from(MANIFEST), Vec::new()));
+    for (relative, _) in &to_write {
+        let path = home.join(relative);
+        // Every folder below the data folder a real one, or missing.
+        let mut folder = home.to_owned();
+        for part in relative.parent().into_iter().flat_map(Path::components) {
+            folder.push(part);
+            if std::fs::symlink_metadata(&folder).is_ok_and(|m| m.file_type().is_symlink()) {
+                return Err(DesktopError::Link { path: folder });
+            }
+        }
+        let Ok(meta) = std::fs::symlink_metadata(&path) else {
+            continue;
+        };
+        if meta.file_type().is_symlink() {
+            return Err(DesktopError::Link { path });
+        }
+        if relative == Path::new(MANIFEST) {
+            continue;
+        }
+        let ours = earlier
+            .files
+            .iter()
+            .find(|(f, _)| f == relative)
+            .is_some_and(|(_, print)| match print {
+                Some(_) => still_ours(&path, *print, None),
+                // An earlier version's record: any regular file it wrote.
+                None => meta.is_file(),
+            });
+        if !ours {
+            return Err(DesktopError::NotOurs { path });
+        }
+    }
     let mut manifest = Manifest {
         files: Vec::new(),
         folders: earlier.folders,
+        made: earlier.made,
     };
-    let manifest_path = home.join(MANIFEST);
-    let mut to_write: Vec<(PathBuf, Vec<u8>)> = files;
-    to_write.push((PathBuf::from(MANIFEST), Vec::new()));
+    // A fresh home: the data folder and those above it, made and recorded.
+    let mut missing = Vec::new();
+    let mut up = Some(home);
+    while let Some(f) = up.filter(|f| !f.as_os_str().is_empty() && !f.exists()) {
+        missing.push(f.to_owned());
+        up = f.parent();
+    }
+    for f in missing.into_iter().rev() {
+        std::fs::create_dir(&f).map_err(io(&f))?;
+        manifest.made.push(f);
+    }
     // Folders first, each recorded when this install creates it.
     for (relative, _) in &to_write {
         let mut missing = Vec::new();
@@ -296,25 +398,14 @@ pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
     for (relative, bytes) in &to_write {
         let path = home.join(relative);
         crate::output::write_atomic(&path, bytes)?;
-        manifest.files.push(relative.clone());
+        manifest
+            .files
+            .push((relative.clone(), Some(fingerprint(bytes))));
         done.files.push(path);
     }
-    write_manifest(&manifest_path, &manifest)?;
+    crate::output::write_atomic(&home.join(MANIFEST), manifest.text().as_bytes())?;
     refresh(home, &mut done);
     Ok(done)
-}
-
-fn write_manifest(path: &Path, manifest: &Manifest) -> Result<(), DesktopError> {
-    let mut file = std::fs::File::create(path).map_err(|source| DesktopError::Io {
-        path: path.to_owned(),
-        source,
-    })?;
-    file.write_all(manifest.text().as_bytes())
-        .and_then(|()| file.sync_all())
-        .map_err(|source| DesktopError::Io {
-            path: path.to_owned(),
-            source,
-        })
 }
 
 /// Removes what [`install`] wrote under `home`, and the folders it
@@ -324,8 +415,25 @@ pub fn uninstall(home: &Path) -> Result<Done, DesktopError> {
     let Some(manifest) = Manifest::read(home)? else {
         return Ok(done);
     };
-    for relative in &manifest.files {
+    // What this version writes: the bytes of files an earlier version
+    // recorded without a fingerprint are compared with them.
+    let exec = std::env::current_exe()
+        .and_then(std::fs::canonicalize)
+        .unwrap_or_default();
+    let expected = files(&exec);
+    for (relative, print) in &manifest.files {
         let path = home.join(relative);
+        if std::fs::symlink_metadata(&path).is_err() {
+            continue;
+        }
+        let now = expected
+            .iter()
+            .find(|(f, _)| f == relative)
+            .map(|(_, b)| b.as_slice());
+        if !still_ours(&path, *print, now) {
+            done.kept.push(path);
+            continue;
+        }
         match std::fs::remove_file(&path) {
             Ok(()) => done.files.push(path),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
@@ -344,6 +452,10 @@ pub fn uninstall(home: &Path) -> Result<Done, DesktopError> {
     folders.sort_by_key(|f| std::cmp::Reverse(f.components().count()));
     for f in folders {
         let _ = std::fs::remove_dir(home.join(f));
+    }
+    // The data folder and those above it, if this install made them.
+    for f in manifest.made.iter().rev() {
+        let _ = std::fs::remove_dir(f);
     }
     Ok(done)
 }

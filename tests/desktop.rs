@@ -841,3 +841,99 @@ fn new_writes_the_example_and_never_over_a_file() {
     let o = rayoflight(dir.path(), &["new", "-"]);
     assert_eq!(stdout(&o), rayoflight::EXAMPLE_SCENE);
 }
+
+/// Issue 43, item 6: install-desktop writes and deletes only what it
+/// owns. After an install, a file another program replaced and an icon
+/// the user edited are left by `--uninstall` and named (it deleted both);
+/// a desktop entry replaced by a link to the user's notes is not written
+/// through by a second install (it overwrote the notes), nor is a folder
+/// link; in a fresh home without `~/.local/share` it makes the folders,
+/// records them, and removes them again (it failed: "No such file or
+/// directory").
+#[cfg(all(feature = "gui", unix))]
+#[test]
+fn install_desktop_writes_and_removes_only_what_it_owns() {
+    let id = rayoflight::desktop::APP_ID;
+    let dir = tempfile::tempdir().unwrap();
+    // A fresh home: no .local at all. Made, then removed again.
+    let home = dir.path().join("home/.local/share");
+    fs::create_dir(dir.path().join("home")).unwrap();
+    let o = install_desktop(&home, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(home.join(format!("applications/{id}.desktop")).is_file());
+    let o = install_desktop(&home, &["--uninstall"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(tree(&dir.path().join("home")), Vec::<String>::new());
+
+    let o = install_desktop(&home, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let entry = home.join(format!("applications/{id}.desktop"));
+    let svg = home.join(format!("icons/hicolor/scalable/apps/{id}.svg"));
+    fs::write(&entry, "[Desktop Entry]\nName=Another program's\n").unwrap();
+    let mut edited = fs::read_to_string(&svg).unwrap();
+    edited.push_str("<!-- the user's touch -->\n");
+    fs::write(&svg, &edited).unwrap();
+    let o = install_desktop(&home, &["--uninstall"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    for kept in [&entry, &svg] {
+        assert!(
+            stderr(&o).contains(&format!(
+                "left {}: it changed since install-desktop wrote it",
+                kept.display()
+            )),
+            "{}",
+            stderr(&o)
+        );
+    }
+    assert_eq!(
+        fs::read_to_string(&entry).unwrap(),
+        "[Desktop Entry]\nName=Another program's\n"
+    );
+    assert_eq!(fs::read_to_string(&svg).unwrap(), edited);
+    // Nothing else of it is left: only the two changed files, in their
+    // folders (and the desktop database's cache, as an entry is left).
+    let left: Vec<String> = tree(&home)
+        .into_iter()
+        .filter(|p| p.contains('.') && !p.ends_with("mimeinfo.cache"))
+        .collect();
+    assert_eq!(
+        left,
+        [
+            format!("applications/{id}.desktop"),
+            format!("icons/hicolor/scalable/apps/{id}.svg")
+        ],
+    );
+
+    // Installed again; the entry replaced by a link to the user's notes.
+    let home = dir.path().join("share");
+    assert!(install_desktop(&home, &[]).status.success());
+    let notes = dir.path().join("notes.txt");
+    fs::write(&notes, "my notes\n").unwrap();
+    let entry = home.join(format!("applications/{id}.desktop"));
+    fs::remove_file(&entry).unwrap();
+    std::os::unix::fs::symlink(&notes, &entry).unwrap();
+    let o = install_desktop(&home, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("a symbolic link install-desktop did not make"));
+    assert_eq!(fs::read_to_string(&notes).unwrap(), "my notes\n");
+    fs::remove_file(&entry).unwrap();
+
+    // A folder link to elsewhere is not written through.
+    let elsewhere = dir.path().join("elsewhere");
+    fs::create_dir(&elsewhere).unwrap();
+    let home = dir.path().join("linked");
+    fs::create_dir(&home).unwrap();
+    std::os::unix::fs::symlink(&elsewhere, home.join("icons")).unwrap();
+    let o = install_desktop(&home, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains(&format!(
+            "{}: a symbolic link install-desktop did not make",
+            home.join("icons").display()
+        )),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(tree(&elsewhere), Vec::<String>::new());
+    assert_eq!(tree(&home), ["icons"]);
+}

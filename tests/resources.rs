@@ -447,3 +447,43 @@ fn out_of_descriptors_edit_says_so_and_blames_no_one() {
     }
     assert!(edited_at.is_some_and(|n| n <= 8), "{edited_at:?}");
 }
+
+/// Issue 43, item 5: `study` on a 4000×4000 scene under 256 MB of address
+/// space refused in one line before printing anything, with or without
+/// more threads; it aborted ("memory allocation of 144096000 bytes
+/// failed") when it drew a failure's picture. The same scene at a size
+/// that fits is studied.
+#[test]
+fn study_refuses_a_scene_past_the_memory_left_in_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = rayoflight::EXAMPLE_SCENE;
+    let at = |w: u32, h: u32| {
+        let start = example.find("<camera width=").unwrap();
+        let end = start + example[start..].find("eyeDistance").unwrap();
+        format!(
+            "{}<camera width=\"{w}\" height=\"{h}\" {}",
+            &example[..start],
+            &example[end..]
+        )
+    };
+    fs::write(dir.path().join("s4k.xml"), at(4000, 4000)).unwrap();
+    fs::write(dir.path().join("small.xml"), at(64, 48)).unwrap();
+    for threads in [&[][..], &["--threads", "8"][..]] {
+        let mut args = vec!["study", "--out", "st", "--runs", "1"];
+        args.extend(threads);
+        args.push("s4k.xml");
+        let o = run(limited(&address_space(256 << 20), dir.path(), &args));
+        let err = one_line_refusal(&o, "study");
+        assert!(
+            err.starts_with("s4k: the study at 4000×4000 needs "),
+            "{err}"
+        );
+        assert_eq!(common::stdout(&o), "", "nothing printed before");
+    }
+    let o = run(limited(
+        &address_space(256 << 20),
+        dir.path(),
+        &["study", "--out", "st", "--runs", "1", "small.xml"],
+    ));
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -188,6 +188,12 @@ fn install_desktop(uninstall: bool) -> Result<(), Failure> {
                     home.display()
                 ),
             }
+            for kept in &done.kept {
+                eprintln!(
+                    "left {}: it changed since install-desktop wrote it",
+                    rayoflight::escape::visible(&kept.display().to_string(), false)
+                );
+            }
             done
         }
     };

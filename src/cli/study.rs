@@ -34,6 +34,10 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         study::load_scenes(&args.scenes)
     }
     .map_err(|e| e.to_string())?;
+    // Every scene fits in memory, asked before anything is printed.
+    for scene in &scenes {
+        study::check_memory(scene).map_err(|e| e.to_string())?;
+    }
     // Fail on an unusable output folder before the long part.
     rayoflight::files::make_folders(&args.out)
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.out.display()))?;

@@ -28,6 +28,37 @@ pub enum StudyError {
     Render(#[from] RenderError),
     #[error("the study was cancelled")]
     Cancelled,
+    /// A scene too large for the memory left.
+    #[error("{scene}: the study at {width}×{height} {source}")]
+    Memory {
+        scene: String,
+        width: u32,
+        height: u32,
+        source: crate::resources::NotEnoughMemory,
+    },
+}
+
+/// Refuses a scene whose study needs more memory than the system gives
+/// ([`bytes_for_scene`]): asked before the first ray, a one-line refusal,
+/// not an abort when a failure's picture is drawn.
+pub fn check_memory(scene: &StudyScene) -> Result<(), StudyError> {
+    let (width, height) = (scene.scene.camera.width, scene.scene.camera.height);
+    crate::resources::check_memory(bytes_for_scene(width, height)).map_err(|source| {
+        StudyError::Memory {
+            scene: scene.name.clone(),
+            width,
+            height,
+            source,
+        }
+    })
+}
+
+/// Bytes the study holds for a scene of `width × height` pixels at once:
+/// its two references, a method's image, and the picture of a failure
+/// (three images side by side), 8-bit RGB each.
+pub fn bytes_for_scene(width: u32, height: u32) -> u64 {
+    let image = 3 * u64::from(width) * u64::from(height);
+    (2 + 1 + 3) * image
 }
 
 /// Renders on `pool` (the study's, built once), or says the study was
@@ -233,6 +264,7 @@ pub fn run(
     let mut rows = Vec::new();
     let pool = RenderPool::new(threads)?;
     for scene in scenes {
+        check_memory(scene)?;
         let references = References::new(&scene.scene, methods, &pool, cancel)?;
         for method in methods {
             let reference = references.for_method(method);
