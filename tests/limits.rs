@@ -98,6 +98,7 @@ const CHECKS: &[(&str, Check)] = &[
     ("assemble: open parts", assemble_open_parts),
     ("explain: pixel", explain_pixel),
     ("explain: the ray tree", explain_tree),
+    ("lsp: a message", lsp_message),
 ];
 
 #[test]
@@ -965,5 +966,55 @@ fn explain_tree(dir: &Path, _: &str) -> Result<(), String> {
     accepted(
         &run_with(dir, &guard, &args),
         "--aa 16 of 300 bounces in 384 MiB",
+    )
+}
+
+// ----- lsp -----
+
+/// `rayoflight lsp` with `input` on its stdin (closed after it).
+fn lsp_with(dir: &Path, input: &[u8]) -> Output {
+    use std::io::Write;
+    let mut child = Command::new(bin())
+        .arg("lsp")
+        .current_dir(dir)
+        .stdin(std::process::Stdio::piped())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .expect("the binary runs");
+    child.stdin.take().unwrap().write_all(input).unwrap();
+    child.wait_with_output().unwrap()
+}
+
+fn lsp_message(dir: &Path, error: &str) -> Result<(), String> {
+    let framed = |body: &str| format!("Content-Length: {}\r\n\r\n{body}", body.len());
+    let session = |middle: &str| {
+        [
+            framed(
+                r#"{"jsonrpc":"2.0","id":1,"method":"initialize","params":{"capabilities":{}}}"#,
+            ),
+            framed(r#"{"jsonrpc":"2.0","method":"initialized","params":{}}"#),
+            middle.to_owned(),
+            framed(r#"{"jsonrpc":"2.0","id":2,"method":"shutdown"}"#),
+            framed(r#"{"jsonrpc":"2.0","method":"exit"}"#),
+        ]
+        .concat()
+    };
+    // One byte over the limit, announced: refused at its header (the
+    // editor then goes without sending it: status 1).
+    let over = format!("Content-Length: {}\r\n\r\n", 536_870_913u64);
+    refused(
+        &lsp_with(dir, session(&over).as_bytes()),
+        1,
+        error,
+        "over the limit",
+    )?;
+    // A message under it is taken.
+    let open = framed(
+        r#"{"jsonrpc":"2.0","method":"textDocument/didOpen","params":{"textDocument":{"uri":"file:///s.xml","languageId":"xml","version":1,"text":"<scene/>"}}}"#,
+    );
+    accepted(
+        &lsp_with(dir, session(&open).as_bytes()),
+        "a message under it",
     )
 }

@@ -443,6 +443,11 @@ fn a_message_too_large_is_refused_and_the_session_goes_on() {
             Some(_) => {
                 assert_eq!(status.code(), Some(1), "the editor gone: {err}");
                 assert!(said.contains(r#""id":1"#), "{said}");
+                // Said as soon as the header is read.
+                let why = "rayoflight lsp: a message of 1000000000000 bytes is over the limit \
+                           of 537 MB (536870912 bytes); the message was dropped";
+                assert_eq!(err.lines().next(), Some(why), "{err}");
+                assert!(said.contains(why), "{said}");
             }
             None => {
                 assert_eq!(status.code(), Some(0), "{err}");

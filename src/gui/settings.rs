@@ -3,9 +3,10 @@
 //! editor of Edit › Open in editor
 //! ([`Settings`], `settings.txt`), and the recent files ([`Recent`],
 //! `recent.txt`, one path per line, newest first). Both live in
-//! `$XDG_CONFIG_HOME/rayoflight/` (or `~/.config/rayoflight/`) and are
-//! written the same way ([`store`]: atomically, best effort); tests use
-//! them in memory only. Beside
+//! `$XDG_CONFIG_HOME/rayoflight/` (or `~/.config/rayoflight/`), used only
+//! if that folder and the config home are the user's and closed to
+//! others' writes ([`Persisted::in_homes`]), and are written the same way
+//! ([`store`]: atomically, best effort); tests use them in memory only. Beside
 //! them, where the journal of unsaved edits goes (a state, not a setting:
 //! `$XDG_STATE_HOME`, [`crate::gui::journal`]).
 //!

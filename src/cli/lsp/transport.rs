@@ -102,7 +102,9 @@ fn read_all(
                     return Ok(());
                 }
             }
-            Frame::Refused(why) => {
+            Frame::Refused { why, unread } => {
+                // Said at once, before the body is read past (it may be
+                // long in coming, or never come).
                 let text = format!("rayoflight lsp: {why}; the message was dropped");
                 eprintln!("{text}");
                 let params = ShowMessageParams {
@@ -113,17 +115,30 @@ fn read_all(
                     ShowMessage::METHOD.to_owned(),
                     params,
                 )));
+                if !skip(input, unread)? {
+                    return Ok(());
+                }
             }
         }
     }
+}
+
+/// Reads past `n` bytes of the input, holding none; false where it ended
+/// first.
+pub fn skip(input: &mut impl BufRead, n: u64) -> io::Result<bool> {
+    Ok(io::copy(&mut input.take(n), &mut io::sink())? == n)
 }
 
 /// What one frame of the input was.
 #[derive(Debug)]
 pub enum Frame {
     Message(Message),
-    /// Too large for the limit or the memory left: read past, dropped.
-    Refused(String),
+    /// Too large for the limit or the memory left: dropped, its `unread`
+    /// bytes still to be read past ([`skip`]).
+    Refused {
+        why: String,
+        unread: u64,
+    },
     /// The input ended between messages.
     End,
 }
@@ -190,11 +205,10 @@ pub fn read_frame(input: &mut impl BufRead, available: Option<u64>) -> io::Resul
         }
     };
     if let Some(why) = refusal {
-        let skipped = io::copy(&mut input.take(length), &mut io::sink())?;
-        if skipped < length {
-            return Ok(Frame::End);
-        }
-        return Ok(Frame::Refused(why));
+        return Ok(Frame::Refused {
+            why,
+            unread: length,
+        });
     }
     // Grown as bytes come, never to the announced length at once.
     let mut body = Vec::new();
@@ -207,14 +221,16 @@ pub fn read_frame(input: &mut impl BufRead, available: Option<u64>) -> io::Resul
             return Ok(Frame::End);
         }
         if body.try_reserve(n).is_err() {
-            io::copy(&mut input.take(left - n as u64), &mut io::sink())?;
-            return Ok(Frame::Refused(format!(
-                "a message of {length} bytes {}",
-                resources::NotEnoughMemory {
-                    needed: length,
-                    available: None,
-                }
-            )));
+            return Ok(Frame::Refused {
+                why: format!(
+                    "a message of {length} bytes {}",
+                    resources::NotEnoughMemory {
+                        needed: length,
+                        available: None,
+                    }
+                ),
+                unread: left - n as u64,
+            });
         }
         body.extend_from_slice(&chunk[..n]);
         left -= n as u64;
@@ -245,11 +261,18 @@ mod tests {
 
     #[test]
     fn an_announced_length_takes_no_memory_before_its_bytes() {
-        // Over the limit: read past (here, the input ends), never taken.
-        let huge = b"Content-Length: 1000000000000\r\n\r\n{}";
-        assert!(matches!(frame(huge, None).unwrap(), Frame::End));
-        let mut input = io::BufReader::new(&b"Content-Length: 1000000000000\r\n\r\n"[..]);
-        assert!(matches!(read_frame(&mut input, None).unwrap(), Frame::End));
+        // Over the limit: refused at its header, the body never taken
+        // (here, the input ends before it).
+        let mut input = io::BufReader::new(&b"Content-Length: 1000000000000\r\n\r\n{}"[..]);
+        let Frame::Refused { why, unread } = read_frame(&mut input, None).unwrap() else {
+            panic!("taken");
+        };
+        assert_eq!(
+            why,
+            "a message of 1000000000000 bytes is over the limit of 537 MB (536870912 bytes)"
+        );
+        assert_eq!(unread, 1_000_000_000_000);
+        assert!(!skip(&mut input, unread).unwrap());
         // Under the limit but over the memory left: refused, read past,
         // and the next message is read.
         let body = format!(
@@ -263,11 +286,12 @@ mod tests {
             next.len()
         );
         let mut input = io::BufReader::new(text.as_bytes());
-        let Frame::Refused(why) = read_frame(&mut input, Some(1000)).unwrap() else {
+        let Frame::Refused { why, unread } = read_frame(&mut input, Some(1000)).unwrap() else {
             panic!("taken");
         };
         let starts = format!("a message of {} bytes needs", body.len());
         assert!(why.starts_with(&starts), "{why}");
+        assert!(skip(&mut input, unread).unwrap());
         assert!(matches!(
             read_frame(&mut input, None).unwrap(),
             Frame::Message(_)
