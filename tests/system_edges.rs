@@ -787,14 +787,33 @@ fn a_rename_race_redirects_no_write() {
                 .to_vec(),
         };
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
-        let mut child = spawn(dir.path(), &args);
-        let s = shared.clone();
-        let t = target.to_owned();
-        let raced = wait_for_temporary(&shared, &mut child)
-            && as_user(65534, move || {
-                fs::rename(s.join(".evil"), s.join(&t)).is_ok()
-            });
+        // The racer, user 65534 already, watches the folder itself and
+        // renames the moment root's temporary file has bytes in it.
+        let (s, t) = (shared.clone(), target.to_owned());
+        let (ready, go) = std::sync::mpsc::channel();
+        let racer = std::thread::spawn(move || {
+            use rustix::process::{Gid, Uid};
+            let (gid, uid) = (Gid::from_raw(65534), Uid::from_raw(65534));
+            rustix::thread::set_thread_res_gid(gid, gid, gid).unwrap();
+            rustix::thread::set_thread_res_uid(uid, uid, uid).unwrap();
+            ready.send(()).unwrap();
+            let start = Instant::now();
+            while start.elapsed() < Duration::from_secs(20) {
+                let writing = fs::read_dir(&s).into_iter().flatten().flatten().any(|e| {
+                    e.file_name().to_string_lossy().starts_with(".rayoflight-")
+                        && e.metadata().is_ok_and(|m| m.len() > 0)
+                });
+                if writing {
+                    return fs::rename(s.join(".evil"), s.join(&t)).is_ok();
+                }
+                std::thread::sleep(Duration::from_micros(50));
+            }
+            false
+        });
+        go.recv().unwrap();
+        let child = spawn(dir.path(), &args);
         let o = child.wait_with_output().unwrap();
+        let raced = racer.join().unwrap();
         assert!(
             fs::read(&victim).unwrap() == before,
             "round {round}: {target} redirected into root's file ({})",
@@ -809,21 +828,28 @@ fn a_rename_race_redirects_no_write() {
         );
         outcomes.push((target, raced, o.status.code(), stderr(&o)));
     }
-    // The race was run: the rename landed during the write every round,
-    // and the write said it did not happen. (`edit` reads the file now at
-    // the name to merge onto it, as it does when an editor saves by
-    // rename: root's file, which is no scene.)
+    // The race was run: the rename landed every round, and where it
+    // landed during the write, the write said it did not happen (`edit`
+    // then reads the file now at the name to merge onto it, as it does
+    // when an editor saves by rename: root's file, which is no scene).
+    // A rename that came after the write (the race lost) leaves a
+    // successful write of the attacker's own file.
     for (target, raced, code, err) in &outcomes {
         assert!(raced, "{outcomes:#?}");
-        assert_eq!(*code, Some(1), "{outcomes:#?}");
         let expected = match *target {
             "s.xml" => "shared/s.xml:1:1: unexpected text",
             _ => {
                 "shared/out.png: another program replaced the file while it was written; nothing was written\n"
             }
         };
-        assert!(err.starts_with(expected), "{outcomes:#?}");
+        assert!(
+            *code == Some(0) && err.is_empty() || *code == Some(1) && err.starts_with(expected),
+            "{outcomes:#?}"
+        );
     }
+    let won = outcomes.iter().filter(|o| o.2 == Some(1)).count();
+    eprintln!("the rename landed during the write in {won} rounds of 6");
+    assert!(won >= 3, "the race was hardly run: {outcomes:#?}");
 }
 
 /// Issue 43, item 3: the kernel's rule holds for a link in any part of a
