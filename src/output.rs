@@ -8,7 +8,8 @@
 //! compared with what was checked, a file the caller may not write
 //! refused, a replaced file's owner, group, mode and extended attributes
 //! kept, a file of several hard links updated in place through the
-//! descriptor that was checked, and a signal ([`crate::interrupt`])
+//! descriptor that was checked, as a transaction a crash cannot leave
+//! half done ([`crate::files::rewrite_in_place`]), and a signal ([`crate::interrupt`])
 //! stopping it with the temporary file removed. Nothing is written
 //! through a path once its folder is held: renaming names meanwhile can
 //! make a write fail ([`OutputError::Moved`]), never land elsewhere.
@@ -678,6 +679,8 @@ pub fn write_atomic_with<E: From<OutputError>>(
     // From here a signal is recorded, not fatal: the temporary file must go.
     let _cleanly = crate::interrupt::cleanly();
     let place = place(path)?;
+    // A rewrite of this file that a crash left half done, finished first.
+    crate::files::finish_at(&place).map_err(io_error)?;
     let mut old = None;
     for _ in 0..MAX_TRIES {
         let Some((kind, meta)) = in_the_way(path, &place)? else {
@@ -737,7 +740,7 @@ pub fn write_atomic_with<E: From<OutputError>>(
                 return Err(moved().into());
             }
             if several_names(&meta) {
-                rewrite_in_place(&place, &mut file, &mut new.file).map_err(io_error)?;
+                crate::files::rewrite_in_place(&place, &mut file, &mut new).map_err(io_error)?;
             } else {
                 new.rename_over(true).map_err(io_error)?;
             }
@@ -761,53 +764,6 @@ fn several_names(meta: &std::fs::Metadata) -> bool {
         let _ = meta;
         false
     }
-}
-
-/// Puts `new`'s bytes into `file` itself (the file at `place`, whose
-/// inode other hard links share), as vim's `backupcopy=yes` does: a copy
-/// of the old bytes is made beside it first, the new bytes written over
-/// the old and synced, then the copy removed. If that write fails (a full
-/// disk) the old bytes are put back; if even that fails, the copy stays
-/// and the error names it. Only descriptors are written: whatever the
-/// names in the folder became meanwhile, the file written is the one that
-/// was opened and checked.
-fn rewrite_in_place(
-    place: &Place,
-    file: &mut std::fs::File,
-    new: &mut std::fs::File,
-) -> std::io::Result<()> {
-    use std::io::{Seek, SeekFrom};
-    let name = place.name().to_string_lossy().into_owned();
-    let mut backup = place.new_file(&format!(".{name}."), ".rayoflight-backup")?;
-    file.seek(SeekFrom::Start(0))?;
-    let old_len = std::io::copy(file, &mut backup.file)?;
-    backup.file.sync_all()?;
-    if crate::interrupt::requested() {
-        return Err(crate::interrupt::error());
-    }
-    // From here the rewrite is finished, signal or not: it is short, and
-    // a half-written file is what must never be left.
-    let copy = |from: &mut std::fs::File, to: &mut std::fs::File| -> std::io::Result<()> {
-        from.seek(SeekFrom::Start(0))?;
-        to.seek(SeekFrom::Start(0))?;
-        let len = std::io::copy(from, to)?;
-        to.set_len(len)?;
-        to.sync_all()
-    };
-    if let Err(e) = copy(new, file) {
-        if copy(&mut backup.file, file).is_err() || file.metadata()?.len() != old_len {
-            let kept = backup.keep();
-            return Err(std::io::Error::new(
-                e.kind(),
-                format!(
-                    "{e}; the file is damaged, its old bytes are in {}",
-                    kept.display()
-                ),
-            ));
-        }
-        return Err(e);
-    }
-    Ok(())
 }
 
 #[cfg(test)]

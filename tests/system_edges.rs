@@ -1024,3 +1024,96 @@ fn a_signal_while_the_sheet_decodes_is_said() {
         assert!(!dir.path().join("sheet.png").exists());
     }
 }
+
+/// Issue 44, item 1: a crash during the rewrite in place of a hard-linked
+/// scene never leaves it mixed. `edit` of a 100 MB scene of two names is
+/// killed (SIGKILL) at several points: while it copies the old bytes
+/// aside (the file untouched), and 0, 5 and 20 ms after the rewrite's
+/// record appears (the copy over the old bytes under way). The next
+/// command that reads the file finishes the rewrite from the record: both
+/// names show the whole new text, byte for byte what an uninterrupted
+/// edit writes, and the record and its copies are gone. (Before, the file
+/// kept the new text up to where the copy got and the old text after it,
+/// shifted: a line became `<color red="0.978" green="" blue="0.5"/>`.)
+#[test]
+fn a_crash_during_a_rewrite_in_place_is_finished_by_the_next_reader() {
+    use rustix::process::Signal;
+    let dir = tempfile::tempdir().unwrap();
+    let old = spheres(900_000);
+    let edit = ["edit", "big.xml", "--set", "object[1].material.ka=0.123456"];
+    // What an uninterrupted edit writes.
+    fs::write(dir.path().join("big.xml"), &old).unwrap();
+    assert!(rayoflight(dir.path(), &edit).status.success());
+    let new = fs::read(dir.path().join("big.xml")).unwrap();
+    assert_ne!(new, old.as_bytes());
+    let record = dir.path().join(".big.xml.rayoflight-rewrite");
+    let leftovers = |dir: &Path| -> Vec<String> {
+        files_in(dir)
+            .into_iter()
+            .filter(|n| n.starts_with('.'))
+            .collect()
+    };
+    // (what to wait for, then how long before the kill)
+    let points: [(&str, u64); 4] = [("backup", 0), ("record", 0), ("record", 5), ("record", 20)];
+    let mut mixed_at_kill = 0;
+    for (wait_for, after_ms) in points {
+        for name in files_in(dir.path()) {
+            fs::remove_file(dir.path().join(name)).unwrap();
+        }
+        fs::write(dir.path().join("big.xml"), &old).unwrap();
+        fs::hard_link(
+            dir.path().join("big.xml"),
+            dir.path().join("other-link.xml"),
+        )
+        .unwrap();
+        let mut child = spawn(dir.path(), &edit);
+        let start = Instant::now();
+        let seen = loop {
+            let here = match wait_for {
+                "backup" => files_in(dir.path())
+                    .iter()
+                    .any(|n| n.ends_with(".rayoflight-backup")),
+                _ => record.exists(),
+            };
+            if here || child.try_wait().unwrap().is_some() {
+                break here;
+            }
+            assert!(start.elapsed() < Duration::from_secs(60));
+            std::thread::sleep(Duration::from_micros(100));
+        };
+        assert!(seen, "{wait_for}: the edit ended before it was seen");
+        std::thread::sleep(Duration::from_millis(after_ms));
+        signal(&child, Signal::KILL);
+        let _ = child.wait();
+        let killed_mid_copy = record.exists();
+        let at_kill = fs::read(dir.path().join("big.xml")).unwrap();
+        let mixed = at_kill != old.as_bytes() && at_kill != new;
+        mixed_at_kill += usize::from(mixed);
+        // Any command that reads the file.
+        let o = rayoflight(dir.path(), &["export-pov", "big.xml", "-out", "/dev/null"]);
+        assert!(
+            o.status.success(),
+            "{wait_for}+{after_ms}ms: {}",
+            stderr(&o)
+        );
+        let now = fs::read(dir.path().join("big.xml")).unwrap();
+        let both = fs::read(dir.path().join("other-link.xml")).unwrap();
+        assert!(now == both, "{wait_for}+{after_ms}ms: the names differ");
+        match wait_for {
+            "backup" => assert!(now == old.as_bytes(), "killed before the record: untouched"),
+            _ => {
+                assert!(
+                    now == new,
+                    "{wait_for}+{after_ms}ms: not the new text, whole"
+                );
+                assert!(!record.exists());
+                assert_eq!(leftovers(dir.path()), Vec::<String>::new());
+            }
+        }
+        eprintln!(
+            "{wait_for} + {after_ms} ms: record left by the kill: {killed_mid_copy}, the file mixed: {mixed}"
+        );
+    }
+    // The kills did land inside the copy: the readers had work to do.
+    assert!(mixed_at_kill > 0, "no kill left the file mixed");
+}

@@ -4,16 +4,21 @@
 //! never ends), where a chain of symbolic links leads for reading, the
 //! owner, group and extended attributes a replaced file keeps, the lock
 //! every read-modify-write of a scene holds, and whether two paths are
-//! one file; the folders the user's own state lives in (settings, the
+//! one file; a rewrite in place as a transaction that a crash cannot
+//! leave half done ([`rewrite`]); the folders the user's own state lives in (settings, the
 //! journal, the editor link's sockets), which must be the user's and
 //! writable by no one else ([`own_folder`]). Where a write lands, held by
 //! descriptors so that no rename can redirect it, is [`place`]'s.
 
 mod place;
+mod rewrite;
 
 #[cfg(unix)]
 pub use place::NewFile;
 pub use place::{Kind, Place, PlaceError, make_folders};
+#[cfg(unix)]
+pub use rewrite::rewrite_in_place;
+pub use rewrite::{Finished, finish, finish_at};
 
 use std::fs::Metadata;
 use std::path::{Path, PathBuf};

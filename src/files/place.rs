@@ -458,13 +458,22 @@ mod imp {
             None
         }
 
-        /// Unlinks the name (a file, never a folder).
-        pub fn remove(&self) -> std::io::Result<()> {
-            Ok(rustix::fs::unlinkat(
-                &self.folder,
-                &self.name,
-                AtFlags::empty(),
-            )?)
+        /// Opens the file `name` of the held folder, never through a link,
+        /// for reading (and writing with `write`); `None` where there is
+        /// none.
+        pub fn open_sibling(&self, name: &OsStr, write: bool) -> std::io::Result<Option<File>> {
+            let access = if write { OFlags::RDWR } else { OFlags::RDONLY };
+            let flags = access | OFlags::NOFOLLOW | OFlags::NONBLOCK | OFlags::CLOEXEC;
+            match openat(&self.folder, name, flags, Mode::empty()) {
+                Ok(fd) => Ok(Some(File::from(fd))),
+                Err(Errno::NOENT) => Ok(None),
+                Err(e) => Err(e.into()),
+            }
+        }
+
+        /// Unlinks the file `name` of the held folder.
+        pub fn remove_sibling(&self, name: &OsStr) -> std::io::Result<()> {
+            Ok(rustix::fs::unlinkat(&self.folder, name, AtFlags::empty())?)
         }
     }
 
@@ -478,6 +487,24 @@ mod imp {
     }
 
     impl NewFile<'_> {
+        /// Its name in the folder (while it has one).
+        pub fn name(&self) -> &OsStr {
+            self.name.as_deref().unwrap_or_default()
+        }
+
+        /// Renames it to `to` in the same folder, never over a file there
+        /// (`AlreadyExists`); it is still removed when dropped.
+        pub fn rename_to(&mut self, to: &OsStr) -> std::io::Result<()> {
+            use rustix::fs::{RenameFlags, renameat_with};
+            let Some(name) = self.name.as_ref() else {
+                return Ok(());
+            };
+            let folder = &self.place.folder;
+            renameat_with(folder, name, folder, to, RenameFlags::NOREPLACE)?;
+            self.name = Some(to.to_owned());
+            Ok(())
+        }
+
         /// A path that opens this very file for reading (its descriptor
         /// in `/proc/self/fd`), whatever is renamed meanwhile; its path
         /// in the folder where there is no `/proc`.

@@ -57,7 +57,9 @@ pub const MAX_LIGHTS: usize = 1_000_000;
 /// Most pixels (`width * height`) in the camera's image: 2^28.
 pub const MAX_PIXELS: u64 = 1 << 28;
 
-/// Reads and parses the scene file at `path`.
+/// Reads and parses the scene file at `path`. A rewrite of it in place
+/// that a crash left half done is finished first
+/// ([`crate::files::finish`]).
 ///
 /// The size is checked from the file's metadata before reading (and again
 /// while reading, should the file grow): above [`MAX_FILE_BYTES`] it is
@@ -179,6 +181,9 @@ fn streamed(
     pack: bool,
     progress: Option<&LoadProgress>,
 ) -> Option<Streamed> {
+    // A rewrite in place that a crash left half done is finished before
+    // the file is read ([`crate::files::finish`]): no reader sees it mixed.
+    let _ = crate::files::finish(path);
     let meta = fs::metadata(path).ok()?;
     if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
         return None;
@@ -401,6 +406,8 @@ pub fn load_counting(
     like: &[Arc<Object>],
     progress: Option<&LoadProgress>,
 ) -> Result<(String, Scene), LoadError> {
+    // As in [`streamed`]: a crashed rewrite in place is finished first.
+    let _ = crate::files::finish(path);
     let fail = |kind| LoadError::new(path, None, kind);
     let io = |e: std::io::Error| {
         fail(LoadErrorKind::Io {
