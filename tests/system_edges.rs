@@ -396,17 +396,22 @@ fn concurrent_edits_keep_every_change() {
     assert_eq!(files_in(dir.path()), ["q.xml"]);
 }
 
+/// Whether a temporary file of ours with bytes in it is in `dir` (the
+/// empty one that checks the folder takes new files, before any work, is
+/// not the write).
+fn writing_in(dir: &Path) -> bool {
+    fs::read_dir(dir).into_iter().flatten().flatten().any(|e| {
+        e.file_name().to_string_lossy().starts_with(".rayoflight-")
+            && e.metadata().is_ok_and(|m| m.len() > 0)
+    })
+}
+
 /// Waits until a temporary file of ours appears in `dir` (or `child`
 /// ends); returns whether one did.
 fn wait_for_temporary(dir: &Path, child: &mut Child) -> bool {
     let start = Instant::now();
-    // Bytes in it: the empty one that checks the folder takes new files,
-    // before any work, is not the write.
-    let writing = |name: &String| {
-        name.starts_with(".rayoflight-") && fs::metadata(dir.join(name)).is_ok_and(|m| m.len() > 0)
-    };
     while start.elapsed() < Duration::from_secs(60) {
-        if files_in(dir).iter().any(writing) {
+        if writing_in(dir) {
             return true;
         }
         if child.try_wait().unwrap().is_some() {
@@ -706,14 +711,20 @@ fn an_edit_waiting_for_the_lock_still_obeys_a_signal() {
 /// machine would make it. The test process keeps root.
 fn as_user<T: Send + 'static>(uid: u32, attack: impl FnOnce() -> T + Send + 'static) -> T {
     std::thread::spawn(move || {
-        use rustix::process::{Gid, Uid};
-        let (gid, uid) = (Gid::from_raw(uid), Uid::from_raw(uid));
-        rustix::thread::set_thread_res_gid(gid, gid, gid).unwrap();
-        rustix::thread::set_thread_res_uid(uid, uid, uid).unwrap();
+        become_user(uid);
         attack()
     })
     .join()
     .unwrap()
+}
+
+/// The calling thread becomes user `uid` (its group the same number),
+/// the rest of the process staying as it is.
+fn become_user(uid: u32) {
+    use rustix::process::{Gid, Uid};
+    let (gid, uid) = (Gid::from_raw(uid), Uid::from_raw(uid));
+    rustix::thread::set_thread_res_gid(gid, gid, gid).unwrap();
+    rustix::thread::set_thread_res_uid(uid, uid, uid).unwrap();
 }
 
 /// A folder of root's that no one else may enter, with a file in it: what
@@ -792,18 +803,11 @@ fn a_rename_race_redirects_no_write() {
         let (s, t) = (shared.clone(), target.to_owned());
         let (ready, go) = std::sync::mpsc::channel();
         let racer = std::thread::spawn(move || {
-            use rustix::process::{Gid, Uid};
-            let (gid, uid) = (Gid::from_raw(65534), Uid::from_raw(65534));
-            rustix::thread::set_thread_res_gid(gid, gid, gid).unwrap();
-            rustix::thread::set_thread_res_uid(uid, uid, uid).unwrap();
+            become_user(65534);
             ready.send(()).unwrap();
             let start = Instant::now();
             while start.elapsed() < Duration::from_secs(20) {
-                let writing = fs::read_dir(&s).into_iter().flatten().flatten().any(|e| {
-                    e.file_name().to_string_lossy().starts_with(".rayoflight-")
-                        && e.metadata().is_ok_and(|m| m.len() > 0)
-                });
-                if writing {
+                if writing_in(&s) {
                     return fs::rename(s.join(".evil"), s.join(&t)).is_ok();
                 }
                 std::thread::sleep(Duration::from_micros(50));

@@ -584,6 +584,22 @@ fn journal_entries(folder: &Path) -> Vec<PathBuf> {
     found
 }
 
+/// The app on `path` with its journal in `folder`: the illumination set
+/// to lambert, the edit journaled, then the process dies (nothing runs at
+/// exit).
+fn crash_with_an_edit_journaled(path: &Path, folder: &Path) {
+    let mut harness = app_with_journal(Document::open(path).unwrap(), folder);
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    step_until(
+        &mut harness,
+        Duration::from_millis(1500),
+        "the journal",
+        |_| !journal_entries(folder).is_empty(),
+    );
+    std::mem::forget(harness);
+}
+
 fn status_says(harness: &Harness<'_, RayOfLightApp>, words: &str) -> bool {
     harness.query_by_label_contains(words).is_some()
 }
@@ -602,16 +618,7 @@ fn a_journal_folder_others_may_write_is_not_used() {
     assert_eq!(folder, state.join("rayoflight/journal"));
     // A journal written as the app writes one: the edit it holds is what
     // another user would plant.
-    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
-    harness.get_by_label("lambert").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
-    std::mem::forget(harness);
+    crash_with_an_edit_journaled(&path, &folder);
     let set_mode =
         |m: u32| std::fs::set_permissions(&folder, std::fs::Permissions::from_mode(m)).unwrap();
     set_mode(0o777);
@@ -728,16 +735,7 @@ fn item_3_unsaved_edits_are_journaled_and_restored_after_a_crash() {
 fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
     let (dir, path) = file_with(EXAMPLE);
     let folder = dir.path().join("journal");
-    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
-    harness.get_by_label("lambert").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
-    std::mem::forget(harness);
+    crash_with_an_edit_journaled(&path, &folder);
     // Another program inserts a sphere and moves the light meanwhile.
     let theirs = EXAMPLE
         .replace(r#"light x="1""#, r#"light x="7""#)
@@ -786,16 +784,7 @@ fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
 fn item_3_a_damaged_journal_is_set_aside_with_a_notice() {
     let (dir, path) = file_with(EXAMPLE);
     let folder = dir.path().join("journal");
-    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
-    harness.get_by_label("lambert").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
-    std::mem::forget(harness);
+    crash_with_an_edit_journaled(&path, &folder);
     // Cut short, as by a full disk.
     let entry = journal_entries(&folder).remove(0);
     let text = std::fs::read_to_string(&entry).unwrap();

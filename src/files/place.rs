@@ -182,106 +182,150 @@ mod imp {
             .collect()
     }
 
-    pub(super) fn reach(path: &Path, follow_last: bool) -> Result<Place, PlaceError> {
-        let start = |absolute: bool| -> Result<(OwnedFd, PathBuf), PlaceError> {
-            match absolute {
-                true => Ok((open_folder(CWD, OsStr::new("/"))?, PathBuf::from("/"))),
-                false => Ok((open_folder(CWD, OsStr::new("."))?, PathBuf::new())),
+    /// A walk of a path a part at a time: the folder reached so far, held
+    /// open, its path as the walk spells it, the parts still to walk, and
+    /// the links followed. [`reach`] and [`make_folders`] both walk so.
+    struct Walk {
+        folder: OwnedFd,
+        shown: PathBuf,
+        pending: VecDeque<OsString>,
+        links: usize,
+    }
+
+    impl Walk {
+        /// The walk of `path`, at `/` or the current folder.
+        fn start(path: &Path) -> Result<Walk, PlaceError> {
+            let mut walk = Walk {
+                folder: open_folder(CWD, OsStr::new("."))?,
+                shown: PathBuf::new(),
+                pending: parts(path),
+                links: 0,
+            };
+            if path.has_root() {
+                walk.back_to_root()?;
             }
-        };
-        let (mut folder, mut shown) = start(path.has_root())?;
-        let mut pending = parts(path);
-        let mut links = 0;
-        while let Some(part) = pending.pop_front() {
+            Ok(walk)
+        }
+
+        fn back_to_root(&mut self) -> Result<(), PlaceError> {
+            self.folder = open_folder(CWD, OsStr::new("/"))?;
+            self.shown = PathBuf::from("/");
+            Ok(())
+        }
+
+        /// The folder's path for a message (`.` for the current one).
+        fn shown_folder(&self) -> PathBuf {
+            match self.shown.as_os_str().is_empty() {
+                true => PathBuf::from("."),
+                false => self.shown.clone(),
+            }
+        }
+
+        /// One more link followed, or a name looked at again: past
+        /// [`MAX_LINKS`], a loop.
+        fn count_link(&mut self) -> Result<(), PlaceError> {
+            self.links += 1;
+            match self.links > MAX_LINKS {
+                true => Err(LinkError::Loop.into()),
+                false => Ok(()),
+            }
+        }
+
+        /// The link `part` of the folder (`st` its own facts) may be
+        /// followed, as the kernel's rule allows; it is counted.
+        fn allow_link(&mut self, part: &OsStr, st: &rustix::fs::Stat) -> Result<(), PlaceError> {
+            if !may_follow(st, self.folder.as_fd()) {
+                return Err(LinkError::Protected {
+                    link: self.shown.join(part),
+                    folder: self.shown_folder(),
+                }
+                .into());
+            }
+            self.count_link()
+        }
+
+        /// Follows the link `part`: its target's parts are walked next,
+        /// from `/` where it is absolute.
+        fn follow(&mut self, part: &OsStr) -> Result<(), PlaceError> {
+            let target = readlinkat(&self.folder, part, Vec::new())?;
+            let target = Path::new(OsStr::from_bytes(target.as_bytes()));
+            if target.has_root() {
+                self.back_to_root()?;
+            }
+            for p in parts(target).into_iter().rev() {
+                self.pending.push_front(p);
+            }
+            Ok(())
+        }
+
+        /// Goes into the folder `part`; one made a link or a file since it
+        /// was looked at is looked at again.
+        fn enter(&mut self, part: OsString) -> Result<(), PlaceError> {
+            match open_folder(self.folder.as_fd(), &part) {
+                Ok(next) => {
+                    self.folder = next;
+                    self.shown.push(part);
+                    Ok(())
+                }
+                Err(Errno::LOOP | Errno::NOTDIR) => {
+                    self.count_link()?;
+                    self.pending.push_front(part);
+                    Ok(())
+                }
+                Err(Errno::NOENT) => Err(PlaceError::NoFolder(self.shown.join(part))),
+                Err(e) => Err(PlaceError::Io(e.into())),
+            }
+        }
+
+        /// The place of the name `name` in the folder reached.
+        fn place(self, name: OsString, magic: bool) -> Place {
+            Place {
+                folder_path: self.shown_folder(),
+                folder: self.folder,
+                name,
+                magic,
+            }
+        }
+    }
+
+    pub(super) fn reach(path: &Path, follow_last: bool) -> Result<Place, PlaceError> {
+        let mut walk = Walk::start(path)?;
+        while let Some(part) = walk.pending.pop_front() {
             if part == ".." {
-                folder = open_folder(folder.as_fd(), &part)?;
-                shown.push("..");
+                walk.enter(part)?;
                 continue;
             }
-            let last = pending.is_empty();
-            let here = shown.join(&part);
-            let st = match statat(&folder, &part, AtFlags::SYMLINK_NOFOLLOW) {
+            let last = walk.pending.is_empty();
+            let st = match statat(&walk.folder, &part, AtFlags::SYMLINK_NOFOLLOW) {
                 Ok(st) => st,
-                Err(Errno::NOENT) if last => return Ok(place(folder, shown, part, false)),
+                Err(Errno::NOENT) if last => return Ok(walk.place(part, false)),
                 // The folder the file was to go in, named whole.
                 Err(Errno::NOENT) => {
-                    let folder = pending.range(..pending.len() - 1);
-                    return Err(PlaceError::NoFolder(folder.fold(here, |p, q| p.join(q))));
+                    let rest = walk.pending.range(..walk.pending.len() - 1);
+                    let folder = rest.fold(walk.shown.join(&part), |p, q| p.join(q));
+                    return Err(PlaceError::NoFolder(folder));
                 }
                 Err(e) => return Err(PlaceError::Io(e.into())),
             };
             match kind(&st) {
-                Kind::Link if last && !follow_last => {
-                    return Ok(place(folder, shown, part, false));
-                }
+                Kind::Link if last && !follow_last => return Ok(walk.place(part, false)),
                 Kind::Link => {
-                    let in_folder = if shown.as_os_str().is_empty() {
-                        PathBuf::from(".")
-                    } else {
-                        shown.clone()
-                    };
-                    if !may_follow(&st, folder.as_fd()) {
-                        return Err(LinkError::Protected {
-                            link: here,
-                            folder: in_folder,
-                        }
-                        .into());
+                    walk.allow_link(&part, &st)?;
+                    if last && is_proc(walk.folder.as_fd()) {
+                        return Ok(walk.place(part, true));
                     }
-                    links += 1;
-                    if links > MAX_LINKS {
-                        return Err(LinkError::Loop.into());
-                    }
-                    if last && is_proc(folder.as_fd()) {
-                        return Ok(place(folder, shown, part, true));
-                    }
-                    let target = readlinkat(&folder, &part, Vec::new())?;
-                    let target = Path::new(OsStr::from_bytes(target.as_bytes()));
-                    if target.has_root() {
-                        (folder, shown) = start(true)?;
-                    }
-                    for p in parts(target).into_iter().rev() {
-                        pending.push_front(p);
-                    }
+                    walk.follow(&part)?;
                     // A link to `/` or `.` as the last part: a folder.
-                    if pending.is_empty() {
+                    if walk.pending.is_empty() {
                         return Err(PlaceError::IsDirectory);
                     }
                 }
-                _ if last => return Ok(place(folder, shown, part, false)),
-                Kind::Directory => match open_folder(folder.as_fd(), &part) {
-                    Ok(next) => {
-                        folder = next;
-                        shown = here;
-                    }
-                    // Made a link since it was looked at: look again.
-                    Err(Errno::LOOP | Errno::NOTDIR) => {
-                        links += 1;
-                        if links > MAX_LINKS {
-                            return Err(LinkError::Loop.into());
-                        }
-                        pending.push_front(part);
-                    }
-                    Err(Errno::NOENT) => return Err(PlaceError::NoFolder(here)),
-                    Err(e) => return Err(PlaceError::Io(e.into())),
-                },
-                _ => return Err(PlaceError::NotAFolder(here)),
+                _ if last => return Ok(walk.place(part, false)),
+                Kind::Directory => walk.enter(part)?,
+                _ => return Err(PlaceError::NotAFolder(walk.shown.join(part))),
             }
         }
         Err(PlaceError::IsDirectory)
-    }
-
-    fn place(folder: OwnedFd, shown: PathBuf, name: OsString, magic: bool) -> Place {
-        let folder_path = if shown.as_os_str().is_empty() {
-            PathBuf::from(".")
-        } else {
-            shown
-        };
-        Place {
-            folder,
-            folder_path,
-            name,
-            magic,
-        }
     }
 
     impl Place {
@@ -605,69 +649,27 @@ mod imp {
     /// (mode 0777 less the umask), walking it as [`Place::reach`] does:
     /// a link in any part followed only as the rule allows.
     pub fn make_folders(path: &Path) -> Result<(), PlaceError> {
-        let (mut folder, mut shown) = match path.has_root() {
-            true => (open_folder(CWD, OsStr::new("/"))?, PathBuf::from("/")),
-            false => (open_folder(CWD, OsStr::new("."))?, PathBuf::new()),
-        };
-        let mut pending = parts(path);
-        let mut links = 0;
-        while let Some(part) = pending.pop_front() {
-            let here = shown.join(&part);
-            match statat(&folder, &part, AtFlags::SYMLINK_NOFOLLOW) {
+        let mut walk = Walk::start(path)?;
+        while let Some(part) = walk.pending.pop_front() {
+            match statat(&walk.folder, &part, AtFlags::SYMLINK_NOFOLLOW) {
                 Ok(st) if kind(&st) == Kind::Link => {
-                    let in_folder = if shown.as_os_str().is_empty() {
-                        PathBuf::from(".")
-                    } else {
-                        shown.clone()
-                    };
-                    if !may_follow(&st, folder.as_fd()) {
-                        return Err(LinkError::Protected {
-                            link: here,
-                            folder: in_folder,
-                        }
-                        .into());
-                    }
-                    links += 1;
-                    if links > MAX_LINKS {
-                        return Err(LinkError::Loop.into());
-                    }
-                    let target = readlinkat(&folder, &part, Vec::new())?;
-                    let target = Path::new(OsStr::from_bytes(target.as_bytes()));
-                    if target.has_root() {
-                        folder = open_folder(CWD, OsStr::new("/"))?;
-                        shown = PathBuf::from("/");
-                    }
-                    for p in parts(target).into_iter().rev() {
-                        pending.push_front(p);
-                    }
+                    walk.allow_link(&part, &st)?;
+                    walk.follow(&part)?;
                     continue;
                 }
                 Ok(st) if kind(&st) != Kind::Directory => {
-                    return Err(PlaceError::NotAFolder(here));
+                    return Err(PlaceError::NotAFolder(walk.shown.join(part)));
                 }
                 Ok(_) => {}
                 Err(Errno::NOENT) => {
-                    match rustix::fs::mkdirat(&folder, &part, Mode::from_raw_mode(0o777)) {
+                    match rustix::fs::mkdirat(&walk.folder, &part, Mode::from_raw_mode(0o777)) {
                         Ok(()) | Err(Errno::EXIST) => {}
                         Err(e) => return Err(PlaceError::Io(e.into())),
                     }
                 }
                 Err(e) => return Err(PlaceError::Io(e.into())),
             }
-            match open_folder(folder.as_fd(), &part) {
-                Ok(next) => {
-                    folder = next;
-                    shown = here;
-                }
-                Err(Errno::LOOP) => {
-                    links += 1;
-                    if links > MAX_LINKS {
-                        return Err(LinkError::Loop.into());
-                    }
-                    pending.push_front(part);
-                }
-                Err(e) => return Err(PlaceError::Io(e.into())),
-            }
+            walk.enter(part)?;
         }
         Ok(())
     }

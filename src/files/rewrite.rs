@@ -66,7 +66,10 @@ fn copy_over(from: &mut File, to: &mut File) -> std::io::Result<u64> {
 /// back; if even that fails, the backup and the record stay, and the error
 /// names the backup. Only descriptors are written: whatever the names in
 /// the folder became meanwhile, the file written is the one that was
-/// opened and checked. `new` must be complete and synced.
+/// opened and checked. `new` must be complete and synced, and a record
+/// a crash left of an earlier rewrite finished first ([`finish_at`], as
+/// [`crate::output::write_atomic_with`] does before any write): this
+/// record never replaces one.
 #[cfg(unix)]
 pub fn rewrite_in_place(
     place: &Place,
@@ -74,8 +77,6 @@ pub fn rewrite_in_place(
     new: &mut super::NewFile<'_>,
 ) -> std::io::Result<()> {
     use std::os::unix::fs::MetadataExt;
-    // A crashed rewrite of this file first.
-    finish_at(place)?;
     let name = place.name().to_string_lossy().into_owned();
     let mut backup = place.new_file(&format!(".{name}."), ".rayoflight-backup")?;
     file.seek(SeekFrom::Start(0))?;

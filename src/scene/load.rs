@@ -182,7 +182,8 @@ fn streamed(
     progress: Option<&LoadProgress>,
 ) -> Option<Streamed> {
     // A rewrite in place that a crash left half done is finished before
-    // the file is read ([`crate::files::finish`]): no reader sees it mixed.
+    // the file is looked at ([`crate::files::finish`]): no reader sees it
+    // mixed, nor its length mid-copy.
     let _ = crate::files::finish(path);
     let meta = fs::metadata(path).ok()?;
     if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
