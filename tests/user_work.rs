@@ -597,7 +597,15 @@ fn crash_with_an_edit_journaled(path: &Path, folder: &Path) {
         "the journal",
         |_| !journal_entries(folder).is_empty(),
     );
-    std::mem::forget(harness);
+    crash(harness);
+}
+
+/// The app ends as a crash ends it: nothing of its own runs at exit (no
+/// question, no save, no removal of its journal); what the system does
+/// for any process that ends happens — its lock on its journal goes.
+/// (Dropping the app stops its threads and waits for them.)
+fn crash(harness: Harness<'static, RayOfLightApp>) {
+    drop(harness);
 }
 
 fn status_says(harness: &Harness<'_, RayOfLightApp>, words: &str) -> bool {
@@ -685,7 +693,7 @@ fn item_3_unsaved_edits_are_journaled_and_restored_after_a_crash() {
         }
     }
     // The process dies: nothing runs at exit.
-    std::mem::forget(harness);
+    crash(harness);
     assert_eq!(read(&path), EXAMPLE, "the file is never written unasked");
 
     let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
@@ -770,7 +778,7 @@ fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
         "the journal",
         |_| !journal_entries(&folder).is_empty(),
     );
-    std::mem::forget(harness);
+    crash(harness);
     let ambient = read(&path).replace(r#"type="lambert""#, r#"type="ambient""#);
     std::fs::write(&path, &ambient).unwrap();
     let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
@@ -1178,4 +1186,320 @@ fn the_selection_follows_its_object_through_another_programs_change() {
         4,
     );
     assert_eq!(harness.state().selected_object(), None);
+}
+
+// ----- issue 44: one journal per window, found by the file's identity -----
+
+/// Selects the object labelled `object` in the list, then types `value`
+/// over the panel's field that shows `old`, as a user does (the field
+/// focused, its text selected, the new text typed, Enter).
+fn type_value(harness: &mut Harness<'_, RayOfLightApp>, object: &str, old: f64, value: &str) {
+    harness.get_by_label(object).click();
+    harness.run_steps(2);
+    let field =
+        harness.get_by(move |node| node.numeric_value().is_some_and(|v| (v - old).abs() < 1e-9));
+    field.focus();
+    harness.run_steps(2);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    harness.run_steps(1);
+    harness.get_by(|node| node.is_focused()).type_text(value);
+    harness.run_steps(1);
+    harness.key_press(egui::Key::Enter);
+    harness.run_steps(2);
+}
+
+/// Runs frames until `folder` holds `n` journal entries.
+fn until_entries(harness: &mut Harness<'_, RayOfLightApp>, folder: &Path, n: usize) {
+    step_until(harness, Duration::from_secs(3), "the journal", |_| {
+        journal_entries(folder).len() == n
+    });
+}
+
+fn material(doc: &Document, object: usize, coef: Coef) -> f64 {
+    let field = Field::Material { object, coef };
+    match field.get(doc.scene()).unwrap() {
+        Value::Number(v) => v,
+        other => panic!("{other:?}"),
+    }
+}
+
+/// Issue 44, item 2 (a): two windows on one file each keep their own
+/// entry; both killed, the next start restores both windows' edits (the
+/// one journal file held only the last window's: A's edit was lost).
+#[test]
+fn two_windows_on_one_file_both_keep_their_edits_through_a_crash() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let mut a = app_with_journal(Document::open(&path).unwrap(), &folder);
+    let mut b = app_with_journal(Document::open(&path).unwrap(), &folder);
+    type_value(&mut a, "#2 small red ball sphere", 0.4, "0.61");
+    assert_eq!(material(a.state().document(), 1, Coef::Ka), 0.61);
+    until_entries(&mut a, &folder, 1);
+    type_value(&mut b, "#2 small red ball sphere", 0.5, "0.71");
+    assert_eq!(material(b.state().document(), 1, Coef::Kd), 0.71);
+    until_entries(&mut b, &folder, 2);
+    a.run_steps(2);
+    assert_eq!(journal_entries(&folder).len(), 2, "one entry each");
+
+    // A third window while both live takes nothing, and says why.
+    let c = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(!c.state().document().has_unsaved_edits());
+    assert!(status_says(
+        &c,
+        "another RayOfLight window has unsaved edits"
+    ));
+    drop(c);
+
+    crash(a);
+    crash(b);
+    assert_eq!(read(&path), EXAMPLE);
+    let mut d = app_with_journal(Document::open(&path).unwrap(), &folder);
+    step_until(&mut d, Duration::from_secs(3), "both restored", |app| {
+        material(app.document(), 1, Coef::Kd) == 0.71
+    });
+    let doc = d.state().document();
+    assert_eq!(material(doc, 1, Coef::Ka), 0.61);
+    assert!(status_says(&d, "restored 1 unsaved edit from"));
+    assert!(status_says(&d, "restored 1 unsaved edit of another window"));
+    // Both in one entry, this window's, and the dead windows' gone.
+    until_entries(&mut d, &folder, 1);
+    d.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    step_until(&mut d, Duration::from_secs(10), "the save", |app| {
+        !app.is_saving() && !app.document().has_unsaved_edits()
+    });
+    assert_eq!(
+        read(&path),
+        EXAMPLE.replace(
+            r#"<material ka="0.4" kd="0.5""#,
+            r#"<material ka="0.61" kd="0.71""#
+        )
+    );
+    until_entries(&mut d, &folder, 0);
+}
+
+/// Issue 44, item 2 (b): a window opened on a file another window is
+/// editing never takes that window's edits, and undoing its own removes
+/// only its own entry; the first window's edit outlives its crash.
+#[test]
+fn a_window_never_takes_the_journal_of_a_window_still_open() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let mut a = app_with_journal(Document::open(&path).unwrap(), &folder);
+    type_value(&mut a, "#2 small red ball sphere", 0.4, "0.61");
+    until_entries(&mut a, &folder, 1);
+    let mut b = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(
+        !b.state().document().has_unsaved_edits(),
+        "A's edit stays A's"
+    );
+    b.get_by_label("lambert").click();
+    b.run_steps(1);
+    until_entries(&mut b, &folder, 2);
+    b.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    until_entries(&mut b, &folder, 1);
+    drop(b);
+    crash(a);
+    let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    let doc = harness.state().document();
+    assert_eq!(material(doc, 1, Coef::Ka), 0.61);
+    assert_eq!(doc.scene().model.illumination, scene::Illumination::Whitted);
+}
+
+/// Issue 44, item 2: two dead windows that set one value differently:
+/// the restart asks, as for any conflict, and writes nothing until then;
+/// the entries go once it is settled.
+#[test]
+fn two_dead_windows_that_changed_one_value_are_asked_about() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let mut a = app_with_journal(Document::open(&path).unwrap(), &folder);
+    let mut b = app_with_journal(Document::open(&path).unwrap(), &folder);
+    a.get_by_label("lambert").click();
+    a.run_steps(1);
+    until_entries(&mut a, &folder, 1);
+    b.get_by_label("phong").click();
+    b.run_steps(1);
+    until_entries(&mut b, &folder, 2);
+    crash(a);
+    crash(b);
+    let mut c = app_with_journal(Document::open(&path).unwrap(), &folder);
+    step_until(&mut c, Duration::from_secs(3), "the question", |app| {
+        app.document().conflict().is_some()
+    });
+    c.run_steps(2);
+    assert!(
+        c.query_by_label("Two windows edited the same values")
+            .is_some()
+    );
+    let doc = c.state().document();
+    assert_eq!(doc.scene().model.illumination, scene::Illumination::Lambert);
+    assert_eq!(
+        journal_entries(&folder).len(),
+        2,
+        "nothing goes before the answer"
+    );
+    c.get_by_label("Keep all of the other window's").click();
+    c.run_steps(2);
+    assert!(c.state().document().conflict().is_none());
+    assert_eq!(
+        c.state().document().scene().model.illumination,
+        scene::Illumination::Phong
+    );
+    until_entries(&mut c, &folder, 1);
+    assert_eq!(read(&path), EXAMPLE);
+}
+
+/// Issue 44, item 5: the journal knows the file, not the path string: an
+/// edit made through a link comes back at the real path; a file moved
+/// since comes back at its new path; an unrelated file put at the old
+/// path is not merged with them but asked about.
+#[cfg(unix)]
+#[test]
+fn unsaved_edits_follow_their_file_through_links_and_moves() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    let link = dir.path().join("link.xml");
+    std::os::unix::fs::symlink(&path, &link).unwrap();
+    crash_with_an_edit_journaled(&link, &folder);
+    let harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert_eq!(
+        harness.state().document().scene().model.illumination,
+        scene::Illumination::Lambert,
+        "made through the link, found at the real path"
+    );
+    crash(harness);
+
+    // Moved, then opened where it went.
+    std::fs::create_dir(dir.path().join("moved")).unwrap();
+    let moved = dir.path().join("moved/scene.xml");
+    std::fs::rename(&path, &moved).unwrap();
+    let harness = app_with_journal(Document::open(&moved).unwrap(), &folder);
+    assert_eq!(
+        harness.state().document().scene().model.illumination,
+        scene::Illumination::Lambert
+    );
+    assert!(status_says(&harness, "(made at "));
+    crash(harness);
+
+    // A new, unrelated scene made at its old name.
+    let other = EXAMPLE.replace(r#"depth="2""#, r#"depth="5""#);
+    std::fs::write(&path, &other).unwrap();
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    harness.run_steps(2);
+    assert!(
+        !harness.state().document().has_unsaved_edits(),
+        "not merged unasked"
+    );
+    assert!(
+        harness
+            .query_by_label("Unsaved edits of another file")
+            .is_some()
+    );
+    harness.get_by_label("Keep them for later").click();
+    harness.run_steps(2);
+    assert!(!harness.state().document().has_unsaved_edits());
+    assert!(
+        harness
+            .query_by_label("Unsaved edits of another file")
+            .is_none()
+    );
+    crash(harness);
+    assert_eq!(read(&path), other);
+    // The file they were made on, opened: restored without a question.
+    let harness = app_with_journal(Document::open(&moved).unwrap(), &folder);
+    assert_eq!(
+        harness.state().document().scene().model.illumination,
+        scene::Illumination::Lambert
+    );
+    crash(harness);
+    // Asked again at the new file, restored onto it when the user says so.
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    harness.run_steps(2);
+    harness.get_by_label("Restore them onto this file").click();
+    harness.run_steps(2);
+    let s = harness.state().document().scene().clone();
+    assert_eq!(s.model.illumination, scene::Illumination::Lambert);
+    assert_eq!(s.model.depth, 5, "onto the file as it is");
+}
+
+/// Issue 44, item 8: a save that finished before the app was killed (its
+/// entry not yet removed): the next start says the edits are in the file
+/// already, not "restored … merged", and nothing is unsaved.
+#[test]
+fn edits_saved_before_a_crash_are_not_restored_again() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    crash_with_an_edit_journaled(&path, &folder);
+    // The save's new file, renamed into place as the app saves.
+    replace_atomically(
+        &path,
+        &EXAMPLE.replace(r#"type="whitted""#, r#"type="lambert""#),
+    );
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(!harness.state().document().has_unsaved_edits());
+    assert!(status_says(&harness, "are in the file already"));
+    assert!(!status_says(&harness, "restored"));
+    assert!(
+        harness
+            .query_by_label("Unsaved edits of another file")
+            .is_none()
+    );
+    until_entries(&mut harness, &folder, 0);
+}
+
+/// Issue 44, item 3: after the user settles a conflict, the selection
+/// (the list, the panel, the next edit) is still the object it was, and
+/// the dialog numbers the value as the file numbers it now. (The
+/// selection was left on the number, which another program's insertion
+/// above had given to another object.)
+#[test]
+fn the_selection_keeps_its_object_when_a_conflict_is_settled() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    type_value(&mut harness, "#2 small red ball sphere", 0.4, "0.11");
+    assert_eq!(harness.state().selected_object(), Some(1));
+    assert_eq!(material(harness.state().document(), 1, Coef::Ka), 0.11);
+    // Another program puts a sphere above the red ball and sets its ka.
+    let theirs = EXAMPLE
+        .replacen(
+            "<!-- small red ball -->",
+            "<!-- blue ball -->\n<sphere/>\n<!-- small red ball -->",
+            1,
+        )
+        .replace(r#"<material ka="0.4""#, r#"<material ka="0.22""#);
+    replace_atomically(&path, &theirs);
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the conflict",
+        |app| app.document().conflict().is_some(),
+    );
+    harness.run_steps(2);
+    assert!(
+        harness.query_by_label("object[3].material.ka").is_some(),
+        "numbered as the file has it now"
+    );
+    harness.get_by_label("Keep all of mine").click();
+    harness.run_steps(2);
+    let doc = harness.state().document();
+    assert!(doc.conflict().is_none());
+    assert_eq!(material(doc, 2, Coef::Ka), 0.11);
+    assert_eq!(
+        harness.state().selected_object(),
+        Some(2),
+        "still the red ball"
+    );
+    assert!(
+        harness
+            .query_by_label("Edit #3 small red ball sphere")
+            .is_some()
+    );
+    // The next edit goes to it too.
+    type_value(&mut harness, "#3 small red ball sphere", 0.5, "0.52");
+    assert_eq!(material(harness.state().document(), 2, Coef::Kd), 0.52);
+    assert_eq!(
+        material(harness.state().document(), 1, Coef::Kd),
+        parse(&theirs).objects[1].material.kd,
+        "the blue ball untouched"
+    );
 }

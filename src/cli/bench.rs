@@ -785,12 +785,7 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
     let journal = tempfile::tempdir().map_err(|e| error(&e))?;
     let writer = Writer::start(journal.path().to_owned());
     writer.send(Job::Write {
-        entry: Entry {
-            scene: rayoflight::files::absolute(path),
-            base_fingerprint: doc.file_fingerprint(),
-            saved_at: std::time::SystemTime::now(),
-            edits: doc.unsaved_edits(),
-        },
+        entry: Entry::now(path, doc.file_fingerprint(), doc.unsaved_edits()),
         base: Some(doc.file_text_writer()),
     });
     picture(&worker, doc.scene())?;

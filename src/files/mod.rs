@@ -307,6 +307,12 @@ pub fn lock_for_update(path: &Path) -> std::io::Result<Option<UpdateLock>> {
     }
 }
 
+/// Whether two files' metadata are of one file (Unix: the same device
+/// and inode; elsewhere always, as [`lock_for_update`] takes it).
+pub fn same_metadata(a: &Metadata, b: &Metadata) -> bool {
+    identity_of(a) == identity_of(b)
+}
+
 /// The inode of `meta` (Unix); elsewhere every file is alike, which makes
 /// [`lock_for_update`] take the first file it locks.
 fn identity_of(meta: &Metadata) -> (u64, u64) {

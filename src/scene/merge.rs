@@ -44,8 +44,9 @@ pub enum Choice {
 pub struct Conflict {
     /// Index of the edit in the list given to [`merge`].
     pub edit: usize,
-    /// What it is about (`object[2].material.ka`), numbered as the user
-    /// saw it when making the edit.
+    /// What it is about (`object[2].material.ka`), numbered as in the
+    /// version merged onto (what the list shows once merged), or as the
+    /// user saw it when making the edit where the element is gone.
     pub path: String,
     /// The edit's side, in words or as a value.
     pub yours: String,
@@ -244,9 +245,22 @@ pub fn merge(
     edits: &[Edit],
     choices: &BTreeMap<usize, Choice>,
 ) -> Merged {
+    merge_onto(base, Edited::new(theirs.clone()), edits, choices)
+}
+
+/// [`merge`] onto a scene that carries the origins of its own text
+/// (`theirs` an edited scene, as another window's edits are replayed onto
+/// the edits on screen): an element it added or moved keeps where it
+/// came from.
+pub fn merge_onto(
+    base: &Scene,
+    theirs: Edited,
+    edits: &[Edit],
+    choices: &BTreeMap<usize, Choice>,
+) -> Merged {
     let mut b = Edited::new(base.clone());
-    let mut t = Edited::new(theirs.clone());
-    let mut places = Places::new(base, theirs);
+    let mut places = Places::new(base, theirs.scene());
+    let mut t = theirs;
     let mut applied = Vec::new();
     let mut conflicts = Vec::new();
     for (i, edit) in edits.iter().enumerate() {
@@ -263,7 +277,12 @@ pub fn merge(
             }
             (Verdict::Conflict(_), Some(_)) => None,
             (Verdict::Conflict(c), None) => {
-                conflicts.push(Conflict { edit: i, ..c });
+                // Numbered as the element is numbered now, where it is
+                // still there: the number the list shows.
+                let path = places
+                    .edit(edit, t.scene())
+                    .map_or(c.path, |now| edit_path(&now));
+                conflicts.push(Conflict { edit: i, path, ..c });
                 None
             }
         };
@@ -667,6 +686,19 @@ mod tests {
                 .conflicts
                 .is_empty()
         );
+    }
+
+    #[test]
+    fn a_conflict_is_numbered_as_the_element_is_now() {
+        let base = example();
+        let mut theirs = base.clone();
+        let inserted = theirs.objects[1].clone();
+        theirs.objects.insert(0, inserted);
+        std::sync::Arc::make_mut(&mut theirs.objects[1]).material.ka = 0.7;
+        let edits = vec![Edit::Set(ka(0), Value::Number(0.5))];
+        let m = merge(&base, &theirs, &edits, &BTreeMap::new());
+        assert_eq!(m.conflicts.len(), 1);
+        assert_eq!(m.conflicts[0].path, "object[2].material.ka");
     }
 
     #[test]

@@ -382,6 +382,8 @@ impl RayOfLightApp {
         }
         if self.doc.conflict().is_some() {
             self.conflict_modal(ui);
+        } else {
+            self.journal_offer_modal(ui);
         }
         self.path_prompt_modal(ui);
     }
@@ -455,21 +457,38 @@ impl RayOfLightApp {
             return;
         };
         let conflicts = pending.conflicts().to_vec();
+        let restore = pending.is_restore();
         self.conflict_choices
             .resize(conflicts.len(), Choice::Theirs);
         let mut done = None;
-        egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
-            ui.heading("The file changed on disk");
-            ui.set_max_width(640.0);
-            ui.label(
+        let (heading, text, yours, theirs, take_theirs) = match restore {
+            false => (
+                "The file changed on disk",
                 "Another program saved the scene file, and it changed values you have \
                  edited too (any other edits of yours are applied onto its version). \
                  Choose which to keep:",
-            );
+                "yours",
+                "the file's",
+                "Take all of the file's",
+            ),
+            true => (
+                "Two windows edited the same values",
+                "Another window that was open on this file left unsaved edits of values \
+                 that are edited here too (its other edits are applied). Choose which to \
+                 keep:",
+                "the other window's",
+                "this window's",
+                "Keep all of this window's",
+            ),
+        };
+        egui::Modal::new(egui::Id::unique("conflict")).show(ui.ctx(), |ui| {
+            ui.heading(heading);
+            ui.set_max_width(640.0);
+            ui.label(text);
             egui::Grid::new("conflicts").num_columns(3).show(ui, |ui| {
                 ui.strong("value");
-                ui.strong("yours");
-                ui.strong("the file's");
+                ui.strong(yours);
+                ui.strong(theirs);
                 ui.end_row();
                 for (c, choice) in conflicts.iter().zip(self.conflict_choices.iter_mut()) {
                     ui.label(&c.path);
@@ -484,7 +503,11 @@ impl RayOfLightApp {
                 if ui.button("Apply these choices").clicked() {
                     done = Some(self.conflict_choices.clone());
                 }
-                if ui.button("Keep all of mine").clicked() {
+                let keep_mine = match restore {
+                    false => "Keep all of mine",
+                    true => "Keep all of the other window's",
+                };
+                if ui.button(keep_mine).clicked() {
                     done = Some(
                         conflicts
                             .iter()
@@ -492,17 +515,19 @@ impl RayOfLightApp {
                             .collect(),
                     );
                 }
-                if ui.button("Take all of the file's").clicked() {
+                if ui.button(take_theirs).clicked() {
                     done = Some(vec![Choice::Theirs; conflicts.len()]);
                 }
             });
         });
         if let Some(choices) = done {
-            match self.doc.resolve(&choices) {
+            // The selection stays on its object, wherever the merge put it.
+            match self.keeping_selection(|app| app.doc.resolve(&choices)) {
                 Ok(_) => self.notify("merged".into()),
                 Err(e) => self.notify(format!("not saved: {e}")),
             }
             self.conflict_choices.clear();
+            self.journal_soon();
             self.after_edit();
         }
     }

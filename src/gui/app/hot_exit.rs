@@ -1,39 +1,65 @@
 //! The app's side of the journal of unsaved edits ([`crate::gui::journal`]):
-//! keeping it as edits are made, restoring it when a scene opens, and
+//! keeping this window's entry as edits are made; when a scene opens,
+//! restoring the entries of windows that are gone (every one made on this
+//! file, one after the other, each merged onto the edits before it, a
+//! value two of them changed asked as any conflict), offering rather than
+//! merging the one made on another file that was at this path; and
 //! ending cleanly on SIGTERM, SIGINT and SIGHUP (a logout, Ctrl+C in the
 //! terminal, a closed terminal) with the journal flushed.
 
-use std::path::{Path, PathBuf};
+use std::collections::VecDeque;
+use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use super::RayOfLightApp;
-use crate::files::absolute;
-use crate::gui::journal::{self, Entry, Job, JournalError, Writer};
+use crate::gui::document::Reload;
+use crate::gui::journal::{self, Claimed, Entry, Job, Match, Writer};
 
 /// The journal as the app keeps it.
 pub(super) struct HotExit {
-    folder: PathBuf,
     writer: Writer,
     /// The document generation last journaled (written or removed).
     kept: Option<u64>,
-    /// The base last written, for which document: (path, fingerprint).
+    /// The base last sent, for which document: (path, fingerprint).
     base: Option<(PathBuf, u64)>,
     /// When the edits not yet journaled must be.
     due: Option<Instant>,
+    /// Entries of windows that are gone, restored into the document:
+    /// removed once this window's entry holds their edits (and no
+    /// conflict about them waits).
+    adopted: Vec<Claimed>,
+    /// Entries of windows that are gone, to restore one at a time, each
+    /// once the conflicts of the one before are settled.
+    waiting: VecDeque<Claimed>,
+    /// Entries made at this path on a file replaced since, each asked
+    /// about in turn.
+    offered: VecDeque<Claimed>,
+    /// What the restores of this document said, for one notice.
+    said: Vec<String>,
 }
 
 impl HotExit {
     pub(super) fn new(folder: PathBuf) -> HotExit {
         HotExit {
-            writer: Writer::start(folder.clone()),
-            folder,
+            writer: Writer::start(folder),
             kept: None,
             base: None,
             due: None,
+            adopted: Vec::new(),
+            waiting: VecDeque::new(),
+            offered: VecDeque::new(),
+            said: Vec::new(),
         }
     }
+}
+
+/// What the user answers about an entry made on another file.
+enum Offer {
+    Restore,
+    Later,
+    Discard,
 }
 
 /// Set by SIGTERM, SIGINT or SIGHUP.
@@ -72,9 +98,10 @@ fn clock(time: std::time::SystemTime) -> String {
 }
 
 impl RayOfLightApp {
-    /// Once a frame: journals the unsaved edits [`journal::DELAY`] after
-    /// they change, removes the journal once nothing is unsaved, and ends
-    /// the app on a signal.
+    /// Once a frame: restores the next entry of a window that is gone,
+    /// journals the unsaved edits [`journal::DELAY`] after they change,
+    /// removes the journal once nothing is unsaved, and ends the app on a
+    /// signal.
     pub(super) fn keep_journal(&mut self, ctx: &egui::Context) {
         if self.signalled.load(Ordering::SeqCst) {
             self.flush_journal();
@@ -83,6 +110,7 @@ impl RayOfLightApp {
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             return;
         }
+        self.restore_waiting();
         let Some(hot) = &mut self.hot_exit else {
             return;
         };
@@ -103,34 +131,44 @@ impl RayOfLightApp {
     }
 
     /// Journals the document as it is now (or removes its journal when
-    /// nothing is unsaved).
+    /// nothing is unsaved); then the entries of windows that are gone
+    /// whose edits it holds go.
     fn journal_now(&mut self) {
         let Some(hot) = &mut self.hot_exit else {
             return;
         };
         hot.due = None;
         hot.kept = Some(self.doc.generation());
-        let Some(path) = self.doc.path().map(absolute) else {
+        let Some(path) = self.doc.path().map(crate::files::absolute) else {
             return;
         };
         if !self.doc.has_unsaved_edits() {
-            hot.writer.send(Job::Remove(path));
+            hot.writer.send(Job::Remove);
             hot.base = None;
-            return;
+        } else {
+            let base_fingerprint = self.doc.file_fingerprint();
+            let base = (hot.base != Some((path.clone(), base_fingerprint)))
+                .then(|| self.doc.file_text_writer());
+            hot.base = Some((path.clone(), base_fingerprint));
+            hot.writer.send(Job::Write {
+                entry: Entry::now(&path, base_fingerprint, self.doc.unsaved_edits()),
+                base,
+            });
         }
-        let base_fingerprint = self.doc.file_fingerprint();
-        let base = (hot.base != Some((path.clone(), base_fingerprint)))
-            .then(|| self.doc.file_text_writer());
-        hot.base = Some((path.clone(), base_fingerprint));
-        hot.writer.send(Job::Write {
-            entry: Entry {
-                scene: path,
-                base_fingerprint,
-                saved_at: std::time::SystemTime::now(),
-                edits: self.doc.unsaved_edits(),
-            },
-            base,
-        });
+        // Edits waiting for the user's choices are not in the entry yet.
+        if self.doc.conflict().is_none() && !hot.adopted.is_empty() {
+            hot.writer
+                .send(Job::Adopt(std::mem::take(&mut hot.adopted)));
+        }
+    }
+
+    /// Journals the document at the next frame, whatever its generation
+    /// (after the conflicts of a restore are settled, even by keeping
+    /// everything as it was: the entries they came from can go).
+    pub(super) fn journal_soon(&mut self) {
+        if let Some(hot) = &mut self.hot_exit {
+            hot.kept = None;
+        }
     }
 
     /// Writes what is not yet in the journal and waits for it (at most a
@@ -148,72 +186,200 @@ impl RayOfLightApp {
         }
     }
 
-    /// The user chose to lose the unsaved edits: their journal goes too.
+    /// The user chose to lose the unsaved edits: their journal goes too,
+    /// and the entries of windows that are gone they came from.
     pub(super) fn discard_journal(&mut self) {
-        let (Some(hot), Some(path)) = (&mut self.hot_exit, self.doc.path()) else {
+        let Some(hot) = &mut self.hot_exit else {
             return;
         };
-        hot.writer.send(Job::Remove(absolute(path)));
+        hot.writer.send(Job::Remove);
+        hot.writer
+            .send(Job::Adopt(std::mem::take(&mut hot.adopted)));
         hot.base = None;
     }
 
-    /// Restores the journal of the document's file, if it has one: its
-    /// edits come back as unsaved edits (merged with the file if it
-    /// changed since), and the status bar says so.
+    /// Looks in the journal for the document's file, just opened: the
+    /// entries of windows that are gone are claimed and restored (made on
+    /// another file at this path: offered first), damaged ones set aside
+    /// with a notice, and windows still open on it said.
     pub(super) fn restore_journal(&mut self) {
-        let (Some(hot), Some(path)) = (&self.hot_exit, self.doc.path()) else {
+        let Some(hot) = &mut self.hot_exit else {
             return;
         };
-        let folder = hot.folder.clone();
-        let path = path.to_owned();
-        let restored = match journal::read(&folder, &path) {
-            Ok(None) => return,
-            Ok(Some(restored)) => restored,
-            Err(e) => return self.journal_refused(&folder, &path, &e.to_string()),
+        // The previous document's: its edits were saved or discarded with
+        // it; those not restored are let go, for a later window.
+        hot.writer
+            .send(Job::Adopt(std::mem::take(&mut hot.adopted)));
+        hot.waiting.clear();
+        hot.offered.clear();
+        hot.said.clear();
+        let Some((path, folder)) = self.doc.path().zip(hot.writer.folder()) else {
+            return;
         };
-        let count = restored.entry.edits.len();
-        let when = clock(restored.entry.saved_at);
-        let base = || restored.base().map_err(|e| e.to_string());
-        match self
-            .doc
-            .restore(restored.entry.base_fingerprint, base, &restored.entry.edits)
-        {
+        let found = journal::find(folder, path, hot.writer.id());
+        for (e, aside) in found.damaged {
+            hot.said.push(match aside {
+                Some(aside) => format!("{e}; kept as {}", aside.display()),
+                None => e.to_string(),
+            });
+        }
+        if found.live > 0 {
+            hot.said.push(
+                "another RayOfLight window has unsaved edits of this file (they stay in it)"
+                    .to_owned(),
+            );
+        }
+        let disk = self.doc.disk_fingerprint();
+        for claimed in found.claimed {
+            let holds_base = disk == Some(claimed.restored.entry.base_fingerprint);
+            // Made on another file, unless the edits are all in this one
+            // already (the window saved, then ended before its entry
+            // went: the save replaced the file).
+            let replaced = claimed.how == Match::Replaced && !holds_base && {
+                let entry = &claimed.restored.entry;
+                let mut probe = self.doc.clone();
+                let base = || claimed.restored.base().map_err(|e| e.to_string());
+                !matches!(
+                    probe.restore(entry.base_fingerprint, base, &entry.edits),
+                    Ok(Reload::Unchanged) if !probe.has_unsaved_edits()
+                )
+            };
+            match replaced {
+                true => hot.offered.push_back(claimed),
+                false => hot.waiting.push_back(claimed),
+            }
+        }
+        if !hot.said.is_empty() {
+            let text = hot.said.join("; ");
+            self.notify(text);
+        }
+        self.restore_waiting();
+    }
+
+    /// Restores the next entry waiting, unless a conflict of the one
+    /// before waits for the user, or a question about another is open.
+    fn restore_waiting(&mut self) {
+        let Some(hot) = &mut self.hot_exit else {
+            return;
+        };
+        if self.doc.conflict().is_some() || !hot.offered.is_empty() {
+            return;
+        }
+        let Some(claimed) = hot.waiting.pop_front() else {
+            return;
+        };
+        let first = hot.adopted.is_empty() && !self.doc.has_unsaved_edits();
+        let entry = &claimed.restored.entry;
+        let count = entry.edits.len();
+        let when = clock(entry.saved_at);
+        let base = || claimed.restored.base().map_err(|e| e.to_string());
+        let restored = match first {
+            true => self.doc.restore(entry.base_fingerprint, base, &entry.edits),
+            false => self
+                .doc
+                .restore_more(entry.base_fingerprint, base, &entry.edits),
+        };
+        let plural = if count == 1 { "" } else { "s" };
+        let said = match restored {
+            Ok(Reload::Unchanged) if first && !self.doc.has_unsaved_edits() => {
+                format!("the {count} unsaved edit{plural} from {when} are in the file already")
+            }
             Ok(reload) => {
-                let merged = match reload {
-                    crate::gui::document::Reload::Merged => ", merged with the file's changes",
-                    crate::gui::document::Reload::Conflict => {
-                        ", and the file changed since: choose what to keep"
-                    }
+                let how = match reload {
+                    Reload::Merged => ", merged with the file's changes",
+                    Reload::Conflict => ", and the file changed since: choose what to keep",
                     _ => "",
                 };
-                let plural = if count == 1 { "" } else { "s" };
-                self.notify(format!(
-                    "restored {count} unsaved edit{plural} from {when}{merged} — Ctrl+S saves, Ctrl+Z undoes"
-                ));
-                if let Some(hot) = &mut self.hot_exit {
-                    // Journal again from the restored document.
-                    hot.kept = None;
-                    hot.base = None;
-                }
-                self.after_edit();
+                let whose = if first { "" } else { " of another window" };
+                let moved = match &claimed.how {
+                    Match::Moved { from } => format!(" (made at {})", from.display()),
+                    _ => String::new(),
+                };
+                format!(
+                    "restored {count} unsaved edit{plural}{whose} from {when}{moved}{how} — Ctrl+S saves, Ctrl+Z undoes"
+                )
             }
             Err(why) => {
-                let e = JournalError::Damaged {
-                    path: journal::files(&folder, &path).0,
+                let e = journal::JournalError::Damaged {
+                    path: claimed.path().to_owned(),
                     why,
                 };
-                self.journal_refused(&folder, &path, &e.to_string());
+                let said = match claimed.set_aside() {
+                    Some(aside) => format!("{e}; kept as {}", aside.display()),
+                    None => e.to_string(),
+                };
+                self.say_restored(said);
+                return;
             }
+        };
+        if let Some(hot) = &mut self.hot_exit {
+            hot.adopted.push(claimed);
+            // Journal again from the restored document.
+            hot.kept = None;
+            hot.base = None;
+        }
+        self.say_restored(said);
+        self.after_edit();
+    }
+
+    /// Adds `said` to what this document's restores said, in one notice.
+    fn say_restored(&mut self, said: String) {
+        if let Some(hot) = &mut self.hot_exit {
+            hot.said.push(said);
+            let text = hot.said.join("; ");
+            self.notify(text);
         }
     }
 
-    /// A journal that cannot be applied is moved aside (never applied,
-    /// never lost), with a notice.
-    fn journal_refused(&mut self, folder: &Path, scene: &Path, message: &str) {
-        let kept = journal::set_aside(folder, scene);
-        self.notify(match kept {
-            Some(aside) => format!("{message}; kept as {}", aside.display()),
-            None => message.to_owned(),
+    /// Asks about an entry made at this path on a file that was replaced
+    /// since: restore its edits onto this file (merged, conflicts asked),
+    /// keep them for later, or discard them.
+    pub(super) fn journal_offer_modal(&mut self, ui: &mut egui::Ui) {
+        let Some(claimed) = self.hot_exit.as_ref().and_then(|h| h.offered.front()) else {
+            return;
+        };
+        let entry = &claimed.restored.entry;
+        let count = entry.edits.len();
+        let plural = if count == 1 { "" } else { "s" };
+        let text = format!(
+            "{count} unsaved edit{plural} from {} were made on {} when another file was there \
+             (the file there now was saved by another program since, or is another file \
+             altogether). They are not applied unless you ask.",
+            clock(entry.saved_at),
+            entry.scene.display(),
+        );
+        let mut answer = None;
+        egui::Modal::new(egui::Id::unique("journal-offer")).show(ui.ctx(), |ui| {
+            ui.set_width(520.0);
+            ui.heading("Unsaved edits of another file");
+            ui.label(text);
+            ui.horizontal(|ui| {
+                if ui.button("Restore them onto this file").clicked() {
+                    answer = Some(Offer::Restore);
+                }
+                if ui.button("Keep them for later").clicked() {
+                    answer = Some(Offer::Later);
+                }
+                if ui.button("Discard them").clicked() {
+                    answer = Some(Offer::Discard);
+                }
+            });
         });
+        let Some(answer) = answer else {
+            return;
+        };
+        let Some(hot) = &mut self.hot_exit else {
+            return;
+        };
+        let Some(claimed) = hot.offered.pop_front() else {
+            return;
+        };
+        match answer {
+            Offer::Restore => hot.waiting.push_back(claimed),
+            // Let go: the entry stays, for the next window on this file.
+            Offer::Later => drop(claimed),
+            Offer::Discard => claimed.remove(),
+        }
+        self.restore_waiting();
     }
 }

@@ -79,21 +79,44 @@ impl FileRead {
     }
 }
 
-/// A file version that conflicts with the unsaved edits, waiting for the
+/// Edits that conflict with what they are merged onto, waiting for the
 /// user's choices.
 #[derive(Debug, Clone)]
 pub struct PendingMerge {
-    read: FileRead,
+    onto: Onto,
     conflicts: Vec<Conflict>,
-    /// The unsaved edits the conflicts' indices count in.
+    /// The edits the conflicts' indices count in.
     edits: Vec<Edit>,
     /// Save once the conflicts are settled (the merge came from Ctrl+S).
     save_after: bool,
 }
 
+/// What a pending merge replays its edits onto.
+#[derive(Debug, Clone)]
+enum Onto {
+    /// A version of the file another program saved: the unsaved edits go
+    /// onto it.
+    File(FileRead),
+    /// The scene on screen: edits restored from another window's journal,
+    /// made on `base`, go onto the edits already there. A file read that
+    /// comes meanwhile waits in `later` (merged once this is settled).
+    Shown {
+        base: Box<Scene>,
+        label: String,
+        later: Option<Box<FileRead>>,
+    },
+}
+
 impl PendingMerge {
     pub fn conflicts(&self) -> &[Conflict] {
         &self.conflicts
+    }
+
+    /// Whether the conflicts are between edits restored from another
+    /// window's journal and the scene on screen (else: between the unsaved
+    /// edits and the file another program saved).
+    pub fn is_restore(&self) -> bool {
+        matches!(self.onto, Onto::Shown { .. })
     }
 }
 
@@ -205,6 +228,14 @@ impl Document {
             );
             return Reload::Replaced;
         }
+        if let Some(PendingMerge {
+            onto: Onto::Shown { later, .. },
+            ..
+        }) = &mut self.conflict
+        {
+            *later = Some(Box::new(read));
+            return Reload::Conflict;
+        }
         let save_after = self.conflict.as_ref().is_some_and(|c| c.save_after);
         if !self.dirty && self.conflict.is_none() {
             // Undoing the reload brings back the text before it.
@@ -242,7 +273,7 @@ impl Document {
         let merged = merge::merge(self.file_scene(), &read.scene, &edits, &by_index);
         if !merged.conflicts.is_empty() {
             self.conflict = Some(PendingMerge {
-                read,
+                onto: Onto::File(read),
                 conflicts: merged.conflicts,
                 edits,
                 save_after,
@@ -256,6 +287,44 @@ impl Document {
             ..file
         };
         self.show_version("merge with the file's changes", shown);
+        Reload::Merged
+    }
+
+    /// Replays `edits`, made on `base`, onto the scene on screen (the edits
+    /// of another window, restored from its journal, onto this window's),
+    /// as one undo step called `label`; with conflicts left (both changed
+    /// a value), keeps them pending and asks. `choices` settles the edits
+    /// of the indices it names.
+    pub(super) fn merge_into_shown(
+        &mut self,
+        base: Scene,
+        edits: Vec<Edit>,
+        choices: &BTreeMap<usize, Choice>,
+        label: String,
+    ) -> Reload {
+        let merged = merge::merge_onto(&base, self.shown.edited.clone(), &edits, choices);
+        if !merged.conflicts.is_empty() {
+            self.conflict = Some(PendingMerge {
+                onto: Onto::Shown {
+                    base: Box::new(base),
+                    label,
+                    later: None,
+                },
+                conflicts: merged.conflicts,
+                edits,
+                save_after: false,
+            });
+            return Reload::Conflict;
+        }
+        self.conflict = None;
+        if merged.edited == self.shown.edited {
+            return Reload::Unchanged;
+        }
+        let shown = Version {
+            edited: merged.edited,
+            ..self.shown.clone()
+        };
+        self.show_version(&label, shown);
         Reload::Merged
     }
 
@@ -282,13 +351,29 @@ impl Document {
         let Some(pending) = self.conflict.take() else {
             return Ok(Reload::Unchanged);
         };
+        let read = match pending.onto {
+            Onto::File(read) => read,
+            Onto::Shown { base, label, later } => {
+                let choices = pending
+                    .conflicts
+                    .iter()
+                    .zip(choices)
+                    .map(|(c, choice)| (c.edit, *choice))
+                    .collect();
+                let reload = self.merge_into_shown(*base, pending.edits, &choices, label);
+                return Ok(match later {
+                    Some(read) if reload != Reload::Conflict => self.file_read(*read),
+                    _ => reload,
+                });
+            }
+        };
         let settled: Vec<(Edit, Choice)> = pending
             .conflicts
             .iter()
             .zip(choices)
             .filter_map(|(c, choice)| Some((pending.edits.get(c.edit)?.clone(), *choice)))
             .collect();
-        let reload = self.merge_with(pending.read, &settled, pending.save_after);
+        let reload = self.merge_with(read, &settled, pending.save_after);
         if reload == Reload::Merged && pending.save_after {
             self.save()?;
         }

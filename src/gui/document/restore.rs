@@ -44,9 +44,11 @@ impl Document {
     /// peaked at 700 MB restoring one edit). Otherwise the text `base`
     /// gives is loaded, the edits applied to it, then merged with the file
     /// as it is now (a conflict is asked as with any other program's
-    /// save). Returns how it merged, or why the edits cannot be restored
-    /// (a base that does not load, an edit that does not apply: the
-    /// journal is damaged).
+    /// save); where that leaves nothing unsaved (the edits are all in the
+    /// file: a save that finished before the app ended), the document is
+    /// left as it opened. Returns how it merged, or why the edits cannot
+    /// be restored (a base that does not load, an edit that does not
+    /// apply: the journal is damaged).
     pub fn restore(
         &mut self,
         base_fingerprint: u64,
@@ -71,25 +73,64 @@ impl Document {
         let mut doc = Document::from_text(Some(path), base, base_scene, FileState::Watching);
         doc.apply_labelled(edits.to_vec(), label)
             .map_err(|e| format!("an edit does not apply: {e}"))?;
+        if !self.placeholder && self.state != FileState::Missing {
+            let text = self.file.source.text().into_owned();
+            let reload = doc.file_read(FileRead::new(text, self.file_scene().clone()));
+            if reload != Reload::Conflict && !doc.has_unsaved_edits() {
+                // Every edit is in the file already (a save that finished
+                // before the app ended): nothing to restore.
+                return Ok(Reload::Unchanged);
+            }
+            *self = doc;
+            return Ok(reload);
+        }
         let reload = if self.placeholder {
             // The file does not load now: the edits stay on their base, and
             // saving refuses until the file loads again.
             doc.disk = None;
             doc.error.clone_from(&self.error);
             Reload::Broken
-        } else if self.state == FileState::Missing {
+        } else {
             doc.disk = None;
             doc.state = FileState::Missing;
             Reload::Unchanged
-        } else if self.disk == doc.disk {
-            Reload::Unchanged
-        } else {
-            let text = self.file.source.text().into_owned();
-            let read = FileRead::new(text, self.file_scene().clone());
-            doc.file_read(read)
         };
         *self = doc;
         Ok(reload)
+    }
+
+    /// Restores `edits` of another window, made on the text whose
+    /// fingerprint is `base_fingerprint` (`base` gives it, called only
+    /// when the file no longer holds it), onto the scene on screen, which
+    /// may hold unsaved edits already (another window's, restored before):
+    /// merged as one undo step, a value both changed asked as any conflict
+    /// ([`Document::resolve`]). Returns how it merged (`Unchanged`: every
+    /// edit is there already), or why the edits cannot be restored.
+    pub fn restore_more(
+        &mut self,
+        base_fingerprint: u64,
+        base: impl FnOnce() -> Result<String, String>,
+        edits: &[Edit],
+    ) -> Result<Reload, String> {
+        let path = self.path.clone().ok_or("the scene has no file")?;
+        let base_scene = if !self.placeholder && self.disk == Some(base_fingerprint) {
+            self.file_scene().clone()
+        } else {
+            scene::parse(&base()?, &path).map_err(|e| format!("its base: {e}"))?
+        };
+        // Each edit must apply to its base: a merge leaves out an edit
+        // that does not, and a journal is applied whole or not at all.
+        let mut check = crate::scene::edit::Edited::new(base_scene.clone());
+        for edit in edits {
+            check
+                .apply(edit)
+                .map_err(|e| format!("an edit does not apply: {e}"))?;
+        }
+        let label = match edits.len() {
+            1 => "restore 1 unsaved edit of another window".to_owned(),
+            n => format!("restore {n} unsaved edits of another window"),
+        };
+        Ok(self.merge_into_shown(base_scene, edits.to_vec(), &Default::default(), label))
     }
 }
 
