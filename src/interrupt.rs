@@ -14,9 +14,13 @@
 //! A write past the file-size limit fails instead of ending the process
 //! ([`writes_past_the_size_limit_fail`], SIGXFSZ).
 //!
-//! Without [`install`] (the desktop app, which saves its unsaved edits on
-//! these signals itself, and the library's tests) nothing is ever
-//! requested and guards cost an atomic increment.
+//! The desktop app calls [`record_only`] instead: it ends itself on these
+//! signals (with its unsaved edits in its journal), so a signal never
+//! ends it by default; it is only recorded, and a save or an export under
+//! way stops at its next write and removes its temporary file.
+//!
+//! Without either (the library's tests) nothing is ever requested and
+//! guards cost an atomic increment.
 
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex, OnceLock};
@@ -67,6 +71,30 @@ pub fn install() -> std::io::Result<()> {
         signal_hook::flag::register_usize(signal, Arc::clone(&handlers.caught), signal as usize)?;
         signal_hook::flag::register(signal, Arc::clone(&handlers.requested))?;
         signal_hook::flag::register_conditional_default(signal, Arc::clone(&handlers.unguarded))?;
+    }
+    let _ = HANDLERS.set(handlers);
+    Ok(())
+}
+
+/// Records SIGINT, SIGTERM and SIGHUP for the writers to see
+/// ([`requested`]) and does nothing else: for a process that ends itself
+/// on them (the app; once [`install`] or this ran, later calls do
+/// nothing).
+pub fn record_only() -> std::io::Result<()> {
+    if HANDLERS.get().is_some() {
+        return Ok(());
+    }
+    let handlers = Handlers {
+        caught: Arc::new(AtomicUsize::new(0)),
+        requested: Arc::new(AtomicBool::new(false)),
+        // Read by no handler: none ends the process.
+        unguarded: Arc::new(AtomicBool::new(false)),
+    };
+    // Not `caught`: a process that ends itself on a signal chooses its
+    // own exit status (the app's is 0: its edits are in its journal).
+    #[cfg(unix)]
+    for signal in SIGNALS {
+        signal_hook::flag::register(signal, Arc::clone(&handlers.requested))?;
     }
     let _ = HANDLERS.set(handlers);
     Ok(())

@@ -681,6 +681,10 @@ pub fn write_atomic_with<E: From<OutputError>>(
     let place = place(path)?;
     // A rewrite of this file that a crash left half done, finished first.
     crate::files::finish_at(&place).map_err(io_error)?;
+    // What killed writes left beside it (a save or render killed in the
+    // middle leaves a temporary file as big as the file), removed.
+    #[cfg(unix)]
+    place.sweep(STALE_AFTER);
     let mut old = None;
     for _ in 0..MAX_TRIES {
         let Some((kind, meta)) = in_the_way(path, &place)? else {
@@ -752,6 +756,12 @@ pub fn write_atomic_with<E: From<OutputError>>(
     }
     Ok(())
 }
+
+/// How long a temporary file no process holds locked must have been
+/// left unchanged before a write beside it removes it: a writer locks its
+/// file at once; this only covers the moment between making and locking.
+#[cfg(unix)]
+const STALE_AFTER: std::time::Duration = std::time::Duration::from_secs(2);
 
 /// Whether the file has other hard links than the one being written.
 fn several_names(meta: &std::fs::Metadata) -> bool {

@@ -992,3 +992,124 @@ fn the_editors_cursor_outlines_an_object_and_a_click_shows_its_element() {
     );
     assert_eq!(std::fs::read_to_string(path).unwrap(), TWO_SPHERES);
 }
+
+/// The scene's temporary files of ours (`.rayoflight-XXXXXX.tmp`) in
+/// `dir`, with their sizes.
+fn temporaries(dir: &Path) -> Vec<(String, u64)> {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter_map(|e| {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let len = e.metadata().ok()?.len();
+            (name.starts_with(".rayoflight-") && name.ends_with(".tmp")).then_some((name, len))
+        })
+        .collect()
+}
+
+/// Waits (at most 60 s) until the app's save is writing: a temporary file
+/// of ours with bytes in it.
+fn until_writing(dir: &Path) {
+    let start = Instant::now();
+    while !temporaries(dir).iter().any(|(_, len)| *len > 0) {
+        assert!(start.elapsed() < Duration::from_secs(60), "no save seen");
+        std::thread::sleep(Duration::from_micros(300));
+    }
+}
+
+/// Issue 44, item 4, on the real process: SIGTERM while Ctrl+S writes a
+/// large scene stops the save, and its temporary file (as big as the
+/// file) is gone before the app ends; the file is as it was and the edit
+/// in the journal. `kill -9` in the middle of a save leaves the temporary
+/// file; the next save removes it.
+#[test]
+fn a_save_cut_short_by_sigterm_or_kill_leaves_no_temporary_file() {
+    // A red sphere to drag on, and 150 000 small ones out of sight behind
+    // the camera: about 14 MB to write.
+    let mut hidden = String::new();
+    for i in 0..150_000 {
+        hidden.push_str(&format!(
+            "  <sphere><transformation><scale factor=\"0.01\"/><translate x=\"{}\" z=\"-40\"/></transformation></sphere>\n",
+            i % 500
+        ));
+    }
+    let text = scene(RED).replace("  <camera", &format!("{hidden}  <camera"));
+    let mut opened = Window::open("big.xml", &text);
+    let (shots, display, path) = (
+        opened.shots.clone(),
+        opened.display.clone(),
+        opened.path.clone(),
+    );
+    let home = opened.dir.path().to_owned();
+    let xdotool = |args: &[&str]| xdotool_on(&display, args);
+    let edit_then_save = |name: &str| {
+        wait_for(
+            &display,
+            &shots.join(name),
+            Duration::from_secs(60),
+            "the first render",
+            |s| centroid(s, RED).1 > 500,
+        );
+        let window = app_window(&xdotool);
+        xdotool(&["windowfocus", "--sync", &window]);
+        let image = screenshot(&display, &shots.join(name));
+        orbit(&xdotool, middle(&image, RED), 3);
+        std::thread::sleep(Duration::from_millis(800));
+        xdotool(&["key", "--window", &window, "ctrl+s"]);
+    };
+
+    edit_then_save("cut-0.png");
+    until_writing(&home);
+    let pid = opened.app.0.id().to_string();
+    let sent = Instant::now();
+    assert!(
+        Command::new("kill")
+            .args(["-TERM", &pid])
+            .status()
+            .unwrap()
+            .success()
+    );
+    let status = loop {
+        if let Some(status) = opened.app.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            sent.elapsed() < Duration::from_secs(10),
+            "the app ends on SIGTERM"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    eprintln!("SIGTERM during a save to exit: {:?}", sent.elapsed());
+    assert!(status.success(), "a clean exit: {status:?}");
+    assert_eq!(temporaries(&home), [], "the save's temporary file is gone");
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        text,
+        "the save stopped"
+    );
+    assert_eq!(journal_entries(&home).len(), 1, "the edit is kept");
+
+    // kill -9 in the middle of a save: its temporary file stays.
+    opened.app = start_app(&path, &display, &home);
+    edit_then_save("cut-1.png");
+    until_writing(&home);
+    opened.app.0.kill().unwrap();
+    opened.app.0.wait().unwrap();
+    let left = temporaries(&home);
+    eprintln!("left by kill -9: {left:?}");
+    assert_eq!(left.len(), 1);
+    // The next save, once that file has been still a moment, removes it.
+    std::thread::sleep(Duration::from_secs(3));
+    opened.app = start_app(&path, &display, &home);
+    edit_then_save("cut-2.png");
+    let start = Instant::now();
+    while std::fs::read_to_string(&path).unwrap() == text || !temporaries(&home).is_empty() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "saved, and nothing left: {:?}",
+            temporaries(&home)
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+}

@@ -1121,3 +1121,90 @@ fn a_crash_during_a_rewrite_in_place_is_finished_by_the_next_reader() {
     // The kills did land inside the copy: the readers had work to do.
     assert!(mixed_at_kill > 0, "no kill left the file mixed");
 }
+
+/// Issue 44, item 4: a write killed in the middle (`kill -9`, a power
+/// cut) leaves its temporary file, as big as the file; the next write
+/// beside it removes it, and the copy of a hard-linked file's old bytes
+/// that no record names. Never a file being written (locked), another
+/// user's, one just made, or a name that only looks like ours.
+#[test]
+fn what_a_killed_write_left_is_removed_by_the_next_write_beside_it() {
+    use rustix::process::Signal;
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("q.xml");
+    fs::write(&path, spheres(150_000)).unwrap();
+    // A real write killed in the middle.
+    let mut child = spawn(
+        dir.path(),
+        &["edit", "q.xml", "--set", "object[2].material.ka=0.75"],
+    );
+    assert!(wait_for_temporary(dir.path(), &mut child), "no write seen");
+    signal(&child, Signal::KILL);
+    child.wait().unwrap();
+    let left: Vec<String> = files_in(dir.path())
+        .into_iter()
+        .filter(|n| n.starts_with(".rayoflight-"))
+        .collect();
+    assert_eq!(left.len(), 1, "the killed write's temporary file stays");
+
+    let an_hour_ago = std::time::SystemTime::now() - Duration::from_secs(3600);
+    let plant = |name: &str, old: bool| {
+        let p = dir.path().join(name);
+        fs::write(&p, vec![b'x'; 4096]).unwrap();
+        if old {
+            fs::File::options()
+                .write(true)
+                .open(&p)
+                .unwrap()
+                .set_modified(an_hour_ago)
+                .unwrap();
+        }
+        p
+    };
+    // The killed write's file, aged as after a restart.
+    fs::File::options()
+        .write(true)
+        .open(dir.path().join(&left[0]))
+        .unwrap()
+        .set_modified(an_hour_ago)
+        .unwrap();
+    plant(".q.xml.Ab12Cd.rayoflight-backup", true);
+    let kept = [
+        plant(".rayoflight-fresh1.tmp", false),
+        plant(".rayoflight-locked.tmp", true),
+        plant(".q.xml.2.Ab12Cd.rayoflight-backup", true),
+        plant(".rayoflight-seven77.tmp", true),
+        plant("rayoflight-Ab12Cd.tmp", true),
+    ];
+    // A writer still at work holds its file locked.
+    let held = fs::File::open(dir.path().join(".rayoflight-locked.tmp")).unwrap();
+    held.lock().unwrap();
+    let others = is_root().then(|| {
+        let p = plant(".rayoflight-other1.tmp", true);
+        chown(&p, 65534, 65534);
+        p
+    });
+
+    let o = rayoflight(
+        dir.path(),
+        &["edit", "q.xml", "--set", "object[3].material.ka=0.5"],
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    let now = files_in(dir.path());
+    assert!(!now.contains(&left[0]), "the killed write's file: {now:?}");
+    assert!(!now.contains(&".q.xml.Ab12Cd.rayoflight-backup".to_owned()));
+    for p in kept.iter().chain(others.iter()) {
+        assert!(p.exists(), "{} kept", p.display());
+    }
+    drop(held);
+
+    // A backup a record still names is the rewrite's to finish: kept.
+    let record = dir.path().join(".q.xml.rayoflight-rewrite");
+    fs::write(&record, "not a record this version reads").unwrap();
+    let named = plant(".q.xml.Zz99Yy.rayoflight-backup", true);
+    let _ = rayoflight(
+        dir.path(),
+        &["edit", "q.xml", "--set", "object[3].material.ka=0.25"],
+    );
+    assert!(named.exists());
+}

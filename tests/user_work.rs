@@ -1503,3 +1503,27 @@ fn the_selection_keeps_its_object_when_a_conflict_is_settled() {
         "the blue ball untouched"
     );
 }
+
+/// Issue 44, found trying it by hand: undoing a restore that was merged
+/// with another program's change gives the file back as it opened, in one
+/// step. (It took two, and the second left an "unsaved edit" that put the
+/// other program's value back to the old one, which Ctrl+S would write.)
+#[test]
+fn undoing_a_restore_merged_with_the_files_change_gives_the_file_back() {
+    let (dir, path) = file_with(EXAMPLE);
+    let folder = dir.path().join("journal");
+    crash_with_an_edit_journaled(&path, &folder);
+    let theirs = EXAMPLE.replace(r#"<material ka="0.4""#, r#"<material ka="0.6""#);
+    std::fs::write(&path, &theirs).unwrap();
+    let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
+    assert!(status_says(&harness, "merged with the file's changes"));
+    let doc = harness.state().document();
+    assert_eq!(doc.scene().model.illumination, scene::Illumination::Lambert);
+    assert_eq!(material(doc, 1, Coef::Ka), 0.6);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.run_steps(2);
+    let doc = harness.state().document();
+    assert!(!doc.has_unsaved_edits(), "{:?}", doc.unsaved_edits());
+    assert_eq!(doc.scene(), &parse(&theirs));
+    until_entries(&mut harness, &folder, 0);
+}

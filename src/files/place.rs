@@ -437,7 +437,10 @@ mod imp {
 
         /// A new file in the folder named `PREFIX<random>SUFFIX`, made
         /// with the usual mode (0666 less the umask) and removed when the
-        /// returned value is dropped, unless it is renamed or kept.
+        /// returned value is dropped, unless it is renamed or kept. It is
+        /// locked (`flock`) while its descriptor is open, so that
+        /// [`Place::sweep`] tells one being written from one a killed
+        /// process left.
         pub fn new_file(&self, prefix: &str, suffix: &str) -> std::io::Result<NewFile<'_>> {
             for _ in 0..128 {
                 let mut name = OsString::from(prefix);
@@ -454,6 +457,12 @@ mod imp {
                     Mode::from_raw_mode(0o666),
                 ) {
                     Ok(fd) => {
+                        // A file system without locks: left to age (see
+                        // `sweep`).
+                        let _ = rustix::fs::flock(
+                            &fd,
+                            rustix::fs::FlockOperation::NonBlockingLockExclusive,
+                        );
                         return Ok(NewFile {
                             place: self,
                             name: Some(name),
@@ -465,6 +474,93 @@ mod imp {
                 }
             }
             Err(std::io::Error::from(std::io::ErrorKind::AlreadyExists))
+        }
+
+        /// Removes what writes of the place's file left when they were
+        /// killed (a power cut, `kill -9`, a crash): the temporary files
+        /// of [`Place::new_file`] named `.rayoflight-XXXXXX.tmp` in the
+        /// folder, and the copies `.NAME.XXXXXX.rayoflight-backup` of the
+        /// file's old bytes that no record of a rewrite names (run
+        /// [`crate::files::finish_at`] first). Only the caller's own
+        /// regular files, and only those no process holds locked (every
+        /// writer locks its file) and unchanged for `quiet` (a file made
+        /// but not yet locked). Returns how many files and bytes went.
+        pub fn sweep(&self, quiet: std::time::Duration) -> (usize, u64) {
+            use rustix::fs::{Dir, FlockOperation, flock, unlinkat};
+            let mut gone = (0, 0);
+            // The held folder is an `O_PATH` descriptor: listing needs
+            // one opened for reading, of that same folder.
+            let Ok(listing) = openat(
+                &self.folder,
+                ".",
+                OFlags::RDONLY | OFlags::DIRECTORY | OFlags::CLOEXEC,
+                Mode::empty(),
+            ) else {
+                return gone;
+            };
+            let Ok(dir) = Dir::read_from(&listing) else {
+                return gone;
+            };
+            let mut backup_of = OsString::from(".");
+            backup_of.push(&self.name);
+            backup_of.push(".");
+            let mut record = backup_of.clone();
+            record.push("rayoflight-rewrite");
+            let rewriting = statat(&self.folder, &record, AtFlags::SYMLINK_NOFOLLOW).is_ok();
+            let me = rustix::process::geteuid().as_raw();
+            let now = std::time::SystemTime::now();
+            for entry in dir.flatten() {
+                let name = OsStr::from_bytes(entry.file_name().to_bytes()).to_owned();
+                let bytes = name.as_bytes();
+                // PREFIX, the six letters of `random_part`, SUFFIX: a
+                // backup of `s.xml.2` is not one of `s.xml`'s.
+                let made = |prefix: &[u8], suffix: &[u8]| {
+                    bytes.len() == prefix.len() + 6 + suffix.len()
+                        && bytes.starts_with(prefix)
+                        && bytes.ends_with(suffix)
+                        && bytes[prefix.len()..prefix.len() + 6]
+                            .iter()
+                            .all(u8::is_ascii_alphanumeric)
+                };
+                let temporary = made(b".rayoflight-", b".tmp");
+                let backup = !rewriting && made(backup_of.as_bytes(), b".rayoflight-backup");
+                if !(temporary || backup) {
+                    continue;
+                }
+                let Ok(fd) = openat(
+                    &self.folder,
+                    &name,
+                    OFlags::RDONLY | OFlags::NOFOLLOW | OFlags::NONBLOCK | OFlags::CLOEXEC,
+                    Mode::empty(),
+                ) else {
+                    continue;
+                };
+                let Ok(st) = rustix::fs::fstat(&fd) else {
+                    continue;
+                };
+                let changed = std::time::UNIX_EPOCH
+                    + std::time::Duration::new(
+                        u64::try_from(st.st_mtime).unwrap_or(0),
+                        u32::try_from(st.st_mtime_nsec).unwrap_or(0),
+                    );
+                let old_enough = now.duration_since(changed).is_ok_and(|age| age >= quiet);
+                if FileType::from_raw_mode(st.st_mode) != FileType::RegularFile
+                    || st.st_uid != me
+                    || !old_enough
+                    || flock(&fd, FlockOperation::NonBlockingLockExclusive).is_err()
+                {
+                    continue;
+                }
+                // Still this very file under that name.
+                #[allow(clippy::unnecessary_cast)]
+                let same = statat(&self.folder, &name, AtFlags::SYMLINK_NOFOLLOW)
+                    .is_ok_and(|now| now.st_dev == st.st_dev && now.st_ino == st.st_ino);
+                if same && unlinkat(&self.folder, &name, AtFlags::empty()).is_ok() {
+                    gone.0 += 1;
+                    gone.1 += u64::try_from(st.st_size).unwrap_or(0);
+                }
+            }
+            gone
         }
 
         /// A new file at the name itself, never over anything there (a

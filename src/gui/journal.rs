@@ -212,7 +212,9 @@ fn write_private(
     let mut tmp = tempfile::Builder::new()
         .prefix(".journal-")
         .tempfile_in(dir)?;
-    // tempfile creates it 0600.
+    // tempfile creates it 0600. Locked while written, so that a window
+    // sweeping the folder tells it from one a killed window left.
+    let _ = tmp.as_file().try_lock();
     {
         let mut w = std::io::BufWriter::new(tmp.as_file_mut());
         write(&mut w)?;
@@ -428,18 +430,31 @@ impl Claimed {
     }
 
     /// Moves the entry aside (one that cannot be applied: never applied,
-    /// never lost), as `….json.damaged`; returns where it went.
+    /// never lost), as `….json.damaged`, its base beside it as
+    /// `….base.xml.damaged`; returns where the entry went.
     pub fn set_aside(self) -> Option<PathBuf> {
         set_aside(&self.json)
     }
 }
 
-/// Moves the entry `json` aside as `json.damaged`.
+/// Moves the entry `json` aside as `json.damaged`, and its base (if
+/// any) as `….base.xml.damaged`, so that neither is read again nor left
+/// without the other.
 fn set_aside(json: &Path) -> Option<PathBuf> {
-    let mut aside = json.to_owned().into_os_string();
-    aside.push(".damaged");
-    let aside = PathBuf::from(aside);
-    std::fs::rename(json, &aside).ok().map(|()| aside)
+    let damaged = |path: &Path| {
+        let mut aside = path.to_owned().into_os_string();
+        aside.push(".damaged");
+        PathBuf::from(aside)
+    };
+    let aside = damaged(json);
+    std::fs::rename(json, &aside).ok()?;
+    if let Some(name) = json.file_name().and_then(|n| n.to_str())
+        && let Some(key) = name.strip_suffix(".json")
+    {
+        let base = json.with_file_name(format!("{key}.base.xml"));
+        let _ = std::fs::rename(&base, damaged(&base));
+    }
+    Some(aside)
 }
 
 /// What [`find`] found about a scene in the journal.
@@ -527,8 +542,23 @@ pub fn find(folder: &Path, scene: &Path, own: Option<&str>) -> Found {
             }
         }
     }
-    // Windows gone without an entry.
+    // Windows gone without an entry, and the temporary files of writes
+    // that a kill cut short (a base as big as the scene).
     for name in &names {
+        if name.starts_with(".journal-") {
+            let path = folder.join(name);
+            let quiet = std::fs::metadata(&path)
+                .and_then(|m| m.modified())
+                .is_ok_and(|t| t.elapsed().is_ok_and(|age| age >= Duration::from_secs(2)));
+            if quiet
+                && let Ok(file) = File::open(&path)
+                && file.try_lock().is_ok()
+                && still_named(&file, &path)
+            {
+                let _ = std::fs::remove_file(&path);
+            }
+            continue;
+        }
         if let Some(id) = name.strip_suffix(".lock")
             && Some(id) != own
             && !with_entries.contains(id)

@@ -458,11 +458,21 @@ impl RayOfLightApp {
         };
         let conflicts = pending.conflicts().to_vec();
         let restore = pending.is_restore();
+        let onto_the_file = pending.is_restore_onto_the_file();
         self.conflict_choices
             .resize(conflicts.len(), Choice::Theirs);
         let mut done = None;
-        let (heading, text, yours, theirs, take_theirs) = match restore {
-            false => (
+        let (heading, text, yours, theirs, take_theirs) = match (restore, onto_the_file) {
+            (true, true) => (
+                "The file changed since these edits were made",
+                "Unsaved edits restored from the journal change values that another \
+                 program changed in the file since (their other edits are applied onto \
+                 its version). Choose which to keep:",
+                "the restored edit",
+                "the file's",
+                "Take all of the file's",
+            ),
+            (false, _) => (
                 "The file changed on disk",
                 "Another program saved the scene file, and it changed values you have \
                  edited too (any other edits of yours are applied onto its version). \
@@ -471,7 +481,7 @@ impl RayOfLightApp {
                 "the file's",
                 "Take all of the file's",
             ),
-            true => (
+            (true, false) => (
                 "Two windows edited the same values",
                 "Another window that was open on this file left unsaved edits of values \
                  that are edited here too (its other edits are applied). Choose which to \
@@ -503,9 +513,10 @@ impl RayOfLightApp {
                 if ui.button("Apply these choices").clicked() {
                     done = Some(self.conflict_choices.clone());
                 }
-                let keep_mine = match restore {
-                    false => "Keep all of mine",
-                    true => "Keep all of the other window's",
+                let keep_mine = match (restore, onto_the_file) {
+                    (false, _) => "Keep all of mine",
+                    (true, true) => "Keep all of the restored edits",
+                    (true, false) => "Keep all of the other window's",
                 };
                 if ui.button(keep_mine).clicked() {
                     done = Some(

@@ -55,6 +55,10 @@ impl HotExit {
     }
 }
 
+/// How long the app waits on a signal for a save or export under way to
+/// stop and remove its temporary file.
+const STOP_WAIT: Duration = Duration::from_secs(3);
+
 /// What the user answers about an entry made on another file.
 enum Offer {
     Restore,
@@ -104,6 +108,18 @@ impl RayOfLightApp {
     /// signal.
     pub(super) fn keep_journal(&mut self, ctx: &egui::Context) {
         if self.signalled.load(Ordering::SeqCst) {
+            // A save or an export under way stops at its next write (the
+            // signal is recorded for it too, `crate::interrupt`) and
+            // removes its temporary file: the app ends once it has, or
+            // after STOP_WAIT.
+            let since = *self.signalled_at.get_or_insert_with(Instant::now);
+            if let Some(export) = &self.export {
+                export.cancel();
+            }
+            if (self.saving.is_some() || self.export.is_some()) && since.elapsed() < STOP_WAIT {
+                ctx.request_repaint_after(Duration::from_millis(5));
+                return;
+            }
             self.flush_journal();
             // Nothing asks: the edits are in the journal.
             self.allow_close = true;
@@ -138,6 +154,13 @@ impl RayOfLightApp {
             return;
         };
         hot.due = None;
+        // While the user chooses between restored edits and others, the
+        // edits are all in the entries they came from (still claimed):
+        // an entry of this window's would only copy some of them, to be
+        // asked about again after a crash.
+        if self.doc.conflict().is_some_and(|c| c.is_restore()) {
+            return;
+        }
         hot.kept = Some(self.doc.generation());
         let Some(path) = self.doc.path().map(crate::files::absolute) else {
             return;
@@ -285,9 +308,12 @@ impl RayOfLightApp {
                 format!("the {count} unsaved edit{plural} from {when} are in the file already")
             }
             Ok(reload) => {
-                let how = match reload {
-                    Reload::Merged => ", merged with the file's changes",
-                    Reload::Conflict => ", and the file changed since: choose what to keep",
+                let how = match (reload, first) {
+                    (Reload::Merged, true) => ", merged with the file's changes",
+                    (Reload::Conflict, true) => ", and the file changed since: choose what to keep",
+                    (Reload::Conflict, false) => {
+                        ", which changed values edited here too: choose what to keep"
+                    }
                     _ => "",
                 };
                 let whose = if first { "" } else { " of another window" };
@@ -340,9 +366,13 @@ impl RayOfLightApp {
         };
         let entry = &claimed.restored.entry;
         let count = entry.edits.len();
-        let plural = if count == 1 { "" } else { "s" };
+        let (plural, were) = if count == 1 {
+            ("", "was")
+        } else {
+            ("s", "were")
+        };
         let text = format!(
-            "{count} unsaved edit{plural} from {} were made on {} when another file was there \
+            "{count} unsaved edit{plural} from {} {were} made on {} when another file was there \
              (the file there now was saved by another program since, or is another file \
              altogether). They are not applied unless you ask.",
             clock(entry.saved_at),
@@ -374,11 +404,20 @@ impl RayOfLightApp {
         let Some(claimed) = hot.offered.pop_front() else {
             return;
         };
+        let kept = claimed.path().display().to_string();
         match answer {
             Offer::Restore => hot.waiting.push_back(claimed),
             // Let go: the entry stays, for the next window on this file.
-            Offer::Later => drop(claimed),
-            Offer::Discard => claimed.remove(),
+            Offer::Later => {
+                drop(claimed);
+                self.notify(format!(
+                    "the unsaved edits of the other file are kept in {kept}: they are offered again when this file opens"
+                ));
+            }
+            Offer::Discard => {
+                claimed.remove();
+                self.notify("the unsaved edits of the other file were discarded".to_owned());
+            }
         }
         self.restore_waiting();
     }

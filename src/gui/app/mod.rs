@@ -211,6 +211,8 @@ pub struct RayOfLightApp {
     hot_exit: Option<hot_exit::HotExit>,
     /// A signal asked the app to end (see [`RayOfLightApp::end_on_signals`]).
     signalled: Arc<AtomicBool>,
+    /// When the app saw it.
+    signalled_at: Option<Instant>,
     ctx: egui::Context,
 }
 
@@ -245,6 +247,7 @@ impl RayOfLightApp {
             loading: None,
             reading: false,
             signalled: Arc::new(AtomicBool::new(false)),
+            signalled_at: None,
             path_prompt: None,
             view: View::default(),
             selection: Selection::default(),
@@ -301,6 +304,9 @@ impl RayOfLightApp {
     /// end the app cleanly from now on, with the unsaved edits in the
     /// journal and nothing asked.
     pub fn end_on_signals(&mut self) {
+        // A save or export under way stops at its next write, its
+        // temporary file removed, before the app ends.
+        let _ = crate::interrupt::record_only();
         self.signalled = hot_exit::watch_signals(&self.ctx);
     }
 

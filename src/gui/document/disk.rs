@@ -104,6 +104,9 @@ enum Onto {
         base: Box<Scene>,
         label: String,
         later: Option<Box<FileRead>>,
+        /// The scene on screen is the file's, changed by another program
+        /// since the edits were made (else: other windows' edits).
+        from_file: bool,
     },
 }
 
@@ -117,6 +120,18 @@ impl PendingMerge {
     /// edits and the file another program saved).
     pub fn is_restore(&self) -> bool {
         matches!(self.onto, Onto::Shown { .. })
+    }
+
+    /// Whether the conflicts are between restored edits and the file's
+    /// own changes since they were made (else: another window's edits).
+    pub fn is_restore_onto_the_file(&self) -> bool {
+        matches!(
+            self.onto,
+            Onto::Shown {
+                from_file: true,
+                ..
+            }
+        )
     }
 }
 
@@ -301,6 +316,7 @@ impl Document {
         edits: Vec<Edit>,
         choices: &BTreeMap<usize, Choice>,
         label: String,
+        from_file: bool,
     ) -> Reload {
         let merged = merge::merge_onto(&base, self.shown.edited.clone(), &edits, choices);
         if !merged.conflicts.is_empty() {
@@ -309,6 +325,7 @@ impl Document {
                     base: Box::new(base),
                     label,
                     later: None,
+                    from_file,
                 },
                 conflicts: merged.conflicts,
                 edits,
@@ -353,14 +370,20 @@ impl Document {
         };
         let read = match pending.onto {
             Onto::File(read) => read,
-            Onto::Shown { base, label, later } => {
+            Onto::Shown {
+                base,
+                label,
+                later,
+                from_file,
+            } => {
                 let choices = pending
                     .conflicts
                     .iter()
                     .zip(choices)
                     .map(|(c, choice)| (c.edit, *choice))
                     .collect();
-                let reload = self.merge_into_shown(*base, pending.edits, &choices, label);
+                let reload =
+                    self.merge_into_shown(*base, pending.edits, &choices, label, from_file);
                 return Ok(match later {
                     Some(read) if reload != Reload::Conflict => self.file_read(*read),
                     _ => reload,

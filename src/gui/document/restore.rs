@@ -4,7 +4,7 @@
 //! engine with the file as it is now.
 
 use super::disk::{Fingerprint, fingerprint};
-use super::{Document, FileRead, FileState, Reload};
+use super::{Document, FileState, Reload};
 use crate::scene::edit::Edit;
 use crate::scene::{self, splice};
 
@@ -38,65 +38,54 @@ impl Document {
 
     /// Restores `edits`, made on the text whose fingerprint is
     /// `base_fingerprint`, onto this document just opened from the file,
-    /// as one undo step. A file that still holds that text (the usual case
-    /// after a crash) takes them as it is, and `base` is never called: a
-    /// million objects' base is not read and parsed a second time (the app
-    /// peaked at 700 MB restoring one edit). Otherwise the text `base`
-    /// gives is loaded, the edits applied to it, then merged with the file
-    /// as it is now (a conflict is asked as with any other program's
-    /// save); where that leaves nothing unsaved (the edits are all in the
-    /// file: a save that finished before the app ended), the document is
-    /// left as it opened. Returns how it merged, or why the edits cannot
-    /// be restored (a base that does not load, an edit that does not
-    /// apply: the journal is damaged).
+    /// as one undo step (undoing it gives the file as it opened). A file
+    /// that still holds that text (the usual case after a crash) takes
+    /// them as it is, and `base` is never called: a million objects' base
+    /// is not read and parsed a second time (the app peaked at 700 MB
+    /// restoring one edit). Otherwise the text `base` gives is loaded and
+    /// the edits replayed from it onto the file as it is now (a value the
+    /// file changed too is asked, [`super::PendingMerge::is_restore`]); where
+    /// that changes nothing (the edits are all in the file: a save that
+    /// finished before the app ended), the document is left as it opened
+    /// and `Unchanged` returned with nothing unsaved. Returns how it
+    /// merged, or why the edits cannot be restored (a base that does not
+    /// load, an edit that does not apply: the journal is damaged).
     pub fn restore(
         &mut self,
         base_fingerprint: u64,
         base: impl FnOnce() -> Result<String, String>,
         edits: &[Edit],
     ) -> Result<Reload, String> {
-        let path = self.path.clone().ok_or("the scene has no file")?;
         let label = match edits.len() {
             1 => "restore 1 unsaved edit".to_owned(),
             n => format!("restore {n} unsaved edits"),
         };
-        if !self.placeholder
-            && self.state != FileState::Missing
-            && self.disk == Some(base_fingerprint)
-        {
+        let path = self.path.clone().ok_or("the scene has no file")?;
+        if self.placeholder || self.state == FileState::Missing {
+            // The file does not load now, or is gone: the edits stay on
+            // their base, and saving refuses until the file loads again.
+            let base = base()?;
+            let base_scene = scene::parse(&base, &path).map_err(|e| format!("its base: {e}"))?;
+            let mut doc = Document::from_text(Some(path), base, base_scene, FileState::Watching);
+            doc.apply_labelled(edits.to_vec(), label)
+                .map_err(|e| format!("an edit does not apply: {e}"))?;
+            doc.disk = None;
+            let reload = if self.placeholder {
+                doc.error.clone_from(&self.error);
+                Reload::Broken
+            } else {
+                doc.state = FileState::Missing;
+                Reload::Unchanged
+            };
+            *self = doc;
+            return Ok(reload);
+        }
+        if self.disk == Some(base_fingerprint) && !self.dirty {
             self.apply_labelled(edits.to_vec(), label)
                 .map_err(|e| format!("an edit does not apply: {e}"))?;
             return Ok(Reload::Unchanged);
         }
-        let base = base()?;
-        let base_scene = scene::parse(&base, &path).map_err(|e| format!("its base: {e}"))?;
-        let mut doc = Document::from_text(Some(path), base, base_scene, FileState::Watching);
-        doc.apply_labelled(edits.to_vec(), label)
-            .map_err(|e| format!("an edit does not apply: {e}"))?;
-        if !self.placeholder && self.state != FileState::Missing {
-            let text = self.file.source.text().into_owned();
-            let reload = doc.file_read(FileRead::new(text, self.file_scene().clone()));
-            if reload != Reload::Conflict && !doc.has_unsaved_edits() {
-                // Every edit is in the file already (a save that finished
-                // before the app ended): nothing to restore.
-                return Ok(Reload::Unchanged);
-            }
-            *self = doc;
-            return Ok(reload);
-        }
-        let reload = if self.placeholder {
-            // The file does not load now: the edits stay on their base, and
-            // saving refuses until the file loads again.
-            doc.disk = None;
-            doc.error.clone_from(&self.error);
-            Reload::Broken
-        } else {
-            doc.disk = None;
-            doc.state = FileState::Missing;
-            Reload::Unchanged
-        };
-        *self = doc;
-        Ok(reload)
+        self.replay_restored(base_fingerprint, base, edits, label, true)
     }
 
     /// Restores `edits` of another window, made on the text whose
@@ -112,6 +101,25 @@ impl Document {
         base: impl FnOnce() -> Result<String, String>,
         edits: &[Edit],
     ) -> Result<Reload, String> {
+        let label = match edits.len() {
+            1 => "restore 1 unsaved edit of another window".to_owned(),
+            n => format!("restore {n} unsaved edits of another window"),
+        };
+        self.replay_restored(base_fingerprint, base, edits, label, false)
+    }
+
+    /// Replays `edits`, made on the text of fingerprint `base_fingerprint`
+    /// (the file's as last read, else `base`'s), onto the scene on screen.
+    /// `from_file`: the scene on screen is the file's, changed by another
+    /// program since the edits were made (else: other restored edits).
+    fn replay_restored(
+        &mut self,
+        base_fingerprint: u64,
+        base: impl FnOnce() -> Result<String, String>,
+        edits: &[Edit],
+        label: String,
+        from_file: bool,
+    ) -> Result<Reload, String> {
         let path = self.path.clone().ok_or("the scene has no file")?;
         let base_scene = if !self.placeholder && self.disk == Some(base_fingerprint) {
             self.file_scene().clone()
@@ -126,11 +134,13 @@ impl Document {
                 .apply(edit)
                 .map_err(|e| format!("an edit does not apply: {e}"))?;
         }
-        let label = match edits.len() {
-            1 => "restore 1 unsaved edit of another window".to_owned(),
-            n => format!("restore {n} unsaved edits of another window"),
-        };
-        Ok(self.merge_into_shown(base_scene, edits.to_vec(), &Default::default(), label))
+        Ok(self.merge_into_shown(
+            base_scene,
+            edits.to_vec(),
+            &Default::default(),
+            label,
+            from_file,
+        ))
     }
 }
 
