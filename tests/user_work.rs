@@ -1527,3 +1527,88 @@ fn undoing_a_restore_merged_with_the_files_change_gives_the_file_back() {
     assert_eq!(doc.scene(), &parse(&theirs));
     until_entries(&mut harness, &folder, 0);
 }
+
+/// Issue 44, item 6: a value typed a key at a time is one undo step,
+/// ended by Enter (typing "0.19" over 0.4 left three); and every Ctrl+Z
+/// press is one step, however fast they come (five in one frame, as a
+/// held key repeats, undid one).
+#[test]
+fn a_typed_value_is_one_step_and_every_undo_press_counts() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    harness.get_by_label("#2 small red ball sphere").click();
+    harness.run_steps(2);
+    harness
+        .get_by(|node| node.numeric_value().is_some_and(|v| (v - 0.4).abs() < 1e-9))
+        .focus();
+    harness.run_steps(2);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::A);
+    harness.run_steps(1);
+    for key in ["0", ".", "1", "9"] {
+        harness.get_by(|node| node.is_focused()).type_text(key);
+        harness.run_steps(1);
+    }
+    harness.key_press(egui::Key::Enter);
+    harness.run_steps(2);
+    assert_eq!(material(harness.state().document(), 1, Coef::Ka), 0.19);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.run_steps(2);
+    let doc = harness.state().document();
+    assert_eq!(material(doc, 1, Coef::Ka), 0.4, "one step undoes the entry");
+    assert!(!doc.has_unsaved_edits());
+
+    for model in ["lambert", "phong", "ambient", "lambert", "phong"] {
+        harness.get_by_label(model).click();
+        harness.run_steps(1);
+    }
+    assert_eq!(
+        harness.state().document().scene().model.illumination,
+        scene::Illumination::Phong
+    );
+    for _ in 0..5 {
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    }
+    harness.run_steps(1);
+    let doc = harness.state().document();
+    assert_eq!(doc.scene().model.illumination, scene::Illumination::Whitted);
+    assert!(!doc.has_unsaved_edits(), "five presses, five steps");
+}
+
+/// Issue 44, item 7: Ctrl+S after the file was renamed away asks (save
+/// it there again, save as, cancel) rather than silently making a new
+/// file at the old name.
+#[test]
+fn saving_a_file_renamed_away_asks_first() {
+    let (dir, path) = file_with(EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    harness.get_by_label("lambert").click();
+    harness.run_steps(1);
+    let renamed = dir.path().join("renamed.xml");
+    std::fs::rename(&path, &renamed).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the file missing",
+        |app| *app.document().state() == rayoflight::gui::document::FileState::Missing,
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    harness.run_steps(3);
+    assert!(harness.query_by_label("The file is gone").is_some());
+    assert!(!path.exists(), "nothing written before the answer");
+    harness.get_by_label("Cancel").click();
+    harness.run_steps(3);
+    assert!(!path.exists());
+    assert!(harness.state().document().has_unsaved_edits());
+
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    harness.run_steps(3);
+    harness.get_by_label("Save it there again").click();
+    step_until(&mut harness, Duration::from_secs(10), "the save", |app| {
+        !app.is_saving() && !app.document().has_unsaved_edits()
+    });
+    assert_eq!(
+        read(&path),
+        EXAMPLE.replace(r#"type="whitted""#, r#"type="lambert""#)
+    );
+    assert_eq!(read(&renamed), EXAMPLE, "the renamed file left alone");
+}

@@ -98,6 +98,17 @@ pub(super) struct Binding {
     pub help: &'static str,
 }
 
+impl Command {
+    /// Whether each press of its key runs it once more (undo, redo,
+    /// zoom); the others run once however many presses a frame brings.
+    pub(super) fn repeats(&self) -> bool {
+        matches!(
+            self,
+            Command::Undo | Command::Redo | Command::ZoomIn | Command::ZoomOut
+        )
+    }
+}
+
 const fn chord(modifiers: Modifiers, key: Key) -> KeyboardShortcut {
     KeyboardShortcut::new(modifiers, key)
 }

@@ -21,6 +21,9 @@ pub(super) enum Confirm {
     Discard(Command),
     /// Save as would replace this existing file.
     Replace(PathBuf),
+    /// The file was moved, renamed or deleted since it was read: saving
+    /// would make a new file at its old path (then `Command`).
+    Missing(Option<Command>),
 }
 
 /// A file dialog running on its own thread, so the window keeps painting.
@@ -35,6 +38,8 @@ pub(super) enum DialogKind {
 pub(super) enum Answer {
     Go,
     SaveThen,
+    /// Save as… instead.
+    Elsewhere,
     Cancel,
 }
 
@@ -148,7 +153,19 @@ impl RayOfLightApp {
     /// Starts saving on a thread of its own ([`SaveJob::spawn`]); `then`
     /// runs once the edits are saved.
     /// Editing goes on meanwhile; what is edited then stays unsaved.
+    /// Saves, then runs `then`; asks first when the file is gone (moved,
+    /// renamed or deleted since it was read): a new file at its old path
+    /// is not what every user expects.
     pub(super) fn save_then(&mut self, then: Option<Command>) {
+        if *self.doc.state() == crate::gui::document::FileState::Missing && self.saving.is_none() {
+            self.confirm = Some(Confirm::Missing(then));
+            return;
+        }
+        self.save_now(then);
+    }
+
+    /// Saves to the document's path, then runs `then`.
+    fn save_now(&mut self, then: Option<Command>) {
         if self.saving.is_some() {
             self.notify("already saving: wait for it".into());
             return;
@@ -417,6 +434,28 @@ impl RayOfLightApp {
                         }
                     });
                 }
+                Confirm::Missing(_) => {
+                    ui.heading("The file is gone");
+                    ui.label(format!(
+                        "{} was moved, renamed or deleted since it was read. Save the \
+                         scene there again as a new file, or somewhere else?",
+                        self.doc
+                            .path()
+                            .map(|p| p.display().to_string())
+                            .unwrap_or_default()
+                    ));
+                    ui.horizontal(|ui| {
+                        if ui.button("Save it there again").clicked() {
+                            answer = Some(Answer::Go);
+                        }
+                        if ui.button("Save as…").clicked() {
+                            answer = Some(Answer::Elsewhere);
+                        }
+                        if ui.button("Cancel").clicked() {
+                            answer = Some(Answer::Cancel);
+                        }
+                    });
+                }
                 Confirm::Replace(path) => {
                     ui.heading("Replace the file?");
                     ui.label(format!("{} already exists.", path.display()));
@@ -446,7 +485,9 @@ impl RayOfLightApp {
             // Once saved (no conflict, no error) it goes on; else the edits
             // stay.
             (Answer::SaveThen, Confirm::Discard(command)) => self.save_then(Some(command)),
-            (Answer::SaveThen, Confirm::Replace(_)) => {}
+            (Answer::Go, Confirm::Missing(then)) => self.save_now(then),
+            (Answer::Elsewhere, Confirm::Missing(_)) => self.start_dialog(DialogKind::SaveAs),
+            (Answer::SaveThen | Answer::Elsewhere, _) => {}
         }
     }
 

@@ -213,20 +213,34 @@ impl RayOfLightApp {
         let mut commands = Vec::new();
         ctx.input_mut(|i| {
             for binding in BINDINGS {
-                let pressed = binding.keys.iter().any(|trigger| match trigger {
-                    Trigger::Chord(chord) => i.consume_shortcut(chord),
-                    Trigger::EditChord(chord) => !typing && i.consume_shortcut(chord),
-                    Trigger::Key(key) => !typing && i.modifiers.is_none() && i.key_pressed(*key),
-                    Trigger::Char(c) => {
-                        !typing
-                            && i.events
-                                .iter()
-                                .any(|e| matches!(e, egui::Event::Text(t) if t == c))
-                    }
-                });
-                if pressed {
-                    commands.push(binding.command.clone());
-                }
+                // Every press counts: five Ctrl+Z that come in one frame
+                // (a held key repeats that fast) undo five steps.
+                let presses: usize = binding
+                    .keys
+                    .iter()
+                    .map(|trigger| match trigger {
+                        Trigger::Chord(chord) => {
+                            i.count_and_consume_key(chord.modifiers, chord.logical_key)
+                        }
+                        Trigger::EditChord(chord) if !typing => {
+                            i.count_and_consume_key(chord.modifiers, chord.logical_key)
+                        }
+                        Trigger::Key(key) if !typing && i.modifiers.is_none() => {
+                            i.num_presses(*key)
+                        }
+                        Trigger::Char(c) if !typing => i
+                            .events
+                            .iter()
+                            .filter(|e| matches!(e, egui::Event::Text(t) if t == c))
+                            .count(),
+                        _ => 0,
+                    })
+                    .sum();
+                let times = match binding.command.repeats() {
+                    true => presses,
+                    false => presses.min(1),
+                };
+                commands.extend(std::iter::repeat_n(binding.command.clone(), times));
             }
         });
         let dropped: Option<PathBuf> = ctx.input(|i| {

@@ -18,14 +18,19 @@ pub(super) struct Form<'s> {
 }
 
 impl Form<'_> {
+    /// A drag of the field, or an entry typed in it, ends: Enter, Tab, a
+    /// click elsewhere.
     pub(super) fn note(&mut self, response: &Response) {
-        if response.drag_stopped() {
+        if response.drag_stopped() || response.lost_focus() {
             self.out.drag_ended = true;
         }
     }
 
+    /// `field` set to `value` by the widget of `response`. While it is
+    /// dragged or typed in (it has the keyboard's focus), its changes
+    /// join one undo step: typing "0.19" is one entry, not four.
     pub(super) fn set(&mut self, field: Field, value: Value, response: &Response) {
-        self.out.dragging |= response.dragged();
+        self.out.dragging |= response.dragged() || response.has_focus() || response.lost_focus();
         self.out.edits.push(Edit::Set(field, value));
     }
 
