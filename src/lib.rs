@@ -78,5 +78,5 @@ pub mod sheet;
 pub mod split;
 pub mod study;
 
-/// The built-in example scene from the brief (`scenes/example.xml`).
+/// The built-in example scene, from `scenes/example.xml`.
 pub const EXAMPLE_SCENE: &str = include_str!("../scenes/example.xml");

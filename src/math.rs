@@ -18,7 +18,8 @@ use smallvec::SmallVec;
 
 pub use glam::DVec3 as Vec3;
 
-/// One child of a `<transformation>` element (contract section 3).
+/// One child of a `<transformation>` element (docs/scene-format.md,
+/// Transformations).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum TransformStep {
     Translate(DVec3),

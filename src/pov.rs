@@ -1,5 +1,6 @@
-//! The POV-Ray 3.7 translation of a scene (contract section 8), used to
-//! cross-check our renders against an independent raytracer.
+//! The POV-Ray 3.7 translation of a scene (docs/scene-format.md,
+//! Cross-checking with POV-Ray), used to cross-check our renders against an
+//! independent raytracer.
 //!
 //! Our world is right-handed with y down; POV-Ray's is left-handed with y up.
 //! The mirror F = diag(1, −1, 1) maps one onto the other: every point
@@ -8,7 +9,8 @@
 //! are the 3×3 part transposed (column j of our matrix is its row j) and the
 //! translation comes last.
 //!
-//! The finish reproduces the contract's formulas exactly: `pigment { rgb 1 }`
+//! The finish reproduces the scene format's formulas (docs/scene-format.md,
+//! Illumination) exactly: `pigment { rgb 1 }`
 //! so that the diffuse term is not multiplied by the object's colour, the
 //! ambient term `ka·C` as an ambient colour (with `ambient_light rgb 1`),
 //! `brilliance 1`, `phong ks phong_size m`, `specular 0`, `reflection { ks }`,
@@ -36,10 +38,12 @@ use crate::scene::{Illumination, Object, Scene, Shape};
 /// The largest `max_trace_level` POV-Ray accepts.
 pub const POV_MAX_TRACE_LEVEL: u32 = 256;
 
-/// The command-line flags of contract section 8, before `+W +H +I +O`.
+/// POV-Ray's command-line flags for a cross-check (docs/scene-format.md,
+/// Cross-checking with POV-Ray), before `+W +H +I +O`.
 pub const POV_FLAGS: &str = "-A +FN File_Gamma=1.0";
 
-/// Translates `scene` to POV-Ray 3.7 scene language (contract section 8).
+/// Translates `scene` to POV-Ray 3.7 scene language (docs/scene-format.md,
+/// Cross-checking with POV-Ray).
 pub fn export(scene: &Scene) -> String {
     export_named(scene, None)
 }
@@ -109,7 +113,8 @@ fn write_scene(out: &mut String, scene: &Scene, header: Option<Header>) -> std::
     let cam = &scene.camera;
     writeln!(
         out,
-        "// POV-Ray 3.7 translation of a RayOfLight scene (contract section 8)."
+        "// POV-Ray 3.7 translation of a RayOfLight scene \
+         (docs/scene-format.md, Cross-checking with POV-Ray)."
     )?;
     if let Some(h) = header {
         writeln!(out, "// Source: {}", in_comment(&h.scene.to_string_lossy()))?;

@@ -46,7 +46,8 @@ fn sum_of_terms(terms: &Value) -> [f64; 3] {
     [0, 1, 2].map(|c| ((a[c] + d[c]) + s[c]) + r[c])
 }
 
-/// The contract's rounding: clamp to [0, 1], floor(c·255 + 0.5).
+/// The 8-bit rounding (docs/scene-format.md, Illumination): clamp to
+/// [0, 1], floor(c·255 + 0.5).
 fn to_8bit(c: f64) -> u8 {
     if c > 0.0 {
         (c.min(1.0) * 255.0 + 0.5).floor() as u8

@@ -1,7 +1,7 @@
 //! Golden tests: every scene in `scenes/golden/` rendered with the default
 //! options must match the POV-Ray 3.7 reference in `tests/golden/<name>.png`
-//! (made by `tests/golden/regenerate.sh` through `pov::export`, contract
-//! section 8).
+//! (made by `tests/golden/regenerate.sh` through `pov::export`; see
+//! docs/scene-format.md, Cross-checking with POV-Ray).
 //!
 //! Tolerance (never loosen it): at least 99.99 % of the pixels within one
 //! 8-bit level on every channel, and no pixel off by more than 8 unless it is

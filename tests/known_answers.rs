@@ -1,6 +1,6 @@
 //! Known-answer tests: one-pixel images whose colour was worked out by hand
-//! from the contract's formulas (section 5), so the renderer is checked
-//! against arithmetic, not against itself.
+//! from the scene format's formulas (docs/scene-format.md, Illumination),
+//! so the renderer is checked against arithmetic, not against itself.
 //!
 //! The setup: a 1×1 image (s = 2, the pixel centre is the screen origin), the
 //! eye at (0, 0, −4), so the primary ray runs along +z through the origin.

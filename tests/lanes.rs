@@ -2,7 +2,7 @@
 //! in an AVX2 register or four in two SSE2 registers, the widest the
 //! processor has (`RAYOFLIGHT_SIMD=avx2` or `baseline` asks for narrower).
 //! All must give the same image, byte for byte, with every study method:
-//! whichever a machine takes, the picture is the contract's. (On a machine
+//! whichever a machine takes, the picture is the reference image. (On a machine
 //! without AVX-512 or AVX2 the wider ones fall back, and the comparison is
 //! between fewer widths.)
 

@@ -1,6 +1,7 @@
 //! The loader's errors: every malformed scene under `tests/malformed/` must be
 //! refused with the exact `line:column` of the culprit and a message naming
-//! the element and attribute at fault (contract sections 4 and 9).
+//! the element and attribute at fault (docs/scene-format.md: Elements,
+//! Numbers, Everything else in the file and Error messages).
 //!
 //! Columns count characters, not bytes (a tab is one), so several cases put
 //! tabs and multi-byte characters before the culprit on its line.

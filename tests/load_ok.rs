@@ -1,5 +1,6 @@
 //! Scenes the loader must accept, and the values it must give them
-//! (contract sections 2–4 and 9).
+//! (docs/scene-format.md: Elements, Transformations, Numbers and Everything
+//! else in the file).
 
 use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
@@ -297,7 +298,7 @@ fn transformation_steps_apply_in_document_order() {
 
 #[test]
 fn many_lights_and_objects_are_accepted() {
-    // The contract asks for at least 10 000 lights and 1 000 000 objects.
+    // docs/limits.md promises at least 10 000 lights and 1 000 000 objects.
     let mut text = format!("<scene>{CAMERA}\n");
     for i in 0..10_000 {
         text.push_str(&format!("<light x=\"{i}\" y=\"0\" z=\"0\"/>\n"));

@@ -4,10 +4,10 @@
 //! `auto` gives the default image byte for byte.
 //!
 //! The failures (measured with `rayoflight study`, not staged):
-//! - `f32`: everywhere there is a reflection, because the contract's offset
-//!   (1e-9 + 1e-12·|M|) is far below f32's spacing (acne), and worse far
-//!   from the origin, where hit points round to f32's grid (spacing 1 at
-//!   1e7); `f32-eps-1e-3` (an offset f32 resolves near the origin)
+//! - `f32`: everywhere there is a reflection, because the reference offset
+//!   (1e-9 + 1e-12·|M|, docs/study.md) is far below f32's spacing (acne),
+//!   and worse far from the origin, where hit points round to f32's grid
+//!   (spacing 1 at 1e7); `f32-eps-1e-3` (an offset f32 resolves near the origin)
 //!   passes at the origin and at 1e3 and fails at 1e5 and 1e7;
 //! - `no-offset`: acne on every whitted scene;
 //! - `depth-1`: where the last reflection is visible (inside a sphere);

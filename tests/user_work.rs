@@ -23,8 +23,8 @@ use rayoflight::scene::edit::{Coef, Edit, Field, Item, Value};
 use rayoflight::scene::merge::Choice;
 use rayoflight::scene::{self, Scene};
 
-/// The brief's example with comments above and inside the light, and a
-/// number spelled `-2.0e0`.
+/// The example scene (`scenes/example.xml`) with comments above and inside
+/// the light, and a number spelled `-2.0e0`.
 const EXAMPLE: &str = r#"<?xml version="1.0"?>
 <scene>
 <!-- big green ball -->

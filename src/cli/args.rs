@@ -6,11 +6,11 @@
 //!    applied and every rule across flags checked. That value is all the
 //!    rest of the binary sees.
 //!
-//! The brief's single-dash long options `-out` and `-time` are rewritten to
-//! `--out` and `--time` before clap sees them: clap would read `-out` as
-//! `-o ut`. Any other single-dash word of letters (`-frobnicate`, `-tme`)
-//! is refused whole, with the flag it is a slip for, before clap would
-//! read it as short flags. Numeric flags take negative numbers as values,
+//! The single-dash long options `-out` and `-time` (as the original command
+//! line had them) are rewritten to `--out` and `--time` before clap sees
+//! them: clap would read `-out` as `-o ut`. Any other single-dash word of
+//! letters (`-frobnicate`, `-tme`) is refused whole, with the flag it is a
+//! slip for, before clap would read it as short flags. Numeric flags take negative numbers as values,
 //! so that their range check says what is allowed.
 
 use super::edit::{self, EditArg};
@@ -45,8 +45,9 @@ Usage: rayoflight [-time] scene.xml [-out image.png] [--set PATH=VALUE]…
 
 /// What the top-level help says after the flags and subcommands.
 const AFTER_HELP: &str = "\
-The brief's single-dash spellings -out and -time are the same flags as --out
-and --time. A scene file named like a subcommand is given as a path: ./bench.
+The single-dash spellings -out and -time (as the original command line had
+them) are the same flags as --out and --time. A scene file named like a
+subcommand is given as a path: ./bench.
 
 Exit status: 0 success, 1 scene, render or output error, 2 usage error.";
 
@@ -996,7 +997,7 @@ fn edit_args(given: Vec<Given>, scene: &Path) -> Result<Vec<EditArg>, UsageError
         })
 }
 
-/// The arguments with the brief's `-out` and `-time` spelled `--out` and
+/// The arguments with the single-dash `-out` and `-time` spelled `--out` and
 /// `--time` (up to a `--`, after which every argument is a file).
 fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
     let mut files_only = false;
@@ -1018,9 +1019,9 @@ fn brief_spellings(args: impl IntoIterator<Item = OsString>) -> Vec<OsString> {
         .collect()
 }
 
-/// The first single-dash word of several letters that is neither a brief
-/// spelling (`-out`, `-time`, already `--out` and `--time` here) nor a
-/// cluster of short flags (`-qh`), as a message: `unknown flag
+/// The first single-dash word of several letters that is neither a
+/// single-dash long flag (`-out`, `-time`, already `--out` and `--time`
+/// here) nor a cluster of short flags (`-qh`), as a message: `unknown flag
 /// '-frobnicate'`, `unknown flag '-tme' (did you mean '-time'?)`. clap
 /// would read `-frobnicate` as `-f …` and `-outt x.png` as `-o utt` then
 /// a stray `x.png`. A word with a digit, a dot or a slash (`-n4`,

@@ -5,7 +5,8 @@
 //! on the ray mapped by the inverse matrix. The direction is mapped but *not*
 //! renormalised, so the parameter t found in object space is the world
 //! distance along the unit world direction: hits on differently scaled
-//! objects compare directly (contract section 2).
+//! objects compare directly, and the visible hit is the nearest in world
+//! distance.
 //!
 //! [`Shape`] is what an object is in its own space; [`Primitive`] flattens what the transform allows (a sphere under a
 //! similarity is a world centre and radius; a plane a world point and

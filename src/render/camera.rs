@@ -1,4 +1,4 @@
-//! Primary rays of the pinhole camera (contract section 1).
+//! Primary rays of the pinhole camera (docs/scene-format.md, Coordinates).
 
 use crate::geometry::{Lanes, Ray, Vector};
 use crate::scene::Camera;

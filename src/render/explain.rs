@@ -13,8 +13,8 @@
 //! Σ I kd cos θ, Σ I ks cos^m α and ks I_r. The camera ray's reflection
 //! is the renderer's own sum of the later bounces, so its four terms add
 //! up to the pixel's unclamped colour bit for bit; a later bounce's
-//! reflection is its ks times the next bounce's colour (the contract's
-//! I = local + ks I_r).
+//! reflection is its ks times the next bounce's colour (the whitted formula
+//! I = phong + ks I_r, docs/scene-format.md, Illumination).
 //!
 //! The trees of a pixel's rays can be large (256 rays of 10 000 bounces):
 //! [`Prepared::explain_each`] hands them on one at a time, so that a

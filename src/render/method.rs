@@ -39,7 +39,7 @@ impl Method {
     }
 }
 
-/// The methods compared: `default` (the reference: the contract's method
+/// The methods compared: `default` (the reference method, docs/study.md,
 /// done plainly, every ray against every object, every chain to its
 /// depth) first, then `auto`, then variations of the exact fast path
 /// ([`RenderOptions::default`]), one change each.
@@ -62,9 +62,9 @@ pub fn methods() -> Vec<Method> {
                 ..d()
             },
         ),
-        // f32 with an offset f32 can resolve near the origin (the contract's
-        // 1e-9 + 1e-12·|M| is below f32's spacing everywhere): it separates
-        // f32's failure far from the origin from its acne.
+        // f32 with an offset f32 can resolve near the origin (the reference
+        // offset 1e-9 + 1e-12·|M| is below f32's spacing everywhere): it
+        // separates f32's failure far from the origin from its acne.
         method(
             "f32-eps-1e-3",
             RenderOptions {

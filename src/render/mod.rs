@@ -7,9 +7,9 @@
 //! app's worker and `--region` share: a region of the image is traced in
 //! the whole image's tiles, so its pixels are the whole render's.
 //! [`RenderOptions`] holds every method choice (and the region to render);
-//! its default is the contract's reference image. [`render_pass`] renders
-//! one term of the formula (or the hit's normal, depth, object) through the
-//! same tile loop; [`explain`] says why a pixel has its colour, from the
+//! its default gives the reference image (docs/study.md). [`render_pass`]
+//! renders one term of the formula (or the hit's normal, depth, object)
+//! through the same tile loop; [`explain`] says why a pixel has its colour, from the
 //! same trace. [`navigate`] moves the camera as a viewport does (orbit,
 //! pan, dolly); [`object_ids`] says which object each pixel shows.
 //! [`methods`] are the named ways to render (`auto`, `f32`, `aa4`, …) that
@@ -68,7 +68,7 @@ pub const MAX_AA: u32 = 16;
 /// points, normals, reflected rays). Shading is always f64.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum Precision {
-    /// f64 throughout: the contract's reference.
+    /// f64 throughout, as the reference method (docs/study.md) renders.
     #[default]
     F64,
     /// Rays and primitives in f32 (the study's "f32 everywhere").
@@ -89,7 +89,8 @@ pub enum SphereTest {
 /// How far a reflected ray starts off the surface it leaves, along N.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Offset {
-    /// ε = 1e-9 + 1e-12·|M| (contract section 5): the reference.
+    /// ε = 1e-9 + 1e-12·|M| (world units): the reference method's offset
+    /// (docs/study.md), the one that matches POV-Ray on every golden scene.
     #[default]
     Contract,
     /// A fixed ε in world units.
@@ -103,7 +104,7 @@ impl Eq for Offset {}
 
 impl Offset {
     /// The reflected ray R leaving hit point M along the mirror of V about
-    /// N, from ε off the surface (contract section 5), in the precision
+    /// N, from ε off the surface (see [`Offset`]), in the precision
     /// (and lanes) of the point.
     #[inline(always)]
     pub fn reflected<V: Vector>(self, point: &SurfacePoint<V>) -> Ray<V> {
@@ -117,10 +118,10 @@ impl Offset {
     }
 }
 
-/// How to render. `RenderOptions::default()` gives the contract's image:
-/// one ray through each pixel centre, f64 throughout, with every exact
-/// shortcut allowed; [`RenderOptions::reference`] is the same image
-/// without shortcuts, and [`auto`](fn@auto) the options a given scene needs.
+/// How to render. `RenderOptions::default()` gives the reference image
+/// (docs/study.md): one ray through each pixel centre, f64 throughout,
+/// with every exact shortcut allowed; [`RenderOptions::reference`] is the
+/// same image without shortcuts, and [`auto`](fn@auto) the options a given scene needs.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RenderOptions {
     /// Worker threads; `None` uses rayon's global pool (one per core).
@@ -171,9 +172,10 @@ impl Default for RenderOptions {
 }
 
 impl RenderOptions {
-    /// The contract's method done plainly: every ray tests every object
-    /// and every whitted chain runs to its depth. The study's `default`
-    /// row; its image is the one every exact shortcut must reproduce.
+    /// The reference method (docs/study.md) done plainly: every ray tests
+    /// every object and every whitted chain runs to its depth. The
+    /// study's `default` row; its image is the one every exact shortcut
+    /// must reproduce.
     pub fn reference() -> Self {
         RenderOptions {
             early_stop: false,

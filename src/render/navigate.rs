@@ -1,5 +1,6 @@
 //! Moving the camera as a viewport does: orbit around a pivot, pan in the
-//! view plane, dolly toward a point (contract section 1's camera).
+//! view plane, dolly toward a point (the camera of docs/scene-format.md,
+//! Coordinates).
 //!
 //! A [`Pose`] is the camera's transformation read as a uniform scale, a
 //! rotation and a position. Each move gives a new pose, which

@@ -546,7 +546,7 @@ impl<W: WithKernel, K: Kernel> Vectorized for OnAvx<'_, W, K> {
 
 /// f64 geometry, a packet of rays at a time in the lanes of `L` ([`F64x4`],
 /// [`Avx4`] or [`Avx8`]): the reference
-/// (stable test, contract offset) and its study variants.
+/// (stable test, the reference offset) and its study variants.
 struct Exact<const TEXTBOOK: bool, L> {
     offset: Offset,
     lanes: PhantomData<L>,
@@ -1025,7 +1025,8 @@ impl Prepared {
     /// The colour is the camera ray's hit's own terms, then the later
     /// bounces: ((ambient + diffuse) + specular) + reflection, where
     /// reflection = Σ_k w_k I_k over the later hits, w_k the product of
-    /// the ks met before hit k: the contract's I = local + ks I_r unrolled.
+    /// the ks met before hit k: the whitted formula I = phong + ks I_r
+    /// (docs/scene-format.md, Illumination) unrolled.
     #[inline(always)]
     fn trace<K: Kernel, O: Observer<K::L>>(
         &self,

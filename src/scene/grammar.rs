@@ -1,4 +1,5 @@
-//! The scene format's grammar as data (contract sections 2–4 and 9): which
+//! The scene format's grammar as data (docs/scene-format.md: Elements,
+//! Transformations and Numbers): which
 //! elements hold which, which attributes each takes, and for every
 //! attribute what it means, its type, its range, and whether it is required
 //! or what it defaults to.
@@ -66,8 +67,8 @@ pub struct Element {
 /// What an attribute's value may be.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Value {
-    /// A finite decimal number (contract section 9), at least `min` if set
-    /// (`min_exclusive`: greater than it).
+    /// A finite decimal number (docs/scene-format.md, Numbers), at least
+    /// `min` if set (`min_exclusive`: greater than it).
     Number {
         min: Option<f64>,
         min_exclusive: bool,

@@ -1,5 +1,6 @@
-//! The scene loader: XML text to a validated [`Scene`] (contract sections
-//! 2–4 and 9), or a [`LoadError`] naming the file, the `line:column` and the
+//! The scene loader: XML text to a validated [`Scene`] (docs/scene-format.md:
+//! Elements, Transformations, Numbers, Everything else in the file and Error
+//! messages), or a [`LoadError`] naming the file, the `line:column` and the
 //! element and attribute at fault.
 //!
 //! quick-xml reads the text as a stream of events; a small recursive descent
@@ -721,9 +722,9 @@ pub(crate) enum NumberError {
     NotFinite,
 }
 
-/// A number as the format reads it (contract section 9): a finite `f64`,
-/// surrounding ASCII whitespace ignored. The edit engine reads values typed
-/// on the command line with the same rule.
+/// A number as the format reads it (docs/scene-format.md, Numbers): a
+/// finite `f64`, surrounding ASCII whitespace ignored. The edit engine reads
+/// values typed on the command line with the same rule.
 pub(crate) fn parse_number(text: &str) -> Result<f64, NumberError> {
     match text.trim_ascii().parse::<f64>() {
         Ok(v) if v.is_finite() => Ok(v),
@@ -732,9 +733,9 @@ pub(crate) fn parse_number(text: &str) -> Result<f64, NumberError> {
     }
 }
 
-/// An integer as the format reads it (contract section 9): ASCII digits
-/// with an optional leading `+`, surrounding ASCII whitespace ignored;
-/// `None` when it is not one or does not fit in a `u64`.
+/// An integer as the format reads it (docs/scene-format.md, Numbers):
+/// ASCII digits with an optional leading `+`, surrounding ASCII whitespace
+/// ignored; `None` when it is not one or does not fit in a `u64`.
 pub(crate) fn parse_integer(text: &str) -> Option<u64> {
     let text = text.trim_ascii();
     let digits = text.strip_prefix('+').unwrap_or(text);
@@ -1236,7 +1237,7 @@ impl<'a> Parser<'a> {
         })
     }
 
-    /// A finite number (contract section 9).
+    /// A finite number (docs/scene-format.md, Numbers).
     fn number(&self, attrs: &Attrs<'_>, attr: &Attr<'_>) -> Result<f64, LoadError> {
         let fields = || (attrs.element, attr.name, Box::from(attr.value.as_ref()));
         match parse_number(&attr.value) {
@@ -1321,7 +1322,7 @@ impl<'a> Parser<'a> {
     }
 
     /// An integer in `min..=max`: ASCII digits with an optional leading `+`
-    /// (contract section 9).
+    /// (docs/scene-format.md, Numbers).
     fn integer(
         &self,
         attrs: &Attrs<'_>,

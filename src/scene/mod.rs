@@ -1,6 +1,7 @@
 //! The scene as the file describes it: objects, lights, camera and
 //! illumination model, with defaults filled in and every value validated
-//! (contract sections 2–4 and 9).
+//! (docs/scene-format.md: Elements, Transformations, Numbers and Everything
+//! else in the file).
 //!
 //! [`load`](fn@load) reads a file, [`parse`] a string; both return a [`Scene`] or a
 //! [`LoadError`] that carries the file and the `line:column` of the culprit.
@@ -50,7 +51,7 @@ pub struct Object {
     pub transform: Transform,
 }
 
-/// The pinhole camera of contract section 1.
+/// The pinhole camera (docs/scene-format.md, Coordinates).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Camera {
     pub width: u32,

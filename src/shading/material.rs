@@ -3,7 +3,7 @@ use crate::math::Vec3;
 /// A linear RGB colour; components are ≥ 0 and may exceed 1.
 pub type Color = Vec3;
 
-/// Phong material coefficients (contract section 5); with lanes
+/// Phong material coefficients (docs/scene-format.md, Illumination); with lanes
 /// (`Material<F64x4>`), those of the surface each lane hit.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material<R = f64> {

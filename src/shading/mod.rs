@@ -1,5 +1,6 @@
-//! Shading: materials, lights and the illumination formulas of contract
-//! section 5, written with its names.
+//! Shading: materials, lights and the illumination formulas of the scene
+//! format's Illumination section (docs/scene-format.md), written with its
+//! names.
 //!
 //! At a hit point M with unit shading normal N (facing the incoming ray) and
 //! unit V pointing back along the ray, for each light l at S_l of colour I_l:
@@ -15,9 +16,10 @@
 //!
 //! A light contributes nothing where cos θ_l ≤ 0, the specular term nothing
 //! where cos α_l ≤ 0; there are no shadows, and the diffuse term is not
-//! multiplied by C (the brief's formula). The reflected colour I_r of
-//! `whitted` is traced by the renderer, which calls [`local_color`] once per
-//! bounce and weights it by the product of the ks met so far.
+//! multiplied by C (as in docs/scene-format.md's formulas). The reflected
+//! colour I_r of `whitted` is traced by the renderer, which calls
+//! [`local_color`] once per bounce and weights it by the product of the ks
+//! met so far.
 
 mod light;
 mod material;

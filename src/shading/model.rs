@@ -1,4 +1,4 @@
-/// The illumination model's formula (contract section 5).
+/// The illumination model's formula (docs/scene-format.md, Illumination).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Illumination {
     Ambient,

@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the golden reference images tests/golden/<name>.png from
 # scenes/golden/<name>.xml with POV-Ray 3.7, through our exporter
-# (`rayoflight export-pov`, contract section 8):
+# (`rayoflight export-pov`; docs/scene-format.md, Cross-checking with POV-Ray):
 #
 #   povray -A +FN File_Gamma=1.0 +W<w> +H<h> +I<name>.pov +O<name>.png
 #
