@@ -19,7 +19,7 @@ use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::request::RenderRequest;
 use rayoflight::scene::edit::{Edit, Field, Value};
-use rayoflight::scene::{self, Scene};
+use rayoflight::scene::{self, Scene, Shape};
 use std::path::Path;
 use std::sync::Arc;
 use std::sync::mpsc;
@@ -182,7 +182,7 @@ fn a_large_text_held_packed_saves_as_a_text_held_whole() {
         let edit = match k {
             0 => set("object[40000].color.red", 0.75),
             1 => Edit::Remove(Item::Object(12)),
-            2 => Edit::add(doc.scene(), NewElement::Sphere),
+            2 => Edit::add(doc.scene(), NewElement::Object(Shape::Sphere)),
             _ => set("light[1].x", 2.5),
         };
         doc.apply(edit.clone()).unwrap();

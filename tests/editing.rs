@@ -17,7 +17,7 @@ use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
 use rayoflight::scene::edit::{Coef, Edit, Field, Item, NewElement, Owner, Value};
 use rayoflight::scene::merge::Choice;
-use rayoflight::scene::{self, Illumination, Scene};
+use rayoflight::scene::{self, Illumination, Scene, Shape};
 
 /// Three spheres and two lights, a comment above each, comments inside.
 const SCENE: &str = r#"<?xml version="1.0"?>
@@ -568,7 +568,7 @@ fn undo_and_redo_name_the_step_and_survive_a_save() {
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(1), Value::Number(0.5))).unwrap();
     doc.apply(Edit::Remove(Item::Light(1))).unwrap();
-    doc.apply(Edit::add(doc.scene(), NewElement::Plane))
+    doc.apply(Edit::add(doc.scene(), NewElement::Object(Shape::Plane)))
         .unwrap();
     assert_eq!(doc.undo_label(), Some("add plane"));
     doc.save().unwrap();
@@ -732,7 +732,7 @@ fn object_labels_come_from_the_comment_above() {
     assert_eq!(doc.object_label(2), "#3 BLUE sphere");
     doc.apply(Edit::Remove(Item::Object(0))).unwrap();
     assert_eq!(doc.object_label(0), "#1 GREEN sphere");
-    doc.apply(Edit::add(doc.scene(), NewElement::Sphere))
+    doc.apply(Edit::add(doc.scene(), NewElement::Object(Shape::Sphere)))
         .unwrap();
     assert_eq!(doc.object_label(2), "#3 sphere");
 }
@@ -809,7 +809,11 @@ fn random_edit(rng: &mut Rng, scene: &Scene) -> Edit {
     match rng.below(10) {
         0 => Edit::add(
             scene,
-            [NewElement::Sphere, NewElement::Plane, NewElement::Light][rng.below(3)],
+            [
+                NewElement::Object(Shape::Sphere),
+                NewElement::Object(Shape::Plane),
+                NewElement::Light,
+            ][rng.below(3)],
         ),
         1 if objects > 0 => Edit::Remove(Item::Object(rng.below(objects))),
         2 if lights > 0 => Edit::Remove(Item::Light(rng.below(lights))),

@@ -1,23 +1,94 @@
 //! The shapes an object can have, each in its own space: what the
-//! intersection formulas of this folder are written for. The scene names
-//! them in its file ([`Shape::name`]); geometry flattens them into
-//! [`Primitive`](super::Primitive)s.
+//! intersection formulas of this folder are written for.
+//!
+//! This is the one list of them: [`Shape::ALL`], each with the element
+//! name the scene format gives it ([`Shape::name`]), what the format's
+//! documentation says of it ([`Shape::doc`]: editors show it, the schema
+//! holds it) and whether it has bounds. The loader, the schema and the
+//! completion of `rayoflight lsp`, the save-back, `--add` and the panel's
+//! buttons all read this list: a shape is named nowhere else. Geometry
+//! flattens a shape into a [`Primitive`](super::Primitive) that answers
+//! where a ray hits it and its normal there.
 
-/// What an object is in its own space.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Shape {
+/// Declares the shapes, each once: the enum and the list of all of
+/// them, with their element names and documentation.
+macro_rules! shapes {
+    ($($(#[doc = $what:literal])* $shape:ident = $name:literal, bounded: $bounded:literal, $doc:literal;)*) => {
+        /// What an object is in its own space.
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+        pub enum Shape {
+            $($(#[doc = $what])* $shape,)*
+        }
+
+        impl Shape {
+            /// Every shape, in the order the format lists them.
+            pub const ALL: &'static [Shape] = &[$(Shape::$shape),*];
+
+            /// The element name in the scene format (`<sphere>`).
+            pub const fn name(self) -> &'static str {
+                match self {
+                    $(Shape::$shape => $name,)*
+                }
+            }
+
+            /// What the scene format says of the element (the schema
+            /// holds it, editors show it on hover).
+            pub const fn doc(self) -> &'static str {
+                match self {
+                    $(Shape::$shape => concat!(
+                        $doc,
+                        " Its optional <color>, <material> and <transformation>, ",
+                        "each at most once, in any order."
+                    ),)*
+                }
+            }
+
+            /// Whether it fits in a box (a bounding volume hierarchy holds
+            /// it); an unbounded one is tested against every ray apart.
+            pub const fn is_bounded(self) -> bool {
+                match self {
+                    $(Shape::$shape => $bounded,)*
+                }
+            }
+        }
+    };
+}
+
+shapes! {
     /// The unit sphere centred on the origin.
-    Sphere,
+    Sphere = "sphere", bounded: true,
+        "The unit sphere centred on the origin of its own space, placed by its transformation.";
     /// The plane z = 0, infinite and two-sided.
-    Plane,
+    Plane = "plane", bounded: false,
+        "The plane z = 0 of its own space (infinite, two-sided), placed by its transformation.";
 }
 
 impl Shape {
-    /// The element name in the scene format (`<sphere>`, `<plane>`).
-    pub fn name(self) -> &'static str {
-        match self {
-            Shape::Sphere => "sphere",
-            Shape::Plane => "plane",
+    /// The shape whose element is `name`, if one is.
+    pub fn from_name(name: &str) -> Option<Shape> {
+        Shape::ALL.iter().copied().find(|s| s.name() == name)
+    }
+
+    /// [`Shape::from_name`] for a name as the XML reader hands it.
+    pub fn from_name_bytes(name: &[u8]) -> Option<Shape> {
+        Shape::ALL
+            .iter()
+            .copied()
+            .find(|s| s.name().as_bytes() == name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_shape_is_found_by_its_name_and_only_by_it() {
+        for &shape in Shape::ALL {
+            assert_eq!(Shape::from_name(shape.name()), Some(shape));
+            assert_eq!(Shape::from_name_bytes(shape.name().as_bytes()), Some(shape));
         }
+        assert_eq!(Shape::from_name("light"), None);
+        assert_eq!(Shape::from_name("Sphere"), None);
     }
 }

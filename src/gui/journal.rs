@@ -933,6 +933,7 @@ impl Drop for Writer {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::Shape;
     use crate::scene::edit::{Coef, NewElement, Value};
 
     #[test]
@@ -951,7 +952,7 @@ mod tests {
                 },
                 Value::Number(0.1 + 0.2),
             ),
-            Edit::add(&s, NewElement::Sphere),
+            Edit::add(&s, NewElement::Object(Shape::Sphere)),
             Edit::add(&s, NewElement::Light),
             Edit::Remove(Item::Object(0)),
             Edit::Transform(Owner::Camera, moved.clone()),

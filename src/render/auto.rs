@@ -27,7 +27,7 @@
 use super::RenderOptions;
 use super::prepared::{BVH_THRESHOLD, CULL_LIMIT, TILE_CANDIDATES, max_local_color};
 use crate::geometry::Primitive;
-use crate::scene::{Illumination, Scene, Shape};
+use crate::scene::{Illumination, Scene};
 
 /// One choice of the plan.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -96,7 +96,7 @@ pub fn auto(scene: &Scene) -> Plan {
     let bounded = scene
         .objects
         .iter()
-        .filter(|o| o.shape == Shape::Sphere)
+        .filter(|o| o.shape.is_bounded())
         .count();
     let planes = scene.objects.len() - bounded;
     let (choice, reason) = if bounded == 0 && planes == 0 {

@@ -44,7 +44,7 @@ use crate::geometry::{
 };
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
-use crate::scene::{Camera, Object, Scene, Shape};
+use crate::scene::{Camera, Object, Scene};
 use crate::shading::{Color, Illumination, Light, Material, SurfacePoint, Terms, local_color};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -746,19 +746,18 @@ impl Shapes {
             scene
                 .objects
                 .iter()
-                .filter(|o| o.shape == Shape::Sphere)
+                .filter(|o| o.shape.is_bounded())
                 .count(),
         );
         let mut planes = Vec::new();
         let mut plane_objects = Vec::new();
         // Object numbers fit in u32: the loader takes at most MAX_OBJECTS.
         for (index, object) in (0u32..).zip(scene.objects.iter()) {
-            match object.shape {
-                Shape::Sphere => bounded_objects.push(index),
-                Shape::Plane => {
-                    planes.push(Primitive::new(object.shape, &object.transform));
-                    plane_objects.push(index);
-                }
+            if object.shape.is_bounded() {
+                bounded_objects.push(index);
+            } else {
+                planes.push(Primitive::new(object.shape, &object.transform));
+                plane_objects.push(index);
             }
         }
         // The primitives with their object numbers, made in the scene's

@@ -10,9 +10,26 @@
 //! ranges, defaults) and this table are held to each other by tests that
 //! load a scene for every row (`scene::schema` tests).
 
+use crate::geometry::Shape;
 use crate::shading::Illumination;
 
-pub(crate) const SCENE_CHILDREN: &[&str] = &["sphere", "plane", "light", "camera", "model"];
+/// `<scene>`'s children: every shape ([`Shape::ALL`]), then the light,
+/// the camera and the model.
+pub(crate) const SCENE_CHILDREN: &[&str] = &{
+    const OTHERS: [&str; 3] = ["light", "camera", "model"];
+    let mut names = [""; Shape::ALL.len() + OTHERS.len()];
+    let mut i = 0;
+    while i < Shape::ALL.len() {
+        names[i] = Shape::ALL[i].name();
+        i += 1;
+    }
+    let mut k = 0;
+    while k < OTHERS.len() {
+        names[i + k] = OTHERS[k];
+        k += 1;
+    }
+    names
+};
 pub(crate) const OBJECT_CHILDREN: &[&str] = &["color", "material", "transformation"];
 pub(crate) const LIGHT_CHILDREN: &[&str] = &["color"];
 pub(crate) const CAMERA_CHILDREN: &[&str] = &["transformation"];
@@ -52,7 +69,7 @@ pub enum Repeat {
 }
 
 /// One element of the format.
-#[derive(Debug)]
+#[derive(Debug, Clone, Copy)]
 pub struct Element {
     pub name: &'static str,
     /// What it is, as editors show it on hover.
@@ -114,51 +131,64 @@ pub enum Presence {
     Optional,
 }
 
-/// The illumination models' names, as `<model type>` takes them.
-const MODELS: &[&str] = &[
-    Illumination::ALL[0].name(),
-    Illumination::ALL[1].name(),
-    Illumination::ALL[2].name(),
-    Illumination::ALL[3].name(),
-];
+/// The illumination models' names, as `<model type>` takes them: every
+/// one of [`Illumination::ALL`].
+const MODELS: &[&str] = &{
+    let mut names = [""; Illumination::ALL.len()];
+    let mut i = 0;
+    while i < names.len() {
+        names[i] = Illumination::ALL[i].name();
+        i += 1;
+    }
+    names
+};
 
-/// Every element, the root first.
-pub const ELEMENTS: &[Element] = &[
+/// The element of an object of shape `shape`.
+const fn object_element(shape: Shape) -> Element {
     Element {
-        name: "scene",
-        doc: "A scene: objects (<sphere>, <plane>), <light>s, exactly one <camera> and at most one <model>, in any order.",
-        children: SCENE_CHILDREN,
-        repeat: Repeat::Scene {
-            one: "camera",
-            at_most_one: "model",
-        },
-        attributes: NONE,
-        also: Some(
-            "It may name its schema with xmlns:xsi and xsi:noNamespaceSchemaLocation, and takes no other attribute. At most 10 000 000 objects and 1 000 000 lights.",
-        ),
-    },
-    Element {
-        name: "sphere",
-        doc: concat!(
-            "The unit sphere centred on the origin of its own space, placed by its transformation. ",
-            "Its optional <color>, <material> and <transformation>, each at most once, in any order."
-        ),
+        name: shape.name(),
+        doc: shape.doc(),
         children: OBJECT_CHILDREN,
         repeat: Repeat::EachOnce,
         attributes: NONE,
         also: None,
+    }
+}
+
+/// Every element, the root first, then the objects' (one for each of
+/// [`Shape::ALL`]), then the others.
+pub const ELEMENTS: &[Element] = &{
+    let mut all = [SCENE_ELEMENT; 1 + Shape::ALL.len() + OTHER_ELEMENTS.len()];
+    let mut i = 0;
+    while i < Shape::ALL.len() {
+        all[1 + i] = object_element(Shape::ALL[i]);
+        i += 1;
+    }
+    let mut k = 0;
+    while k < OTHER_ELEMENTS.len() {
+        all[1 + i + k] = OTHER_ELEMENTS[k];
+        k += 1;
+    }
+    all
+};
+
+/// The root element.
+const SCENE_ELEMENT: Element = Element {
+    name: "scene",
+    doc: "A scene: objects (<sphere>, <plane>), <light>s, exactly one <camera> and at most one <model>, in any order.",
+    children: SCENE_CHILDREN,
+    repeat: Repeat::Scene {
+        one: "camera",
+        at_most_one: "model",
     },
-    Element {
-        name: "plane",
-        doc: concat!(
-            "The plane z = 0 of its own space (infinite, two-sided), placed by its transformation. ",
-            "Its optional <color>, <material> and <transformation>, each at most once, in any order."
-        ),
-        children: OBJECT_CHILDREN,
-        repeat: Repeat::EachOnce,
-        attributes: NONE,
-        also: None,
-    },
+    attributes: NONE,
+    also: Some(
+        "It may name its schema with xmlns:xsi and xsi:noNamespaceSchemaLocation, and takes no other attribute. At most 10 000 000 objects and 1 000 000 lights.",
+    ),
+};
+
+/// The elements other than the root and the objects'.
+const OTHER_ELEMENTS: &[Element] = &[
     Element {
         name: "light",
         doc: "A point light at world position (x, y, z); its optional <color> is its intensity. Lights cast no shadows.",

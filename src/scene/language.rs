@@ -14,7 +14,7 @@
 
 use super::grammar::{self, Value};
 use super::xml::is_name_char;
-use super::{LoadError, Position, names, splice};
+use super::{LoadError, Position, Shape, names, splice};
 use std::ops::Range;
 use std::path::Path;
 
@@ -707,7 +707,7 @@ pub fn symbols(text: &str) -> Vec<Symbol> {
         .into_iter()
         .map(|(name, range, selection)| {
             let (name, kind) = match name {
-                "sphere" | "plane" => {
+                _ if Shape::from_name(name).is_some() => {
                     objects += 1;
                     (
                         names::object_name(objects - 1, name, labels.get(objects - 1)),
@@ -737,7 +737,7 @@ pub fn symbols(text: &str) -> Vec<Symbol> {
 fn objects(text: &str) -> impl Iterator<Item = (Range<usize>, Range<usize>)> + '_ {
     splice::top_level(text)
         .into_iter()
-        .filter(|(name, ..)| matches!(*name, "sphere" | "plane"))
+        .filter(|(name, ..)| Shape::from_name(name).is_some())
         .map(|(_, range, selection)| (range, selection))
 }
 

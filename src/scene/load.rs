@@ -1456,28 +1456,24 @@ impl<'a> Parser<'a> {
         name: &'static str,
         scene: &mut Gathered,
     ) -> Result<(), LoadError> {
-        match name {
-            "sphere" | "plane" => {
-                if scene.objects.len() >= self.max_objects {
-                    return Err(self.error_at(
-                        e.at,
-                        LoadErrorKind::TooManyObjects {
-                            limit: self.max_objects,
-                        },
-                    ));
-                }
-                let shape = if name == "sphere" {
-                    Shape::Sphere
-                } else {
-                    Shape::Plane
-                };
-                let object = self.object(e, shape)?;
-                let object = match self.like.get(scene.objects.len()) {
-                    Some(same) if **same == object => Arc::clone(same),
-                    _ => Arc::new(object),
-                };
-                scene.objects.push(object);
+        if let Some(shape) = Shape::from_name(name) {
+            if scene.objects.len() >= self.max_objects {
+                return Err(self.error_at(
+                    e.at,
+                    LoadErrorKind::TooManyObjects {
+                        limit: self.max_objects,
+                    },
+                ));
             }
+            let object = self.object(e, shape)?;
+            let object = match self.like.get(scene.objects.len()) {
+                Some(same) if **same == object => Arc::clone(same),
+                _ => Arc::new(object),
+            };
+            scene.objects.push(object);
+            return Ok(());
+        }
+        match name {
             "light" => {
                 if scene.lights.len() >= self.max_lights {
                     return Err(self.error_at(

@@ -502,7 +502,7 @@ pub fn edits_between(from: &Scene, to: &Scene) -> Vec<Edit> {
                 Field::Color { object: m, channel },
             ));
         }
-        for coef in [Coef::Ka, Coef::Kd, Coef::Ks, Coef::M] {
+        for coef in Coef::ALL {
             fields.push((
                 Field::Material { object: n, coef },
                 Field::Material { object: m, coef },

@@ -35,9 +35,9 @@ use std::path::Path;
 use quick_xml::Reader;
 use quick_xml::events::{BytesStart, Event};
 
-use super::edit::{EditError, Edited, ObjectOrigin, number_text as num};
+use super::edit::{Coef, EditError, Edited, ObjectOrigin, number_text as num};
 use super::source::Source;
-use super::{Color, Illumination, LoadError, Material, Model, Object, Scene, parse};
+use super::{Color, Illumination, LoadError, Material, Model, Object, Scene, Shape, parse};
 use crate::math::{TransformStep, Vec3};
 use crate::shading::Light;
 
@@ -541,7 +541,7 @@ impl Skeleton {
                 depth == 1 && matches!(event, Event::Start(_) | Event::Empty(_) | Event::End(_));
             let object = match &event {
                 Event::Start(e) | Event::Empty(e) => {
-                    depth == 1 && matches!(e.name().as_ref(), b"sphere" | b"plane")
+                    depth == 1 && Shape::from_name_bytes(e.name().as_ref()).is_some()
                 }
                 _ => false,
             };
@@ -896,14 +896,10 @@ fn color_tag(c: Color) -> String {
 fn material_tag(m: &Material, only_changed: bool) -> String {
     let d = Material::default();
     let mut tag = String::from("<material");
-    for (name, v, dv) in [
-        ("ka", m.ka, d.ka),
-        ("kd", m.kd, d.kd),
-        ("ks", m.ks, d.ks),
-        ("m", m.m, d.m),
-    ] {
-        if !only_changed || v != dv {
-            tag.push_str(&format!(" {name}=\"{}\"", num(v)));
+    for coef in Coef::ALL {
+        let v = coef.of(m);
+        if !only_changed || v != coef.of(&d) {
+            tag.push_str(&format!(" {}=\"{}\"", coef.name(), num(v)));
         }
     }
     tag.push_str("/>");
@@ -1141,7 +1137,7 @@ impl<'t> Doc<'t> {
             }
             let object = stack.len() == 1
                 && skip_below.is_none()
-                && matches!(start.name().as_ref(), b"sphere" | b"plane");
+                && Shape::from_name_bytes(start.name().as_ref()).is_some();
             // An object only placed, or kept with or without its elements.
             let (placed, deep) = match keep {
                 _ if !object => (false, true),
@@ -1665,15 +1661,8 @@ impl Editor<'_, '_> {
             match doc.child(node, "material") {
                 Some(m) => {
                     let (om, em) = (o.material, e.material);
-                    self.set_numbers(
-                        m,
-                        &[
-                            ("ka", om.ka, em.ka),
-                            ("kd", om.kd, em.kd),
-                            ("ks", om.ks, em.ks),
-                            ("m", om.m, em.m),
-                        ],
-                    );
+                    let values = Coef::ALL.map(|c| (c.name(), c.of(&om), c.of(&em)));
+                    self.set_numbers(m, &values);
                 }
                 None => new_items.push((1, vec![(0, material_tag(&e.material, true))])),
             }

@@ -173,7 +173,7 @@ impl RayOfLightApp {
         let centres: Vec<DVec3> = scene
             .objects
             .iter()
-            .filter(|o| o.shape == crate::scene::Shape::Sphere)
+            .filter(|o| o.shape.is_bounded())
             .map(|o| o.transform.to_world().translation)
             .collect();
         let centre = if centres.is_empty() {

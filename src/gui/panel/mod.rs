@@ -191,11 +191,10 @@ fn objects_editor(ui: &mut Ui, form: &mut Form<'_>, doc: &Document, selection: &
     let scene = form.scene;
     ui.horizontal(|ui| {
         ui.heading(format!("Objects ({})", scene.objects.len()));
-        if ui.small_button("+ sphere").clicked() {
-            form.edit(Edit::add(scene, NewElement::Sphere));
-        }
-        if ui.small_button("+ plane").clicked() {
-            form.edit(Edit::add(scene, NewElement::Plane));
+        for &shape in crate::scene::Shape::ALL {
+            if ui.small_button(format!("+ {}", shape.name())).clicked() {
+                form.edit(Edit::add(scene, NewElement::Object(shape)));
+            }
         }
     });
     let id = ui.make_persistent_id("object-search");
@@ -351,13 +350,8 @@ fn material_editor(ui: &mut Ui, form: &mut Form<'_>, object: usize) {
     egui::Grid::new(("material", object))
         .num_columns(2)
         .show(ui, |ui| {
-            for (coef, hint) in [
-                (Coef::Ka, "ambient coefficient"),
-                (Coef::Kd, "diffuse coefficient"),
-                (Coef::Ks, "specular and reflection coefficient"),
-                (Coef::M, "specular exponent (shininess)"),
-            ] {
-                let label = ui.label(coef.name()).on_hover_text(hint);
+            for coef in Coef::ALL {
+                let label = ui.label(coef.name()).on_hover_text(coef.hint());
                 let speed = if coef == Coef::M { 0.5 } else { 0.01 };
                 form.number(
                     ui,

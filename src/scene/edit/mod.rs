@@ -67,11 +67,29 @@ pub(super) fn value_error(path: impl fmt::Display, message: impl Into<String>) -
 mod tests {
     use super::*;
     use crate::math::TransformStep;
+    use crate::scene::Shape;
     use crate::shading::Illumination;
     use std::path::Path;
 
     fn example() -> Edited {
         Edited::new(super::super::parse(crate::EXAMPLE_SCENE, Path::new("e.xml")).unwrap())
+    }
+
+    #[test]
+    fn the_grammar_and_the_edits_name_the_same_coefficients_and_elements() {
+        let coefs: Vec<&str> = Coef::ALL.iter().map(|c| c.name()).collect();
+        assert_eq!(coefs, crate::scene::grammar::MATERIAL_ATTRS);
+        for kind in NewElement::ALL {
+            assert!(
+                crate::scene::grammar::SCENE_CHILDREN.contains(&kind.name()),
+                "{}",
+                kind.name()
+            );
+        }
+        assert_eq!(
+            NewElement::parse("cube").unwrap_err().to_string(),
+            "cube: not an element that can be added; those are sphere, plane and light"
+        );
     }
 
     #[test]
@@ -238,7 +256,7 @@ mod tests {
             "remove light 1"
         );
         assert_eq!(
-            Edit::add(e.scene(), NewElement::Plane).describe(e.scene()),
+            Edit::add(e.scene(), NewElement::Object(Shape::Plane)).describe(e.scene()),
             "add plane"
         );
     }

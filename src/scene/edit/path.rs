@@ -192,9 +192,35 @@ impl Channel {
 }
 
 impl Coef {
+    /// Every coefficient, in the order of `<material>`'s attributes: what
+    /// the panel, the merge and the save-back go through.
+    pub const ALL: [Coef; 4] = [Coef::Ka, Coef::Kd, Coef::Ks, Coef::M];
+
+    /// The attribute's name (`ka`).
     pub fn name(self) -> &'static str {
         name_of(&COEFS, self)
     }
+
+    /// What it is, in words (the panel's hint).
+    pub fn hint(self) -> &'static str {
+        match self {
+            Coef::Ka => "ambient coefficient",
+            Coef::Kd => "diffuse coefficient",
+            Coef::Ks => "specular and reflection coefficient",
+            Coef::M => "specular exponent (shininess)",
+        }
+    }
+
+    /// Its value in `m`.
+    pub fn of(self, m: &Material) -> f64 {
+        match self {
+            Coef::Ka => m.ka,
+            Coef::Kd => m.kd,
+            Coef::Ks => m.ks,
+            Coef::M => m.m,
+        }
+    }
+
     pub(super) fn slot(self, m: &mut Material) -> &mut f64 {
         match self {
             Coef::Ka => &mut m.ka,
@@ -587,22 +613,15 @@ impl Edit {
     /// A new sphere, plane or light with the default values, appended.
     pub fn add(scene: &Scene, kind: NewElement) -> Edit {
         match kind {
-            NewElement::Sphere | NewElement::Plane => {
-                let shape = if kind == NewElement::Sphere {
-                    Shape::Sphere
-                } else {
-                    Shape::Plane
-                };
-                Edit::Insert(
-                    Item::Object(scene.objects.len()),
-                    Element::Object(Box::new(Object {
-                        shape,
-                        color: Vec3::ONE,
-                        material: Material::default(),
-                        transform: Transform::default(),
-                    })),
-                )
-            }
+            NewElement::Object(shape) => Edit::Insert(
+                Item::Object(scene.objects.len()),
+                Element::Object(Box::new(Object {
+                    shape,
+                    color: Vec3::ONE,
+                    material: Material::default(),
+                    transform: Transform::default(),
+                })),
+            ),
             NewElement::Light => Edit::Insert(
                 Item::Light(scene.lights.len()),
                 Element::Light(Light {
@@ -678,32 +697,46 @@ impl Edit {
 /// What `--add` and the panel's buttons add.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum NewElement {
-    Sphere,
-    Plane,
+    /// An object of this shape.
+    Object(Shape),
     Light,
 }
 
 impl NewElement {
-    /// Every kind, in the order the help names them.
-    pub const ALL: [NewElement; 3] = [NewElement::Sphere, NewElement::Plane, NewElement::Light];
+    /// Every kind, in the order the help names them: each shape
+    /// ([`Shape::ALL`]), then the light.
+    pub const ALL: &'static [NewElement] = &{
+        let mut all = [NewElement::Light; Shape::ALL.len() + 1];
+        let mut i = 0;
+        while i < Shape::ALL.len() {
+            all[i] = NewElement::Object(Shape::ALL[i]);
+            i += 1;
+        }
+        all
+    };
 
     /// The kind's name, as `--add` takes it (the element's tag).
     pub fn name(self) -> &'static str {
         match self {
-            NewElement::Sphere => "sphere",
-            NewElement::Plane => "plane",
+            NewElement::Object(shape) => shape.name(),
             NewElement::Light => "light",
         }
     }
 
     pub fn parse(name: &str) -> Result<NewElement, EditError> {
         NewElement::ALL
-            .into_iter()
+            .iter()
+            .copied()
             .find(|kind| kind.name() == name)
             .ok_or_else(|| {
+                let names: Vec<&str> = NewElement::ALL.iter().map(|k| k.name()).collect();
+                let (last, first) = names.split_last().unwrap_or((&"", &[]));
                 path_error(
                     name,
-                    "not an element that can be added; those are sphere, plane and light",
+                    format!(
+                        "not an element that can be added; those are {} and {last}",
+                        first.join(", ")
+                    ),
                 )
             })
     }
