@@ -562,6 +562,21 @@ fn e_then_a_click_explains_the_pixel_as_rendered_and_a_term_selects_its_field() 
     harness.run_steps(1);
     click(&mut harness, MIDDLE);
     harness.run_steps(2);
+    // The worker traces it; the window goes on meanwhile.
+    until(&mut harness, "the pixel explained", |app| {
+        !app.is_explaining() && app.explanation().is_some()
+    });
+    // Asked directly, the explain is the worker's until a frame takes its
+    // answer: the UI thread traces nothing.
+    let (x, y) = {
+        let e = harness.state().explanation().unwrap();
+        (e.x, e.y)
+    };
+    harness.state_mut().explain_pixel(x, y);
+    assert!(harness.state().is_explaining());
+    until(&mut harness, "the pixel explained again", |app| {
+        !app.is_explaining()
+    });
     let app = harness.state();
     let e = app.explanation().expect("the pixel is explained").clone();
     assert_eq!(
@@ -613,6 +628,7 @@ fn e_then_a_click_explains_the_pixel_as_rendered_and_a_term_selects_its_field() 
             );
             harness.run_steps(1);
         }
+        until(harness, "the pixel explained", |app| !app.is_explaining());
     };
     alt_click(&mut harness, MIDDLE + Vec2::new(40.0, 0.0));
     let elsewhere = harness.state().explanation().unwrap().clone();

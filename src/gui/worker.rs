@@ -1,7 +1,9 @@
 //! The render worker: the owner of all rendering for the app — a
-//! background thread and its queue, and a thread for each export, all on
-//! its pools — so that the UI thread never traces a ray or prepares a
-//! scene.
+//! background thread and its queue, a thread for each export (on its
+//! pools) and for each pixel explained ([`Worker::explain`]: a deep
+//! whitted tree on a big scene takes a while) — so that the UI thread never
+//! renders, explains or prepares a scene. It only picks: one primary ray
+//! through the scene the worker prepared ([`Worker::prepared`]).
 //!
 //! Every request gets a generation number. A newer request cancels the older
 //! one within a pixel (the [`Cancel`] token is checked before every pixel),
@@ -415,6 +417,19 @@ impl Worker {
     /// million objects takes a second.
     pub fn prepared(&self, scene: &Scene) -> Option<Prepared> {
         self.latest.seen_from(scene)
+    }
+
+    /// Explains pixel (`x`, `y`) of `prepared` on a thread of its own,
+    /// then hands the answer (`None`: outside the picture) to `done`.
+    pub fn explain(
+        &self,
+        prepared: Prepared,
+        (x, y): (u32, u32),
+        done: impl FnOnce(Option<crate::render::Explanation>) + Send + 'static,
+    ) {
+        let _ = std::thread::Builder::new()
+            .name("explain".to_owned())
+            .spawn(move || done(prepared.explain(x, y)));
     }
 
     /// The newest generation requested.

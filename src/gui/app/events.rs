@@ -187,6 +187,7 @@ impl RayOfLightApp {
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
                 Background::Opened(id, result) => self.opened(id, *result),
                 Background::Editor(message) => self.editor_said(message),
+                Background::Explained(id, explanation) => self.explained(id, explanation),
             }
         }
     }

@@ -2,7 +2,9 @@
 //! opens a window with the pixel's ray tree from the library
 //! ([`crate::render::Prepared::explain`]: the render's own numbers), and
 //! draws the path over the picture. Clicking a term selects the object
-//! and the coefficient it comes from in the panel.
+//! and the coefficient it comes from in the panel. The worker traces the
+//! tree ([`crate::gui::worker::Worker::explain`]); the window goes on
+//! drawing meanwhile, and the newest explain asked for wins.
 
 use super::{Interaction, RayOfLightApp, picture};
 use crate::gui::panel::Selection;
@@ -22,6 +24,14 @@ pub(super) struct Shown {
     labels: BTreeMap<usize, String>,
     /// Which ray's tree is shown (supersampled pixels have several).
     sample: usize,
+    /// The render generation it explains.
+    generation: u64,
+}
+
+/// An explain the worker is tracing.
+pub(super) struct Explaining {
+    /// Which request it is: an answer to an older one is dropped.
+    id: u64,
     /// The render generation it explains.
     generation: u64,
 }
@@ -51,11 +61,31 @@ impl RayOfLightApp {
             self.waiting = Some(picture::Waiting::Explain(x, y));
             return;
         };
-        let Some(explanation) = prepared.explain(x, y) else {
+        static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+        let id = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        self.explaining = Some(Explaining {
+            id,
+            generation: self.worker.newest(),
+        });
+        let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
+        self.worker.explain(prepared, (x, y), move |explanation| {
+            let _ = tx.send(super::Background::Explained(id, explanation.map(Box::new)));
+            ctx.request_repaint();
+        });
+    }
+
+    /// The worker's answer to explain request `id`: shown if it is the
+    /// newest asked for.
+    pub(super) fn explained(&mut self, id: u64, explanation: Option<Box<Explanation>>) {
+        let Some(explaining) = self.explaining.take_if(|e| e.id == id) else {
+            return;
+        };
+        let Some(explanation) = explanation else {
             // Outside the picture (it shrank).
             self.explained = None;
             return;
         };
+        let explanation = *explanation;
         let sample = self.explained.as_ref().map_or(0, |s| s.sample);
         let sample = sample.min(explanation.samples.len() - 1);
         let labels = explanation
@@ -68,8 +98,14 @@ impl RayOfLightApp {
             explanation,
             labels,
             sample,
-            generation: self.worker.newest(),
+            generation: explaining.generation,
         });
+    }
+
+    /// Whether the worker is tracing a pixel to explain (for tests and
+    /// tools driving the app).
+    pub fn is_explaining(&self) -> bool {
+        self.explaining.is_some()
     }
 
     /// Once the picture of an edited scene (or a moved camera) is done,
@@ -81,7 +117,7 @@ impl RayOfLightApp {
         let newest = self.worker.newest();
         let done = matches!(self.preview.state(), RenderState::Done { .. })
             && self.preview.generation() == newest;
-        if shown.generation != newest && done && !self.interacting() {
+        if shown.generation != newest && done && !self.interacting() && self.explaining.is_none() {
             let (x, y) = (shown.explanation.x, shown.explanation.y);
             let armed = self.interaction.is_explain_armed();
             self.explain_pixel(x, y);

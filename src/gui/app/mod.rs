@@ -77,6 +77,9 @@ enum Background {
     Pass((render::Pass, u64), Box<render::PassImage>),
     /// A file opened in the background (the load's number, the document).
     Opened(u64, Box<Result<Document, crate::scene::LoadError>>),
+    /// The pixel explained for this request number (`None`: outside the
+    /// picture).
+    Explained(u64, Option<Box<crate::render::Explanation>>),
     /// What the user's editor said over the editor link
     /// ([`crate::editor_link`]): its unsaved text of a file, or that it
     /// let go of it.
@@ -193,6 +196,8 @@ pub struct RayOfLightApp {
     overlays: bool,
     /// The explained pixel, in its window.
     explained: Option<explain::Shown>,
+    /// The explain the worker is tracing, if any.
+    explaining: Option<explain::Explaining>,
     /// A pick or explain waiting for the worker to prepare the scene.
     waiting: Option<Waiting>,
     /// The pass shown (View › Pass), and its picture once rendered.
@@ -279,6 +284,7 @@ impl RayOfLightApp {
             help_open: false,
             overlays: true,
             explained: None,
+            explaining: None,
             waiting: None,
             pass: render::Pass::Final,
             pass_view: None,
