@@ -4,19 +4,19 @@
 //! existing one. [`write_atomic_with`] is every file's one way out: the
 //! path walked to a folder held by its descriptor, links in every part
 //! followed only as the kernel would for another user's link
-//! ([`crate::files::Place`]), the file in the way opened once and
+//! ([`crate::system::files::Place`]), the file in the way opened once and
 //! compared with what was checked, a file the caller may not write
 //! refused, a replaced file's owner, group, mode and extended attributes
 //! kept, a file of several hard links updated in place through the
 //! descriptor that was checked, as a transaction a crash cannot leave
-//! half done ([`crate::files::rewrite_in_place`]), and a signal ([`crate::interrupt`])
+//! half done ([`crate::system::files::rewrite_in_place`]), and a signal ([`crate::system::interrupt`])
 //! stopping it with the temporary file removed. Nothing is written
 //! through a path once its folder is held: renaming names meanwhile can
 //! make a write fail ([`OutputError::Moved`]), never land elsewhere.
 
-use crate::files::{Kind, Place, PlaceError};
-use crate::part::Part;
+use crate::cluster::part::Part;
 use crate::render::{KeptPass, Pass, PassForm, PassImage, PassPixels};
+use crate::system::files::{Kind, Place, PlaceError};
 use image::codecs::jpeg::JpegEncoder;
 use image::{ImageFormat, RgbImage};
 use std::io::{BufWriter, Write};
@@ -85,7 +85,7 @@ pub enum OutputError {
     #[error("{}: {source}", path.display())]
     Link {
         path: PathBuf,
-        source: crate::files::LinkError,
+        source: crate::system::files::LinkError,
     },
     #[error("{}: interrupted: nothing was written", path.display())]
     Interrupted { path: PathBuf },
@@ -178,7 +178,7 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
     // A device or a pipe would be written directly: never an image.
     let place = place(path)?;
     if let Some((_, meta)) = in_the_way(path, &place)?
-        && let Some(kind) = crate::files::special_kind(&meta)
+        && let Some(kind) = crate::system::files::special_kind(&meta)
     {
         // Through /dev/stdout or /proc/self/fd/N: the shell's pipe.
         let kind = if kind == "a FIFO" && place.is_magic() {
@@ -207,7 +207,7 @@ pub fn check_file_target(path: &Path) -> Result<(), OutputError> {
     }
     let place = place(path)?;
     in_the_way(path, &place)?;
-    let _cleanly = crate::interrupt::cleanly();
+    let _cleanly = crate::system::interrupt::cleanly();
     place
         .new_file(".rayoflight-", ".tmp")
         .map(drop)
@@ -269,9 +269,13 @@ pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
 }
 
 /// Writes a part of a render (`--region`) as a PNG that records where it
-/// belongs ([`crate::part`]).
+/// belongs ([`crate::cluster::part`]).
 pub fn save_part(image: &RgbImage, part: &Part, path: &Path) -> Result<(), OutputError> {
-    save_png(image, &[(crate::part::KEYWORD, &part.to_string())], path)
+    save_png(
+        image,
+        &[(crate::cluster::part::KEYWORD, &part.to_string())],
+        path,
+    )
 }
 
 /// Writes `image` as a PNG with `texts` (keyword, text) in tEXt chunks
@@ -368,7 +372,7 @@ pub fn save_kept_pass(pass: &KeptPass, path: &Path) -> Result<(), OutputError> {
 /// takes the passes' render, [`takes_pass`]), or those pixels and the
 /// encoded file where the format is encoded in memory (PNG is written a
 /// row at a time, EXR block by block). Checked against what the system
-/// gives ([`crate::resources::check_memory`]) before the first ray.
+/// gives ([`crate::system::resources::check_memory`]) before the first ray.
 pub fn bytes_to_render(format: ImageFormat, pass: Option<Pass>, width: u32, height: u32) -> u64 {
     let pixels = u64::from(width) * u64::from(height);
     let kept = match pass {
@@ -612,7 +616,7 @@ pub fn write_new(path: &Path, bytes: &[u8]) -> Result<(), OutputError> {
         return Err(OutputError::EmptyName);
     }
     let place = Place::reach_name(path).map_err(|e| place_error(path, e))?;
-    let _cleanly = crate::interrupt::cleanly();
+    let _cleanly = crate::system::interrupt::cleanly();
     let mut new = match place.create_new() {
         Ok(new) => new,
         Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
@@ -652,7 +656,7 @@ const MAX_TRIES: usize = 8;
 /// so that every name keeps showing the same file; a copy of the old
 /// bytes (`.NAME.XXXXXX.rayoflight-backup`) waits beside it until then,
 /// and stays, named in the error, if the rewrite fails and the old bytes
-/// cannot be put back. A signal ([`crate::interrupt`]) stops the write
+/// cannot be put back. A signal ([`crate::system::interrupt`]) stops the write
 /// with [`OutputError::Interrupted`], nothing changed.
 pub fn write_atomic_with<E: From<OutputError>>(
     path: &Path,
@@ -662,7 +666,7 @@ pub fn write_atomic_with<E: From<OutputError>>(
     let io_error = |source: std::io::Error| {
         // The stop may come back wrapped by an encoder: a failure after a
         // signal is the signal's.
-        if crate::interrupt::is_stop(&source) || crate::interrupt::requested() {
+        if crate::system::interrupt::is_stop(&source) || crate::system::interrupt::requested() {
             OutputError::Interrupted {
                 path: path.to_owned(),
             }
@@ -677,10 +681,10 @@ pub fn write_atomic_with<E: From<OutputError>>(
         path: path.to_owned(),
     };
     // From here a signal is recorded, not fatal: the temporary file must go.
-    let _cleanly = crate::interrupt::cleanly();
+    let _cleanly = crate::system::interrupt::cleanly();
     let place = place(path)?;
     // A rewrite of this file that a crash left half done, finished first.
-    crate::files::finish_at(&place).map_err(io_error)?;
+    crate::system::files::finish_at(&place).map_err(io_error)?;
     // What killed writes left beside it (a save or render killed in the
     // middle leaves a temporary file as big as the file), removed.
     #[cfg(unix)]
@@ -717,22 +721,22 @@ pub fn write_atomic_with<E: From<OutputError>>(
         if meta.is_file() {
             file.set_len(0).map_err(io_error)?;
         }
-        let mut w = crate::interrupt::Checked(file);
+        let mut w = crate::system::interrupt::Checked(file);
         write(&mut w).map_err(io_error)?;
         return Ok(w.flush().map_err(io_error)?);
     }
     let mut new = place.new_file(".rayoflight-", ".tmp").map_err(&io_error)?;
     if let Some((_, meta, file)) = &old {
-        crate::files::keep_attributes(file, meta, &new.file).map_err(io_error)?;
+        crate::system::files::keep_attributes(file, meta, &new.file).map_err(io_error)?;
     }
     {
-        let mut w = BufWriter::new(crate::interrupt::Checked(&mut new.file));
+        let mut w = BufWriter::new(crate::system::interrupt::Checked(&mut new.file));
         write(&mut w).map_err(io_error)?;
         w.flush().map_err(io_error)?;
     }
     new.file.sync_all().map_err(io_error)?;
     check(&new.path_to_read())?;
-    if crate::interrupt::requested() {
+    if crate::system::interrupt::requested() {
         return Err(OutputError::Interrupted {
             path: path.to_owned(),
         }
@@ -744,7 +748,8 @@ pub fn write_atomic_with<E: From<OutputError>>(
                 return Err(moved().into());
             }
             if several_names(&meta) {
-                crate::files::rewrite_in_place(&place, &mut file, &mut new).map_err(io_error)?;
+                crate::system::files::rewrite_in_place(&place, &mut file, &mut new)
+                    .map_err(io_error)?;
             } else {
                 new.rename_over(true).map_err(io_error)?;
             }

@@ -17,7 +17,7 @@ mod common;
 use rayoflight::gui::document::{Document, FileRead, Reload, SaveStep};
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::gui::worker::{Event, Worker};
-use rayoflight::request::RenderRequest;
+use rayoflight::render::request::RenderRequest;
 use rayoflight::scene::edit::{Edit, Field, Value};
 use rayoflight::scene::{self, Scene, Shape};
 use std::path::Path;
@@ -343,7 +343,7 @@ fn the_bench_measures_the_app_through_a_picture_an_edit_and_a_save() {
 /// A save of a large scene, on a thread of its own as the app saves,
 /// leaves nothing behind: the allocator gives back the blocks the save
 /// freed instead of its thread's arena keeping them for a next time that
-/// does not come (`src/allocator.rs`). 200 000 spheres (43 MB): the save
+/// does not come (`src/system/allocator.rs`). 200 000 spheres (43 MB): the save
 /// left 6.4–7.0 MB resident with glibc's own threshold; with the threshold
 /// fixed, 0.8–1.9 MB, and 5–6 MB one run in three (a few live bytes above
 /// the freed blocks keep them); given back as the save ends, resident

@@ -8,12 +8,13 @@ mod common;
 
 use common::{Rng, rayoflight, stderr, stdout};
 use image::RgbImage;
-use rayoflight::part::{self, Part};
-use rayoflight::region::Region;
+use rayoflight::cluster::part::{self, Part};
+use rayoflight::cluster::region::Region;
+use rayoflight::cluster::split;
+use rayoflight::output;
+use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{self, RenderOptions};
-use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
-use rayoflight::{output, split};
 use std::fs;
 use std::path::{Path, PathBuf};
 
@@ -607,15 +608,15 @@ fn sheet_lays_the_renders_of_a_sweep_side_by_side() {
     let out = rayoflight(d, &args);
     assert!(out.status.success(), "{}", stderr(&out));
     let sheet = image::open(d.join("sheet.png")).unwrap().to_rgb8();
-    let gap = rayoflight::sheet::GAP;
+    let gap = rayoflight::cluster::sheet::GAP;
     // Cells are at least MIN_CELL_WIDTH wide, the picture centred.
-    let cell = rayoflight::sheet::MIN_CELL_WIDTH + gap;
-    let inset = (rayoflight::sheet::MIN_CELL_WIDTH - 48) / 2;
+    let cell = rayoflight::cluster::sheet::MIN_CELL_WIDTH + gap;
+    let inset = (rayoflight::cluster::sheet::MIN_CELL_WIDTH - 48) / 2;
     assert_eq!(
         sheet.dimensions(),
         (
             3 * cell + gap,
-            48 + rayoflight::sheet::LABEL_HEIGHT + 2 * gap
+            48 + rayoflight::cluster::sheet::LABEL_HEIGHT + 2 * gap
         )
     );
     // Each picture where it belongs, as rendered.

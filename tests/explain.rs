@@ -260,7 +260,7 @@ fn a_pixel_outside_the_image_is_a_usage_error_and_text_is_readable() {
 #[test]
 fn the_trees_one_at_a_time_are_the_explanations_trees() {
     use rayoflight::render::prepare;
-    use rayoflight::request::RenderRequest;
+    use rayoflight::render::request::RenderRequest;
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/golden/mirror-spheres.xml");
     let scene = rayoflight::scene::load(&path).unwrap();
     for aa in [1, 3] {

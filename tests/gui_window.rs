@@ -782,10 +782,10 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
 }
 
 /// Waits until the app listens for editors in `folder`
-/// (`rayoflight::editor_link`).
+/// (`rayoflight::desktop::editor_link`).
 fn wait_for_the_link(folder: &Path) {
     let start = Instant::now();
-    while rayoflight::editor_link::apps(folder).is_empty() {
+    while rayoflight::desktop::editor_link::apps(folder).is_empty() {
         assert!(start.elapsed() < Duration::from_secs(10), "the app listens");
         std::thread::sleep(Duration::from_millis(50));
     }

@@ -92,9 +92,14 @@ fn neovim_gets_diagnostics_completion_hover_and_symbols() {
 }
 
 /// A runtime folder `run` in `dir` and an app's socket listening in it,
-/// as the app makes them (`rayoflight::editor_link`).
-fn listening_app(dir: &Path) -> (std::path::PathBuf, rayoflight::editor_link::Listener) {
-    use rayoflight::editor_link;
+/// as the app makes them (`rayoflight::desktop::editor_link`).
+fn listening_app(
+    dir: &Path,
+) -> (
+    std::path::PathBuf,
+    rayoflight::desktop::editor_link::Listener,
+) {
+    use rayoflight::desktop::editor_link;
     let runtime = dir.join("run");
     fs::create_dir(&runtime).unwrap();
     let folder = editor_link::folder_in(&runtime.join("rayoflight")).unwrap();
@@ -102,12 +107,12 @@ fn listening_app(dir: &Path) -> (std::path::PathBuf, rayoflight::editor_link::Li
 }
 
 /// The editor's unsaved text goes to the user's apps over the link
-/// (`rayoflight::editor_link`): a listener in a private runtime folder
+/// (`rayoflight::desktop::editor_link`): a listener in a private runtime folder
 /// gets the typed text before any save, then "released" when the editor
 /// saves.
 #[test]
 fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
-    use rayoflight::editor_link::{self, Message};
+    use rayoflight::desktop::editor_link::{self, Message};
     if !common::tool("nvim", "neovim") {
         return;
     }
@@ -158,7 +163,7 @@ const TWO_SPHERES: &str = "<scene>\n  <sphere>\n    <color red=\"1\" green=\"0\"
 /// the focus where it is.
 #[test]
 fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
-    use rayoflight::editor_link::{self, Message};
+    use rayoflight::desktop::editor_link::{self, Message};
     if !common::tool("nvim", "neovim") {
         return;
     }

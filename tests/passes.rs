@@ -8,8 +8,8 @@
 mod common;
 
 use common::{rayoflight, stderr};
+use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{self, Cancel, Pass, PassImage, Progress, object_ids, prepare};
-use rayoflight::request::RenderRequest;
 use rayoflight::scene::{self, Scene};
 use std::path::Path;
 

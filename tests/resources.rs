@@ -23,9 +23,9 @@
 mod common;
 
 use common::{files_in, rayoflight, stderr};
-use rayoflight::part::{self, Part};
-use rayoflight::region::Region;
-use rayoflight::request::RenderRequest;
+use rayoflight::cluster::part::{self, Part};
+use rayoflight::cluster::region::Region;
+use rayoflight::render::request::RenderRequest;
 use rayoflight::scene;
 use std::fs;
 use std::io::Read;
@@ -275,12 +275,12 @@ fn a_sheet_takes_the_largest_render_and_refuses_what_is_past_its_limits() {
     let o = rayoflight(d, &["sheet", "-out", "sheet.png", "huge.png"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (w, h) = image::image_dimensions(d.join("sheet.png")).unwrap();
-    let gap = rayoflight::sheet::GAP;
+    let gap = rayoflight::cluster::sheet::GAP;
     assert_eq!(
         (w, h),
         (
             side + 2 * gap,
-            side + rayoflight::sheet::LABEL_HEIGHT + 2 * gap
+            side + rayoflight::cluster::sheet::LABEL_HEIGHT + 2 * gap
         )
     );
     // An image past a render's pixels: refused from its header.

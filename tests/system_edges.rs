@@ -665,7 +665,7 @@ fn the_apps_save_waits_for_the_lock_and_merges() {
         Value::Number(0.75),
     ))
     .unwrap();
-    let lock = rayoflight::files::lock_for_update(&path).unwrap();
+    let lock = rayoflight::system::files::lock_for_update(&path).unwrap();
     let save = std::thread::spawn(move || doc.save());
     std::thread::sleep(Duration::from_millis(300));
     assert!(!save.is_finished(), "the save did not wait for the lock");
@@ -689,7 +689,7 @@ fn an_edit_waiting_for_the_lock_still_obeys_a_signal() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("q.xml");
     fs::write(&path, TINY).unwrap();
-    let lock = rayoflight::files::lock_for_update(&path).unwrap();
+    let lock = rayoflight::system::files::lock_for_update(&path).unwrap();
     let mut child = spawn(dir.path(), &["edit", "q.xml", "--set", "camera.width=8"]);
     std::thread::sleep(Duration::from_millis(300));
     assert!(child.try_wait().unwrap().is_none(), "the edit did not wait");

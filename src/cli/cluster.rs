@@ -1,15 +1,17 @@
 //! Past one machine: `rayoflight split` (regions of even cost, one a
 //! line), `rayoflight assemble` (parts back into the image, checked) and
 //! `rayoflight sheet` (a sweep's renders side by side). The work is the
-//! library's ([`rayoflight::split`], [`rayoflight::assemble`],
-//! [`rayoflight::sheet`]); this edge reads files and words failures.
+//! library's ([`rayoflight::cluster::split`], [`rayoflight::cluster::assemble`],
+//! [`rayoflight::cluster::sheet`]); this edge reads files and words failures.
 
 use super::args::SplitArgs;
 use super::args::UsageError;
 use super::{Failure, edit, fail, print_line, refused, usage};
 use image::ImageFormat;
+use rayoflight::cluster::{assemble, sheet, split};
 use rayoflight::scene::edit::Edited;
-use rayoflight::{assemble, files, output, resources, scene, sheet, split};
+use rayoflight::system::{files, resources};
+use rayoflight::{output, scene};
 use std::path::{Path, PathBuf};
 
 /// `split scene.xml --tasks N`: the regions on stdout, one a line.
@@ -38,8 +40,8 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
     }
     // A signal stops the assembly between two rows, its temporary file
     // removed (the default action would leave it behind).
-    let _cleanly = rayoflight::interrupt::cleanly();
-    assemble::assemble_until(parts, out, rayoflight::interrupt::flag()).map_err(fail)?;
+    let _cleanly = rayoflight::system::interrupt::cleanly();
+    assemble::assemble_until(parts, out, rayoflight::system::interrupt::flag()).map_err(fail)?;
     Ok(())
 }
 
@@ -52,7 +54,7 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
     // A signal stops it between two images (or in the write), saying so,
     // as every other command: the default action ended it silently.
-    let _cleanly = rayoflight::interrupt::cleanly();
+    let _cleanly = rayoflight::system::interrupt::cleanly();
     let interrupted = || {
         fail(output::OutputError::Interrupted {
             path: out.to_owned(),
@@ -70,7 +72,7 @@ pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(
     }
     let headers = images
         .iter()
-        .map(|path| match rayoflight::interrupt::requested() {
+        .map(|path| match rayoflight::system::interrupt::requested() {
             true => Err(interrupted()),
             false => SheetImage::read(path),
         })
@@ -95,12 +97,12 @@ pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(
     })?;
     let names: Vec<&str> = headers.iter().map(|h| h.name.as_str()).collect();
     let sheet = sheet::draw(&layout, &names, |k| {
-        if rayoflight::interrupt::requested() {
+        if rayoflight::system::interrupt::requested() {
             return Err(interrupted());
         }
         headers[k].decode().map(std::borrow::Cow::Owned)
     })?;
-    if rayoflight::interrupt::requested() {
+    if rayoflight::system::interrupt::requested() {
         return Err(interrupted());
     }
     output::save(&sheet, out).map_err(fail)

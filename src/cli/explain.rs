@@ -8,7 +8,6 @@
 use super::args::ExplainArgs;
 use super::{Failure, edit, fail, refused};
 use glam::DVec3;
-use rayoflight::escape::visible as shown;
 use rayoflight::geometry::Ray;
 use rayoflight::render::explain::{
     Bounce, Ended, PixelValue, Sample, describe_ray, draft_note, number as n, vector as v,
@@ -16,6 +15,7 @@ use rayoflight::render::explain::{
 use rayoflight::render::{Prepared, prepare};
 use rayoflight::scene::edit::Edited;
 use rayoflight::scene::{self, Scene, names};
+use rayoflight::system::escape::visible as shown;
 use serde_json::{Value, json};
 use std::io::{self, Write};
 use std::ops::ControlFlow;

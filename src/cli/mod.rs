@@ -15,10 +15,12 @@ mod stdout;
 mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
-use rayoflight::part::Part;
+use rayoflight::cluster::part::Part;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::{merge, splice};
-use rayoflight::{files, interrupt, measure, output, pov, render, resources, scene};
+use rayoflight::study::measure;
+use rayoflight::system::{files, interrupt, resources};
+use rayoflight::{output, pov, render, scene};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -49,7 +51,7 @@ fn usage(message: String) -> Failure {
 }
 
 pub fn main() -> ExitCode {
-    rayoflight::allocator::tune();
+    rayoflight::system::allocator::tune();
     let code = report(run(std::env::args_os().skip(1)));
     // A signal that stopped the work: the status a shell gives a process
     // the signal ended (130 for Ctrl+C, 143 for SIGTERM).
@@ -191,7 +193,7 @@ fn install_desktop(uninstall: bool) -> Result<(), Failure> {
             for kept in &done.kept {
                 eprintln!(
                     "left {}: it changed since install-desktop wrote it",
-                    rayoflight::escape::visible(&kept.display().to_string(), false)
+                    rayoflight::system::escape::visible(&kept.display().to_string(), false)
                 );
             }
             done
@@ -242,7 +244,7 @@ fn interrupted() -> Failure {
 
 /// An error on stderr: one line, whatever the file names in it hold.
 fn error_line(message: &str) {
-    eprintln!("{}", rayoflight::escape::visible(message, false));
+    eprintln!("{}", rayoflight::system::escape::visible(message, false));
 }
 
 fn render_scene(r: RenderArgs) -> Result<(), Failure> {
@@ -302,7 +304,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
             out.display()
         ))
     })?;
-    // Render time as the bench and the study measure it (rayoflight::measure).
+    // Render time as the bench and the study measure it (rayoflight::study::measure).
     let pool = measure::RenderPool::new(request.threads).map_err(fail)?;
     let counted = render::Progress::default();
     // A signal stops the render at its next tile, or the write.

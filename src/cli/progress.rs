@@ -115,7 +115,7 @@ impl Steps {
             .map_or_else(String::new, |left| format!(" · {} left", seconds(left)));
         self.bar.set_message(format!(
             "{}{left}",
-            rayoflight::escape::visible(name, false)
+            rayoflight::system::escape::visible(name, false)
         ));
     }
 

@@ -4,7 +4,7 @@
 //! error (exit 1, a message on stderr) wherever it happens: a script never
 //! takes a cut list, a plan or a time it did not get for one it did; and
 //! so that names from outside reach the terminal escaped
-//! ([`rayoflight::escape::visible`]).
+//! ([`rayoflight::system::escape::visible`]).
 //!
 //! A closed pipe (`rayoflight split … | head`) is the reader's choice and
 //! no error. A stdout closed from the start (`rayoflight plan s.xml >&-`)
@@ -25,7 +25,7 @@ pub fn write(text: &str) -> Result<(), String> {
         return Err(CLOSED.to_owned());
     }
     let mut out = std::io::stdout().lock();
-    let text = rayoflight::escape::visible(text, true);
+    let text = rayoflight::system::escape::visible(text, true);
     match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
         Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
             Err(format!("rayoflight: cannot write to stdout: {e}"))

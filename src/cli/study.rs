@@ -5,8 +5,8 @@
 //! reference | difference ×8).
 
 use super::progress::Steps;
-use rayoflight::escape::visible;
 use rayoflight::study::chart;
+use rayoflight::system::escape::visible;
 use rayoflight::{output, study};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -39,7 +39,7 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         study::check_memory(scene).map_err(|e| e.to_string())?;
     }
     // Fail on an unusable output folder before the long part.
-    rayoflight::files::make_folders(&args.out)
+    rayoflight::system::files::make_folders(&args.out)
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.out.display()))?;
     let (csv, png) = (args.out.join("study.csv"), args.out.join("study.png"));
     for file in [&csv, &png] {

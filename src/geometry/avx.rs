@@ -11,7 +11,7 @@
 //! tests/lanes.rs renders with all three widths and compares the images.
 //!
 //! This is one of the crate's two modules with `unsafe` (the other,
-//! [`crate::allocator`], calls glibc's malloc). Its single invariant: an
+//! [`crate::system::allocator`], calls glibc's malloc). Its single invariant: an
 //! AVX or AVX-512 instruction runs only on a processor that has it. Every
 //! `unsafe` block here is an `avx!` call, and every value that reaches one
 //! is made under [`Avx2::run`] or [`Avx512::run`], whose receivers exist

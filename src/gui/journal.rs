@@ -66,10 +66,10 @@ const FORMAT: &str = "rayoflight unsaved edits 1";
 /// `~/.local/state`): `home/rayoflight/journal`, made where missing, and
 /// refused unless it and the folders above it up to `home` are the
 /// user's and closed to others' writes, the journal itself closed to
-/// others ([`crate::files::own_folder`]): else another user could plant
+/// others ([`crate::system::files::own_folder`]): else another user could plant
 /// edits that a save writes into the user's scene.
-pub fn folder_in(home: &Path) -> Result<PathBuf, crate::files::OwnFolderError> {
-    crate::files::own_folder(home, &["rayoflight", "journal"], true)
+pub fn folder_in(home: &Path) -> Result<PathBuf, crate::system::files::OwnFolderError> {
+    crate::system::files::own_folder(home, &["rayoflight", "journal"], true)
 }
 
 /// Which file a file's path names, as the journal tells files apart: its
@@ -79,9 +79,9 @@ pub type FileId = (u64, u64);
 
 /// The [`FileId`] of the file `path` names (through links), if known.
 pub fn file_id(path: &Path) -> Option<FileId> {
-    match crate::files::identity(path) {
-        crate::files::FileIdentity::Inode { device, inode } => Some((device, inode)),
-        crate::files::FileIdentity::Path(_) => None,
+    match crate::system::files::identity(path) {
+        crate::system::files::FileIdentity::Inode { device, inode } => Some((device, inode)),
+        crate::system::files::FileIdentity::Path(_) => None,
     }
 }
 
@@ -107,7 +107,7 @@ impl Entry {
     /// `base_fingerprint`, now: the path's links and the file's identity
     /// looked up as it is now.
     pub fn now(path: &Path, base_fingerprint: u64, edits: Vec<Edit>) -> Entry {
-        let scene = crate::files::absolute(path);
+        let scene = crate::system::files::absolute(path);
         Entry {
             canonical: std::fs::canonicalize(&scene).unwrap_or_else(|_| scene.clone()),
             file: file_id(&scene),
@@ -244,7 +244,7 @@ fn random_id() -> String {
 /// on a removed file guards nothing.
 fn still_named(file: &File, path: &Path) -> bool {
     match (file.metadata(), std::fs::metadata(path)) {
-        (Ok(a), Ok(b)) => crate::files::same_metadata(&a, &b),
+        (Ok(a), Ok(b)) => crate::system::files::same_metadata(&a, &b),
         _ => false,
     }
 }
@@ -477,7 +477,7 @@ pub fn find(folder: &Path, scene: &Path, own: Option<&str>) -> Found {
     let Ok(listing) = std::fs::read_dir(folder) else {
         return found;
     };
-    let abs = crate::files::absolute(scene);
+    let abs = crate::system::files::absolute(scene);
     let canonical = std::fs::canonicalize(&abs).unwrap_or_else(|_| abs.clone());
     let id_now = file_id(&abs);
     let stems = [stem_of(&abs), stem_of(&canonical)];

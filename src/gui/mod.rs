@@ -141,8 +141,9 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
             app.end_on_signals();
             // The user's editors' unsaved text, where a private runtime
             // folder is there for the link.
-            let folder = crate::editor_link::folder().ok();
-            if let Some(listener) = folder.and_then(|f| crate::editor_link::Listener::bind(&f).ok())
+            let folder = crate::desktop::editor_link::folder().ok();
+            if let Some(listener) =
+                folder.and_then(|f| crate::desktop::editor_link::Listener::bind(&f).ok())
             {
                 app.listen_to_editors(listener);
             }

@@ -53,13 +53,13 @@ impl Persisted {
     /// What is kept in `config/rayoflight/` (settings, recent files) and
     /// `state/rayoflight/journal/`. Each folder is made where missing and
     /// used only if it and those above it up to its home are the user's
-    /// and closed to others' writes ([`crate::files::own_folder`]):
+    /// and closed to others' writes ([`crate::system::files::own_folder`]):
     /// another user's `recent.txt` would choose the file the app opens,
     /// their journal the edits a save writes. A folder refused is left
     /// alone and said in [`Persisted::refused`].
     pub fn in_homes(config: Option<&Path>, state: Option<&Path>) -> Persisted {
         let mut refused = Vec::new();
-        let mut usable = |found: Option<Result<PathBuf, crate::files::OwnFolderError>>,
+        let mut usable = |found: Option<Result<PathBuf, crate::system::files::OwnFolderError>>,
                           what: &str| match found? {
             Ok(folder) => Some(folder),
             Err(e) => {
@@ -68,7 +68,7 @@ impl Persisted {
             }
         };
         let config = usable(
-            config.map(|home| crate::files::own_folder(home, &["rayoflight"], false)),
+            config.map(|home| crate::system::files::own_folder(home, &["rayoflight"], false)),
             "settings and recent files",
         );
         let journal = usable(
@@ -249,7 +249,7 @@ impl Recent {
     /// Puts `path` first and stores the list ([`store`]; a path the file
     /// cannot hold stays in this run's list only).
     pub fn push(&mut self, path: &Path) {
-        let path = crate::files::absolute(path);
+        let path = crate::system::files::absolute(path);
         self.paths.retain(|p| p != &path);
         self.paths.insert(0, path);
         self.paths.truncate(MAX_RECENT);

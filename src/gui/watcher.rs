@@ -25,9 +25,9 @@
 //! compares what it gets with the text it last read or wrote, which the
 //! watcher cannot know.
 
-use crate::files::through_links;
 use crate::gui::document::{FileRead, OwnWrites, fingerprint_file};
 use crate::scene::{self, LoadError, Object, Objects};
+use crate::system::files::through_links;
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
 use std::path::{Path, PathBuf};
@@ -192,7 +192,7 @@ impl SceneWatcher {
         document_read: Option<u64>,
         on_event: impl Fn(FileEvent) + Send + Sync + 'static,
     ) -> Result<SceneWatcher, WatchError> {
-        let path = crate::files::absolute(path);
+        let path = crate::system::files::absolute(path);
         let on_event = Arc::new(on_event);
         let error = |source| WatchError {
             path: path.clone(),

@@ -2,7 +2,7 @@
 //! for every scene, or the options [`auto`](fn@super::auto) plans for each.
 //! The command line's `--method`, the app's preview and the study choose
 //! among [`methods`]; the study compares them all (speed against
-//! accuracy). A [`RenderRequest`](crate::request::RenderRequest) names one
+//! accuracy). A [`RenderRequest`](crate::render::request::RenderRequest) names one
 //! (none: `auto`).
 
 use super::{Offset, Precision, RenderOptions, SphereTest};

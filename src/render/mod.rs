@@ -30,6 +30,7 @@ mod pool;
 mod prepared;
 mod progress;
 mod progressive;
+pub mod request;
 mod tile;
 
 pub use auto::{Decision, Plan, auto};
@@ -47,8 +48,8 @@ pub use progress::{Progress, time_left};
 pub use progressive::{LastPrepared, Step, passes, render_progressive};
 pub use tile::{Cancel, TILE_SIZE, Tile};
 
+use crate::cluster::region::{Region, RegionError};
 use crate::geometry::{Ray, Real, Vector};
-use crate::region::{Region, RegionError};
 use crate::scene::Scene;
 use crate::shading::{SurfacePoint, reflect};
 use image::RgbImage;
@@ -200,7 +201,7 @@ pub enum RenderError {
     Memory {
         /// What the memory was for: `the 16384×16384 image`.
         what: String,
-        source: crate::resources::NotEnoughMemory,
+        source: crate::system::resources::NotEnoughMemory,
     },
     #[error("cannot start a thread to render on: {0}")]
     Thread(std::io::Error),
@@ -308,10 +309,11 @@ fn render_all(
     let bytes = (width as usize)
         .saturating_mul(height as usize)
         .saturating_mul(3);
-    let pixels = crate::resources::buffer(bytes, 0u8).map_err(|source| RenderError::Memory {
-        what: format!("the {width}×{height} image"),
-        source,
-    })?;
+    let pixels =
+        crate::system::resources::buffer(bytes, 0u8).map_err(|source| RenderError::Memory {
+            what: format!("the {width}×{height} image"),
+            source,
+        })?;
     let mut image = RgbImage::from_raw(width, height, pixels).expect("3 bytes a pixel");
     let prepared = prepare(scene, options);
     let Some(rays) = trace_tiles(

@@ -355,7 +355,7 @@ fn pass_buffer<T: Clone>(
     let len = (width as usize)
         .saturating_mul(height as usize)
         .saturating_mul(per_pixel);
-    crate::resources::buffer(len, value).map_err(|source| RenderError::Memory {
+    crate::system::resources::buffer(len, value).map_err(|source| RenderError::Memory {
         what: format!("the {width}×{height} {} pass ({what})", pass.name()),
         source,
     })
@@ -503,7 +503,7 @@ type Kept<U> = (Vec<U>, Option<(f64, f64)>, u64);
 /// once `cancel` is set.
 fn keep_tiles<U: Copy + Default + Send>(
     prepared: &super::Prepared,
-    region: crate::region::Region,
+    region: crate::cluster::region::Region,
     cancel: &Cancel,
     progress: &Progress,
     mut buffer: Vec<U>,

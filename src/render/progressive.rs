@@ -6,7 +6,7 @@
 //! pass through the one tile loop ([`trace_tiles`]) on the pool it is
 //! called in, each finished tile handed on at once.
 //!
-//! [`crate::measure::progressive_timed`] times it (the one way time is
+//! [`crate::study::measure::progressive_timed`] times it (the one way time is
 //! measured); the app's render worker runs that, and so does the bench's
 //! "app ms" column, through the worker. The full-size pass is the
 //! command line's image, pixel for pixel.
@@ -275,7 +275,7 @@ mod tests {
     fn an_edit_of_surfaces_keeps_the_geometry_and_the_image_is_the_same() {
         use crate::shading::Illumination;
         // Enough spheres for a hierarchy, a plane, reflections.
-        let text = crate::bench::spheres_on_floor(40, 64, 48);
+        let text = crate::study::bench::spheres_on_floor(40, 64, 48);
         let mut scene = crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap();
         scene.model.illumination = Illumination::Whitted;
         let last = LastPrepared::default();

@@ -24,7 +24,7 @@ pub struct Cancel {
     /// Cancelled too when this counter moves off its value
     /// ([`Cancel::or_when`]).
     also: Option<(Arc<AtomicU64>, u64)>,
-    /// Cancelled too by a signal ([`crate::interrupt::requested`]).
+    /// Cancelled too by a signal ([`crate::system::interrupt::requested`]).
     on_signal: bool,
 }
 
@@ -40,8 +40,8 @@ impl Cancel {
     }
 
     /// A token cancelled by SIGINT, SIGTERM or SIGHUP once
-    /// [`crate::interrupt::install`] has been called (the CLI); hold a
-    /// [`crate::interrupt::Cleanly`] guard while rendering with it.
+    /// [`crate::system::interrupt::install`] has been called (the CLI); hold a
+    /// [`crate::system::interrupt::Cleanly`] guard while rendering with it.
     pub fn on_signal() -> Cancel {
         Cancel {
             on_signal: true,
@@ -78,7 +78,7 @@ impl Cancel {
                 .also
                 .as_ref()
                 .is_some_and(|(n, g)| n.load(Ordering::Relaxed) != *g)
-            || (self.on_signal && crate::interrupt::requested())
+            || (self.on_signal && crate::system::interrupt::requested())
     }
 }
 

@@ -60,7 +60,7 @@ pub const MAX_PIXELS: u64 = 1 << 28;
 
 /// Reads and parses the scene file at `path`. A rewrite of it in place
 /// that a crash left half done is finished first
-/// ([`crate::files::finish`]).
+/// ([`crate::system::files::finish`]).
 ///
 /// The size is checked from the file's metadata before reading (and again
 /// while reading, should the file grow): above [`MAX_FILE_BYTES`] it is
@@ -183,9 +183,9 @@ fn streamed(
     progress: Option<&LoadProgress>,
 ) -> Option<Streamed> {
     // A rewrite in place that a crash left half done is finished before
-    // the file is looked at ([`crate::files::finish`]): no reader sees it
+    // the file is looked at ([`crate::system::files::finish`]): no reader sees it
     // mixed, nor its length mid-copy.
-    let _ = crate::files::finish(path);
+    let _ = crate::system::files::finish(path);
     let meta = fs::metadata(path).ok()?;
     if !meta.is_file() || meta.len() > MAX_FILE_BYTES {
         return None;
@@ -409,7 +409,7 @@ pub fn load_counting(
     progress: Option<&LoadProgress>,
 ) -> Result<(String, Scene), LoadError> {
     // As in [`streamed`]: a crashed rewrite in place is finished first.
-    let _ = crate::files::finish(path);
+    let _ = crate::system::files::finish(path);
     let fail = |kind| LoadError::new(path, None, kind);
     let io = |e: std::io::Error| {
         fail(LoadErrorKind::Io {
@@ -429,7 +429,7 @@ pub fn load_counting(
         return Err(fail(LoadErrorKind::IsDirectory));
     }
     // A FIFO would block until a writer comes, a device may never end.
-    if let Some(kind) = crate::files::special_kind(&meta) {
+    if let Some(kind) = crate::system::files::special_kind(&meta) {
         return Err(fail(LoadErrorKind::NotAFile { kind }));
     }
     if meta.len() > MAX_FILE_BYTES {

@@ -11,12 +11,19 @@
 //! The built-in scenes are those of `scenes/study/`, compiled into the
 //! binary; the command line prints and writes files, this module does not.
 //! [`chart`] draws the study's pictures (the chart, the failure pictures).
+//! [`measure`](mod@measure) is how everything is measured (render time, medians, image
+//! differences, CSV: one way for the bench, the study, `-time` and the
+//! tests); [`bench`](mod@bench) holds the benchmark scenes.
 
+pub mod bench;
 pub mod chart;
+pub mod measure;
 
-use crate::measure::{BuiltinScene, Csv, Difference, RenderPool, Timed, median_of, render_timed};
 use crate::render::{self, Cancel, MAX_AA, Method, Progress, RenderError, RenderOptions};
 use crate::scene::{self, LoadError, Scene};
+use crate::study::measure::{
+    BuiltinScene, Csv, Difference, RenderPool, Timed, median_of, render_timed,
+};
 use image::RgbImage;
 use std::path::Path;
 use std::time::Duration;
@@ -34,7 +41,7 @@ pub enum StudyError {
         scene: String,
         width: u32,
         height: u32,
-        source: crate::resources::NotEnoughMemory,
+        source: crate::system::resources::NotEnoughMemory,
     },
 }
 
@@ -43,7 +50,7 @@ pub enum StudyError {
 /// not an abort when a failure's picture is drawn.
 pub fn check_memory(scene: &StudyScene) -> Result<(), StudyError> {
     let (width, height) = (scene.scene.camera.width, scene.scene.camera.height);
-    crate::resources::check_memory(bytes_for_scene(width, height)).map_err(|source| {
+    crate::system::resources::check_memory(bytes_for_scene(width, height)).map_err(|source| {
         StudyError::Memory {
             scene: scene.name.clone(),
             width,
@@ -209,8 +216,8 @@ pub fn measure(
     measure_image(scene, method, reference, runs, &pool, &Cancel::never()).map(|(row, _)| row)
 }
 
-/// [`measure`] on `pool`, and the image the method rendered (its first
-/// run), unless cancelled. The time is render time as [`crate::measure`]
+/// [`measure()`] on `pool`, and the image the method rendered (its first
+/// run), unless cancelled. The time is render time as [`crate::study::measure`](mod@crate::study::measure)
 /// defines it (`auto`'s planning included), as the command line renders
 /// with `--method`.
 pub fn measure_image(
@@ -221,7 +228,7 @@ pub fn measure_image(
     pool: &RenderPool,
     cancel: &Cancel,
 ) -> Result<(Row, RgbImage), StudyError> {
-    let request = crate::request::RenderRequest {
+    let request = crate::render::request::RenderRequest {
         method: Some(method.clone()),
         ..Default::default()
     };

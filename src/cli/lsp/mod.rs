@@ -12,7 +12,7 @@
 //! changed document and checks it at most every 100 ms: a big buffer makes
 //! its errors come later, never the typing slower. The same thread hands
 //! each newest text to the user's running apps
-//! ([`rayoflight::editor_link`]), tells them when the editor saves or
+//! ([`rayoflight::desktop::editor_link`]), tells them when the editor saves or
 //! closes the document, and which object the editor's cursor is in (a
 //! `textDocument/documentHighlight` request, which editors send as the
 //! cursor moves: the answer highlights that object's start tag). A click
@@ -47,7 +47,7 @@ use lsp_types::{
     PublishDiagnosticsParams, Range, ServerCapabilities, ShowDocumentParams, ShowMessageParams,
     SymbolKind, TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
 };
-use rayoflight::editor_link;
+use rayoflight::desktop::editor_link;
 use rayoflight::scene::language::{self, Lines, Place};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -506,7 +506,8 @@ fn object_element(documents: &Documents, path: &Path, object: usize) -> Option<(
     let (key, text, lines) = {
         let all = lock(documents);
         let (key, document) = all.iter().find(|(key, _)| {
-            editor_link::uri_path(key).is_some_and(|p| rayoflight::files::same_file(&p, path))
+            editor_link::uri_path(key)
+                .is_some_and(|p| rayoflight::system::files::same_file(&p, path))
         })?;
         let (text, lines) = document.copy();
         (key.clone(), text, lines)
@@ -516,7 +517,7 @@ fn object_element(documents: &Documents, path: &Path, object: usize) -> Option<(
     Some((uri, range(&text, &lines, element)))
 }
 
-/// The user's running apps ([`rayoflight::editor_link`]), connected to as
+/// The user's running apps ([`rayoflight::desktop::editor_link`]), connected to as
 /// they come and dropped as they go; what each says is read on a thread of
 /// its own.
 struct Apps {

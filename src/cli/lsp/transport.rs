@@ -8,7 +8,7 @@
 //! Here a header line is at most [`MAX_HEADER_LINE`] bytes, a message at
 //! most [`MAX_MESSAGE`] (docs/limits.md), and the memory a body takes
 //! grows with the bytes received, not announced, after the system has
-//! been asked whether the message fits ([`crate::resources`] as every
+//! been asked whether the message fits ([`crate::system::resources`] as every
 //! command asks). A message refused for its size is read past and
 //! dropped, and said to the editor (`window/showMessage`) and on stderr;
 //! the session goes on. Broken framing ends it, as an error.
@@ -20,7 +20,7 @@ use crossbeam_channel::{Receiver, Sender, bounded};
 use lsp_server::{Connection, Message, Notification};
 use lsp_types::notification::{Notification as _, ShowMessage};
 use lsp_types::{MessageType, ShowMessageParams};
-use rayoflight::resources;
+use rayoflight::system::resources;
 
 /// The largest message taken, in bytes: a scene file of about 2.5 million
 /// objects, as JSON, in one `didOpen`.

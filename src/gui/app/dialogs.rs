@@ -282,7 +282,7 @@ impl RayOfLightApp {
         }
         // Exports are exact whatever the preview uses: auto's options, at
         // the chosen anti-aliasing.
-        let request = crate::request::RenderRequest {
+        let request = crate::render::request::RenderRequest {
             method: None,
             aa: Some(self.aa),
             threads: None,

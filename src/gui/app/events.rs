@@ -196,12 +196,12 @@ impl RayOfLightApp {
     /// comes, and the document again when the editor saves or closes it;
     /// the object its cursor is in is selected (and outlined). Messages
     /// about other files are not this window's.
-    fn editor_said(&mut self, message: crate::editor_link::Message) {
-        use crate::editor_link::Message;
+    fn editor_said(&mut self, message: crate::desktop::editor_link::Message) {
+        use crate::desktop::editor_link::Message;
         let ours = |path: &Path| {
             self.doc
                 .path()
-                .is_some_and(|open| crate::files::same_file(open, path))
+                .is_some_and(|open| crate::system::files::same_file(open, path))
         };
         match message {
             Message::Buffer { path, text } if ours(&path) => {

@@ -109,7 +109,7 @@ impl RayOfLightApp {
     pub(super) fn keep_journal(&mut self, ctx: &egui::Context) {
         if self.signalled.load(Ordering::SeqCst) {
             // A save or an export under way stops at its next write (the
-            // signal is recorded for it too, `crate::interrupt`) and
+            // signal is recorded for it too, `crate::system::interrupt`) and
             // removes its temporary file: the app ends once it has, or
             // after STOP_WAIT.
             let since = *self.signalled_at.get_or_insert_with(Instant::now);
@@ -162,7 +162,7 @@ impl RayOfLightApp {
             return;
         }
         hot.kept = Some(self.doc.generation());
-        let Some(path) = self.doc.path().map(crate::files::absolute) else {
+        let Some(path) = self.doc.path().map(crate::system::files::absolute) else {
             return;
         };
         if !self.doc.has_unsaved_edits() {

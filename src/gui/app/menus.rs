@@ -82,7 +82,7 @@ impl RayOfLightApp {
                     && self
                         .doc
                         .path()
-                        .is_none_or(|current| !crate::files::same_file(current, &path));
+                        .is_none_or(|current| !crate::system::files::same_file(current, &path));
                 if other_file {
                     self.confirm = Some(Confirm::Replace(path));
                 } else {

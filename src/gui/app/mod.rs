@@ -81,9 +81,9 @@ enum Background {
     /// picture).
     Explained(u64, Option<Box<crate::render::Explanation>>),
     /// What the user's editor said over the editor link
-    /// ([`crate::editor_link`]): its unsaved text of a file, or that it
+    /// ([`crate::desktop::editor_link`]): its unsaved text of a file, or that it
     /// let go of it.
-    Editor(crate::editor_link::Message),
+    Editor(crate::desktop::editor_link::Message),
 }
 
 /// What the mouse is doing on the picture, or will do at the next click:
@@ -160,7 +160,7 @@ pub struct RayOfLightApp {
     editor_socket: Option<PathBuf>,
     /// The editors connected over the link, for a click on an object to
     /// ask them to show its element.
-    editors: crate::editor_link::Peers,
+    editors: crate::desktop::editor_link::Peers,
     /// The export running in the background, if any.
     export: Option<dialogs::Export>,
     /// The save under way, if any.
@@ -264,7 +264,7 @@ impl RayOfLightApp {
             notice: None,
             editor_failed: std::sync::mpsc::channel(),
             editor_socket: None,
-            editors: crate::editor_link::Peers::default(),
+            editors: crate::desktop::editor_link::Peers::default(),
             export: None,
             saving: None,
             deferred_file_events: Vec::new(),
@@ -312,7 +312,7 @@ impl RayOfLightApp {
     pub fn end_on_signals(&mut self) {
         // A save or export under way stops at its next write, its
         // temporary file removed, before the app ends.
-        let _ = crate::interrupt::record_only();
+        let _ = crate::system::interrupt::record_only();
         self.signalled = hot_exit::watch_signals(&self.ctx);
     }
 
@@ -320,7 +320,7 @@ impl RayOfLightApp {
     /// (their unsaved text of the open file is shown as it is typed, their
     /// cursor selects objects, a click asks them to show one), on threads
     /// of their own: one that accepts, one that reads a connection.
-    pub fn listen_to_editors(&mut self, listener: crate::editor_link::Listener) {
+    pub fn listen_to_editors(&mut self, listener: crate::desktop::editor_link::Listener) {
         self.editor_socket = Some(listener.path().to_owned());
         let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
         let editors = self.editors.clone();
@@ -333,7 +333,7 @@ impl RayOfLightApp {
                     let _ = std::thread::Builder::new()
                         .name("editor".into())
                         .spawn(move || {
-                            use crate::editor_link::{Message, receive};
+                            use crate::desktop::editor_link::{Message, receive};
                             // An editor this app cannot answer is still
                             // followed.
                             let peer = editors.add(&stream).ok();
@@ -453,7 +453,7 @@ impl RayOfLightApp {
         settings.window = window.or(settings.window);
         settings.aa = self.aa;
         settings.study_runs = self.study.runs;
-        settings.last_file = self.doc.path().map(crate::files::absolute);
+        settings.last_file = self.doc.path().map(crate::system::files::absolute);
         settings
     }
 

@@ -270,10 +270,11 @@ impl RayOfLightApp {
         let (Some(path), Some(object)) = (self.doc.path(), self.doc.object_in_text(n)) else {
             return;
         };
-        self.editors.tell(&crate::editor_link::Message::Show {
-            path: path.to_owned(),
-            object,
-        });
+        self.editors
+            .tell(&crate::desktop::editor_link::Message::Show {
+                path: path.to_owned(),
+                object,
+            });
     }
 
     /// A pick or an explain that waited for the worker to prepare the

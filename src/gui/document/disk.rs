@@ -187,7 +187,7 @@ impl FingerprintError {
 pub fn fingerprint_file(path: &Path) -> Result<u64, FingerprintError> {
     use std::io::Read;
     let meta = std::fs::metadata(path).map_err(FingerprintError::Io)?;
-    if let Some(kind) = crate::files::special_kind(&meta) {
+    if let Some(kind) = crate::system::files::special_kind(&meta) {
         return Err(FingerprintError::NotAFile(kind));
     }
     let mut file = std::fs::File::open(path).map_err(FingerprintError::Io)?;

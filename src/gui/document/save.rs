@@ -6,7 +6,7 @@
 //!    its scene, the edited scene, the fingerprint of the file as last
 //!    read or written — all shared, nothing copied;
 //! 2. [`SaveJob::run`], on any thread, locks the file (as `rayoflight
-//!    edit` does, [`crate::files::lock_for_update`]) and reads its
+//!    edit` does, [`crate::system::files::lock_for_update`]) and reads its
 //!    fingerprint: the file as known is written (the edits spliced into
 //!    the source and streamed, the new file read back and checked, and the
 //!    old one read again, before it is replaced), a file changed by another
@@ -104,12 +104,12 @@ impl SaveJob {
     /// Runs the job on a thread of its own, as the app saves (a million
     /// objects take seconds to write and check), then hands `done` the job
     /// and what it did. Before that, the memory the save freed goes back
-    /// to the system ([`crate::allocator::give_back`]): the thread's arena
+    /// to the system ([`crate::system::allocator::give_back`]): the thread's arena
     /// would keep 5–6 MB of 200 000 objects' save one time in three.
     pub fn spawn(self, done: impl FnOnce(SaveJob, SaveOutcome) + Send + 'static) {
         std::thread::spawn(move || {
             let outcome = self.run();
-            crate::allocator::give_back();
+            crate::system::allocator::give_back();
             done(self, outcome);
         });
     }
@@ -120,7 +120,7 @@ impl SaveJob {
         // Held from this read to the rename: a `rayoflight edit` or
         // another save waits. (A file that cannot be opened is found out
         // by the fingerprint below.)
-        let _lock = crate::files::lock_for_update(&self.path);
+        let _lock = crate::system::files::lock_for_update(&self.path);
         match fingerprint_file(&self.path) {
             // Nothing unsaved and the file as we know it: nothing to do.
             Ok(seen) if Some(seen) == self.disk && !self.dirty => SaveOutcome::Unchanged,

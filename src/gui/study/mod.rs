@@ -12,8 +12,8 @@
 mod plot;
 
 use super::worker::Event;
+use crate::render::request::RenderRequest;
 use crate::render::{self, Decision, Method};
-use crate::request::RenderRequest;
 use crate::scene::Scene;
 use crate::study::{self, Row};
 use egui::{Color32, RichText, TextureHandle, TextureOptions};
@@ -61,7 +61,7 @@ impl Default for PreviewMethods {
 impl PreviewMethods {
     /// What to render with, `dragging` or not, at the preview's
     /// anti-aliasing `aa` (View › Anti-aliasing: above 1×1 it is asked for
-    /// and wins over the method's, see [`crate::request`]).
+    /// and wins over the method's, see [`crate::render::request`]).
     pub fn request(&self, dragging: bool, aa: u32) -> RenderRequest {
         let method = match (&self.dragging, dragging) {
             (Some(fast), true) => fast,

@@ -1,7 +1,7 @@
 //! Putting parts together: the PNGs `--region` wrote, on one machine or
 //! many, into the full image, checked first and streamed.
 //!
-//! [`check`] reads each part's record ([`crate::part`]) and refuses,
+//! [`check`] reads each part's record ([`crate::cluster::part`]) and refuses,
 //! naming the culprit, a file given twice, a file that is not a part, parts of another render
 //! (scene or options) or another version, a part whose pixels are not its
 //! region's size, a region outside the image, two parts that overlap and
@@ -18,9 +18,9 @@
 //! The image written is the file a one-machine render writes
 //! ([`crate::output::write_png`] for both): `cmp` finds no difference.
 
+use crate::cluster::part::{self, Part, PartError};
+use crate::cluster::region::Region;
 use crate::output::{self, OutputError};
-use crate::part::{self, Part, PartError};
-use crate::region::Region;
 use std::fs::File;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -152,7 +152,7 @@ fn open(path: &Path) -> Result<(PngReader, PartFile), AssembleError> {
     };
     // A FIFO or a device is never opened: reading one could wait for ever.
     let meta = std::fs::metadata(path).map_err(read_error)?;
-    if let Some(kind) = crate::files::special_kind(&meta) {
+    if let Some(kind) = crate::system::files::special_kind(&meta) {
         return Err(AssembleError::Special {
             path: path.to_owned(),
             kind,
@@ -212,7 +212,7 @@ pub fn check(paths: &[PathBuf]) -> Result<Vec<PartFile>, AssembleError> {
     // The same file twice, by one name or two (a link, a hard link).
     let mut seen = std::collections::HashSet::new();
     for path in paths {
-        if !seen.insert(crate::files::identity(path)) {
+        if !seen.insert(crate::system::files::identity(path)) {
             return Err(AssembleError::Twice { path: path.clone() });
         }
     }
@@ -389,7 +389,10 @@ pub fn assemble_until(
     stop: &AtomicBool,
 ) -> Result<Assembled, AssembleError> {
     let parts = check(paths)?;
-    if paths.iter().any(|p| crate::files::same_file(p, out)) {
+    if paths
+        .iter()
+        .any(|p| crate::system::files::same_file(p, out))
+    {
         return Err(AssembleError::OutIsAPart {
             path: out.to_owned(),
         });
@@ -475,11 +478,11 @@ pub fn most_open(parts: &[PartFile]) -> (usize, u32) {
 }
 
 /// Raises the soft limit of open files to the hard one
-/// ([`crate::resources::raise_open_files`]) and refuses, before any
+/// ([`crate::system::resources::raise_open_files`]) and refuses, before any
 /// pixel is read, parts that a row needs open together beyond it.
 fn check_open_files(parts: &[PartFile]) -> Result<(), AssembleError> {
     let (most, row) = most_open(parts);
-    let Some(files) = crate::resources::raise_open_files() else {
+    let Some(files) = crate::system::resources::raise_open_files() else {
         return Ok(());
     };
     if files.open + most as u64 + SPARE_FILES > files.limit {

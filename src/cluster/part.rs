@@ -10,7 +10,7 @@
 //! region=0,0,400,300 image=800x600 render=5f0e3c2a91b7d408 version=0.1.0
 //! ```
 
-use crate::region::{Region, RegionError};
+use crate::cluster::region::{Region, RegionError};
 use crate::render::RenderOptions;
 use crate::scene::Scene;
 use std::fmt::{self, Write};

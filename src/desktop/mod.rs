@@ -18,6 +18,13 @@
 //! RayOfLight is offered in "Open with" for XML files and is the default
 //! only for its own type, `application/x-rayoflight-scene`: it never claims
 //! every XML file (other formats use a bare `<scene>` root too).
+//!
+//! The editor link ([`editor_link`], Unix) lives here too: the user's
+//! editor's unsaved text, from `rayoflight lsp` to the app, over a socket
+//! of the user's own.
+
+#[cfg(unix)]
+pub mod editor_link;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -28,46 +35,46 @@ pub const APP_ID: &str = "io.github.rayoflight.RayOfLight";
 
 /// The desktop entry as the repository keeps it (`Exec=rayoflight %f`).
 pub const DESKTOP_ENTRY: &str =
-    include_str!("../assets/linux/io.github.rayoflight.RayOfLight.desktop");
+    include_str!("../../assets/linux/io.github.rayoflight.RayOfLight.desktop");
 /// The shared-mime-info package of `application/x-rayoflight-scene`.
 pub const MIME_PACKAGE: &str =
-    include_str!("../assets/linux/io.github.rayoflight.RayOfLight.mime.xml");
+    include_str!("../../assets/linux/io.github.rayoflight.RayOfLight.mime.xml");
 /// The scalable icon.
-pub const ICON_SVG: &str = include_str!("../assets/linux/io.github.rayoflight.RayOfLight.svg");
+pub const ICON_SVG: &str = include_str!("../../assets/linux/io.github.rayoflight.RayOfLight.svg");
 
 /// The icon as PNGs, side in pixels: the hicolor theme's sizes.
 pub const ICON_PNGS: &[(u32, &[u8])] = &[
     (
         16,
-        include_bytes!("../assets/linux/icons/16x16/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/16x16/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         24,
-        include_bytes!("../assets/linux/icons/24x24/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/24x24/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         32,
-        include_bytes!("../assets/linux/icons/32x32/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/32x32/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         48,
-        include_bytes!("../assets/linux/icons/48x48/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/48x48/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         64,
-        include_bytes!("../assets/linux/icons/64x64/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/64x64/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         128,
-        include_bytes!("../assets/linux/icons/128x128/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/128x128/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         256,
-        include_bytes!("../assets/linux/icons/256x256/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/256x256/io.github.rayoflight.RayOfLight.png"),
     ),
     (
         512,
-        include_bytes!("../assets/linux/icons/512x512/io.github.rayoflight.RayOfLight.png"),
+        include_bytes!("../../assets/linux/icons/512x512/io.github.rayoflight.RayOfLight.png"),
     ),
 ];
 

@@ -481,7 +481,7 @@ mod imp {
         /// of [`Place::new_file`] named `.rayoflight-XXXXXX.tmp` in the
         /// folder, and the copies `.NAME.XXXXXX.rayoflight-backup` of the
         /// file's old bytes that no record of a rewrite names (run
-        /// [`crate::files::finish_at`] first). Only the caller's own
+        /// [`crate::system::files::finish_at`] first). Only the caller's own
         /// regular files, and only those no process holds locked (every
         /// writer locks its file) and unchanged for `quiet` (a file made
         /// but not yet locked). Returns how many files and bytes went.

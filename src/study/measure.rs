@@ -14,15 +14,15 @@
 //! - **CSV** text: a header and rows, fields quoted where they must be
 //!   ([`Csv`]).
 //! - The **built-in scenes** the bench and the study measure
-//!   ([`BuiltinScene`]; the lists are [`crate::bench::SCENES`] and
+//!   ([`BuiltinScene`]; the lists are [`crate::study::bench::SCENES`] and
 //!   [`crate::study::SCENES`]).
 
 pub use crate::render::RenderPool;
+use crate::render::request::RenderRequest;
 use crate::render::{
     self, Cancel, KeptPass, LastPrepared, Pass, PassForm, PassImage, Progress, RenderError,
     RenderOptions, RenderStats, Step, Tile,
 };
-use crate::request::RenderRequest;
 use crate::scene::{self, LoadError, Scene};
 use image::RgbImage;
 use std::sync::Arc;
@@ -43,7 +43,7 @@ pub struct BuiltinScene {
 #[doc(hidden)]
 macro_rules! builtin {
     ($set:literal, $name:literal) => {
-        $crate::measure::BuiltinScene {
+        $crate::study::measure::BuiltinScene {
             name: $name,
             path: concat!("scenes/", $set, "/", $name, ".xml"),
             text: include_str!(concat!(
@@ -282,7 +282,7 @@ pub fn pixel_differences(image: &RgbImage, reference: &RgbImage) -> Vec<u8> {
 
 /// CSV text: a header line, then a line a row; a field holding a comma, a
 /// quote or a line break is quoted, its other control characters
-/// escaped ([`crate::escape::visible`]).
+/// escaped ([`crate::system::escape::visible`]).
 #[derive(Debug, Clone)]
 pub struct Csv {
     text: String,
@@ -313,7 +313,7 @@ impl Csv {
             }
             // A name from outside: its controls shown, not obeyed by the
             // terminal a `cat` of the file drives.
-            let field = crate::escape::visible(field, true);
+            let field = crate::system::escape::visible(field, true);
             if field.contains([',', '"', '\n', '\r']) {
                 self.text.push('"');
                 self.text.push_str(&field.replace('"', "\"\""));

@@ -53,7 +53,7 @@ pub enum LinkError {
     #[error("no runtime folder: XDG_RUNTIME_DIR is not set")]
     NoRuntimeDir,
     #[error(transparent)]
-    Unsafe(#[from] crate::files::OwnFolderError),
+    Unsafe(#[from] crate::system::files::OwnFolderError),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: io::Error },
 }
@@ -70,7 +70,7 @@ pub fn folder() -> Result<PathBuf, LinkError> {
 }
 
 /// [`folder`] at `path`: the user's own, closed to others, and so is the
-/// folder it is in ([`crate::files::own_folder`]).
+/// folder it is in ([`crate::system::files::own_folder`]).
 pub fn folder_in(path: &Path) -> Result<PathBuf, LinkError> {
     let io = |source| LinkError::Io {
         path: path.to_owned(),
@@ -80,7 +80,7 @@ pub fn folder_in(path: &Path) -> Result<PathBuf, LinkError> {
     else {
         return Err(io(io::Error::other("not a folder's path")));
     };
-    Ok(crate::files::own_folder(home, &[name], true)?)
+    Ok(crate::system::files::own_folder(home, &[name], true)?)
 }
 
 /// Whether the process at the other end of `stream` is this user's.

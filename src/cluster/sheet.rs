@@ -49,7 +49,7 @@ pub enum SheetError {
     Memory {
         width: u32,
         height: u32,
-        source: crate::resources::NotEnoughMemory,
+        source: crate::system::resources::NotEnoughMemory,
     },
 }
 
@@ -153,13 +153,14 @@ pub fn draw<'a, E: From<SheetError>>(
     mut picture: impl FnMut(usize) -> Result<std::borrow::Cow<'a, RgbImage>, E>,
 ) -> Result<RgbImage, E> {
     let (width, height) = (layout.width, layout.height);
-    let mut raw = crate::resources::buffer(layout.bytes() as usize, 0u8).map_err(|source| {
-        SheetError::Memory {
-            width,
-            height,
-            source,
-        }
-    })?;
+    let mut raw =
+        crate::system::resources::buffer(layout.bytes() as usize, 0u8).map_err(|source| {
+            SheetError::Memory {
+                width,
+                height,
+                source,
+            }
+        })?;
     for pixel in raw.chunks_exact_mut(3) {
         pixel.copy_from_slice(&BACKGROUND.0);
     }

@@ -82,8 +82,8 @@ pub fn rewrite_in_place(
     file.seek(SeekFrom::Start(0))?;
     let old_len = std::io::copy(file, &mut backup.file)?;
     backup.file.sync_all()?;
-    if crate::interrupt::requested() {
-        return Err(crate::interrupt::error());
+    if crate::system::interrupt::requested() {
+        return Err(crate::system::interrupt::error());
     }
     let meta = file.metadata()?;
     let new_len = new.file.metadata()?.len();

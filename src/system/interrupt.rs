@@ -121,7 +121,7 @@ pub fn requested() -> bool {
 }
 
 /// The flag a signal sets, for loops that take one
-/// ([`crate::assemble::assemble_until`]).
+/// ([`crate::cluster::assemble::assemble_until`]).
 pub fn flag() -> &'static AtomicBool {
     HANDLERS.get().map_or(&NEVER, |h| &*h.requested)
 }
