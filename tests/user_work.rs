@@ -1612,3 +1612,27 @@ fn saving_a_file_renamed_away_asks_first() {
     );
     assert_eq!(read(&renamed), EXAMPLE, "the renamed file left alone");
 }
+
+/// Found trying issue 44 by hand: a notice too long for the status bar
+/// is cut with "…" and shown whole on hover, once (a tooltip of the app's
+/// own was drawn over egui's, the same text twice).
+#[test]
+fn a_long_notice_is_shown_whole_once_on_hover() {
+    let (_dir, path) = file_with(EXAMPLE);
+    let long = format!("a notice {}end", "long words ".repeat(60));
+    let persisted = Persisted {
+        refused: vec![long.clone()],
+        ..Persisted::in_memory()
+    };
+    let mut harness = app_keeping(Document::open(&path).unwrap(), persisted);
+    let shown =
+        |h: &Harness<'_, RayOfLightApp>| h.query_all_by_label_contains("a notice long").count();
+    assert_eq!(shown(&harness), 1, "one label, cut");
+    harness.get_by_label_contains("a notice long").hover();
+    // Past egui's tooltip delay.
+    for _ in 0..60 {
+        harness.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(shown(&harness), 2, "the label and one tooltip");
+}

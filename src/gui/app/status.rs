@@ -197,9 +197,9 @@ impl RayOfLightApp {
                 }
                 if let Some((notice, _)) = &self.notice {
                     ui.separator();
-                    // Cut to the bar's width with "…"; all of it on hover.
-                    ui.add(egui::Label::new(notice.as_str()).truncate())
-                        .on_hover_text(notice.as_str());
+                    // Cut to the bar's width with "…"; egui shows all of it
+                    // on hover (a tooltip of our own drew it twice).
+                    ui.add(egui::Label::new(notice.as_str()).truncate());
                 }
             });
         });
