@@ -23,9 +23,9 @@
 //!   for many tasks, their parts put back together and checked, and the
 //!   renders of a sweep side by side (`sheet`).
 //! - [`study`]: speed against accuracy: every method on the study scenes,
-//!   measured; with `measure` (render time, medians, image differences,
-//!   CSV: one way for the bench, the study, `-time` and the tests) and
-//!   `bench` (the benchmark scenes).
+//!   measured; with `bench` (the benchmark scenes). What measures (render
+//!   time, medians, image differences, CSV: one way for the bench, the
+//!   study, `-time` and the tests) is `render::measure`.
 //! - [`desktop`]: the app's desktop entry, icons and scene MIME type,
 //!   installed for the user and removed again; and the editor link
 //!   (Unix): the editor's unsaved text from `rayoflight lsp` to the app,

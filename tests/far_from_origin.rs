@@ -44,7 +44,7 @@ fn a_scene_moved_by_1e5_renders_like_at_the_origin() {
         let there = translate_scene(&here, offset);
         let a = render::render(&here, &RenderOptions::default()).unwrap();
         let b = render::render(&there, &RenderOptions::default()).unwrap();
-        let difference = rayoflight::study::measure::Difference::between(&a, &b);
+        let difference = rayoflight::render::measure::Difference::between(&a, &b);
         let (share, max) = (difference.within1, difference.max);
         assert!(
             share >= 0.9999 && max <= 8,

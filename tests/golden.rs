@@ -107,7 +107,7 @@ struct Comparison {
 impl Comparison {
     fn new(ours: &RgbImage, reference: &RgbImage) -> Comparison {
         let (w, h) = ours.dimensions();
-        let diffs = rayoflight::study::measure::pixel_differences(ours, reference);
+        let diffs = rayoflight::render::measure::pixel_differences(ours, reference);
         let mut worst = (0, 0, [0; 3], [0; 3]);
         let mut max_diff = 0;
         for (k, &d) in diffs.iter().enumerate() {

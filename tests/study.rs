@@ -140,7 +140,7 @@ fn draft_and_depth_cut_trace_fewer_rays() {
 fn anti_aliasing_is_measured_against_the_supersampled_reference() {
     let s = scene("example");
     let methods = rayoflight::render::methods();
-    let pool = rayoflight::study::measure::RenderPool::new(None).unwrap();
+    let pool = rayoflight::render::measure::RenderPool::new(None).unwrap();
     let refs = study::References::new(&s.scene, &methods, &pool, &render::Cancel::never()).unwrap();
     let supersampled = refs.supersampled.as_ref().unwrap();
     let aa4 = method("aa4");

@@ -7,11 +7,11 @@
 use super::progress::Steps;
 use rayoflight::cluster::part::Part;
 use rayoflight::cluster::{assemble, split};
+use rayoflight::render::measure::{Csv, Difference, RenderPool, Timed, median_of, render_timed};
 use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{Cancel, Progress, RenderStats};
 use rayoflight::scene::{self, Scene};
 use rayoflight::study::bench;
-use rayoflight::study::measure::{Csv, Difference, RenderPool, Timed, median_of, render_timed};
 use rayoflight::{output, pov};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -961,7 +961,7 @@ fn csv(rows: &[Row]) -> String {
     csv.into_text()
 }
 
-/// Median render time over `runs`, as [`rayoflight::study::measure`] defines it
+/// Median render time over `runs`, as [`rayoflight::render::measure`] defines it
 /// (the CLI's request: `auto`; the pool built before the clock).
 fn time_render(
     scene: &Scene,

@@ -16,9 +16,9 @@ mod study;
 
 use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
 use rayoflight::cluster::part::Part;
+use rayoflight::render::measure;
 use rayoflight::scene::edit::{EditError, Edited};
 use rayoflight::scene::{merge, splice};
-use rayoflight::study::measure;
 use rayoflight::system::{files, interrupt, resources};
 use rayoflight::{output, pov, render, scene};
 use std::path::{Path, PathBuf};
@@ -304,7 +304,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
             out.display()
         ))
     })?;
-    // Render time as the bench and the study measure it (rayoflight::study::measure).
+    // Render time as the bench and the study measure it (rayoflight::render::measure).
     let pool = measure::RenderPool::new(request.threads).map_err(fail)?;
     let counted = render::Progress::default();
     // A signal stops the render at its next tile, or the write.

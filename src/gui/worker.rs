@@ -38,13 +38,13 @@
 //! ([`Worker::export`]) runs beside the preview on a thread of its own, on
 //! the worker's pool.
 
+use crate::render::measure::{self, PassTime};
 use crate::render::request::RenderRequest;
 use crate::render::{
     self, Cancel, LastPrepared, ObjectIds, Pass, PassImage, Prepared, Progress, RenderError,
     RenderOptions, RenderPool, Tile,
 };
 use crate::scene::Scene;
-use crate::study::measure::{self, PassTime};
 use crate::study::{self, Row, StudyError, StudyScene, chart};
 use image::RgbImage;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -92,7 +92,7 @@ pub enum Event {
         /// Time from the request to its first pass: resolving it and
         /// preparing the scene (next to nothing when the last request's
         /// prepared scene served). With `elapsed` of the full-size pass:
-        /// render time, as [`crate::study::measure`](mod@crate::study::measure) defines it.
+        /// render time, as [`crate::render::measure`](mod@crate::render::measure) defines it.
         prepare: Duration,
         /// Rays traced in this pass, primary and reflected (as `RenderStats`).
         rays: u64,

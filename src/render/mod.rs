@@ -22,6 +22,7 @@ mod auto;
 mod camera;
 pub mod explain;
 mod ids;
+pub mod measure;
 mod method;
 pub mod navigate;
 mod observer;

@@ -1,7 +1,7 @@
 //! The one kind of thread pool renders run on: [`RenderPool`]. Every pool
 //! of render threads is built here — the command line's `--threads`
 //! ([`super::render`] and its siblings), the bench and the study (built
-//! before their clocks start, see [`crate::study::measure`](mod@crate::study::measure)), and the app's render
+//! before their clocks start, see [`crate::render::measure`](mod@crate::render::measure)), and the app's render
 //! worker (named threads, all the cores, and a smaller one while the user
 //! drags).
 

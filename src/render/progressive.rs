@@ -6,7 +6,7 @@
 //! pass through the one tile loop ([`trace_tiles`]) on the pool it is
 //! called in, each finished tile handed on at once.
 //!
-//! [`crate::study::measure::progressive_timed`] times it (the one way time is
+//! [`crate::render::measure::progressive_timed`] times it (the one way time is
 //! measured); the app's render worker runs that, and so does the bench's
 //! "app ms" column, through the worker. The full-size pass is the
 //! command line's image, pixel for pixel.

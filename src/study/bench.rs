@@ -2,10 +2,10 @@
 //! binary, so `rayoflight bench` runs from anywhere) and generated scenes
 //! of n spheres on a floor for the cost-against-object-count series.
 //!
-//! Timing is [`crate::study::measure`](mod@crate::study::measure)'s; POV-Ray and reporting live with the
+//! Timing is [`crate::render::measure`](mod@crate::render::measure)'s; POV-Ray and reporting live with the
 //! command line; this module only says what is rendered.
 
-use crate::study::measure::BuiltinScene;
+use crate::render::measure::BuiltinScene;
 
 /// The bench set, in the order reported.
 pub const SCENES: [BuiltinScene; 4] = [

@@ -11,19 +11,17 @@
 //! The built-in scenes are those of `scenes/study/`, compiled into the
 //! binary; the command line prints and writes files, this module does not.
 //! [`chart`] draws the study's pictures (the chart, the failure pictures).
-//! [`measure`](mod@measure) is how everything is measured (render time, medians, image
-//! differences, CSV: one way for the bench, the study, `-time` and the
-//! tests); [`bench`](mod@bench) holds the benchmark scenes.
+//! Everything is measured one way ([`crate::render::measure`](mod@crate::render::measure));
+//! [`bench`](mod@bench) holds the benchmark scenes.
 
 pub mod bench;
 pub mod chart;
-pub mod measure;
 
-use crate::render::{self, Cancel, MAX_AA, Method, Progress, RenderError, RenderOptions};
-use crate::scene::{self, LoadError, Scene};
-use crate::study::measure::{
+use crate::render::measure::{
     BuiltinScene, Csv, Difference, RenderPool, Timed, median_of, render_timed,
 };
+use crate::render::{self, Cancel, MAX_AA, Method, Progress, RenderError, RenderOptions};
+use crate::scene::{self, LoadError, Scene};
 use image::RgbImage;
 use std::path::Path;
 use std::time::Duration;
@@ -217,7 +215,7 @@ pub fn measure(
 }
 
 /// [`measure()`] on `pool`, and the image the method rendered (its first
-/// run), unless cancelled. The time is render time as [`crate::study::measure`](mod@crate::study::measure)
+/// run), unless cancelled. The time is render time as [`crate::render::measure`](mod@crate::render::measure)
 /// defines it (`auto`'s planning included), as the command line renders
 /// with `--method`.
 pub fn measure_image(

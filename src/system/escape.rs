@@ -4,7 +4,7 @@
 //! make one line look like two, and a right-to-left override would show
 //! another name than the one meant. Every line the CLI prints goes
 //! through [`visible`], and so does every field of the CSV files the core
-//! writes ([`crate::study::measure::Csv`], read with `cat` as often as by a
+//! writes ([`crate::render::measure::Csv`], read with `cat` as often as by a
 //! program): such characters are written as visible escapes (`\n`, `\e`,
 //! `\x07`, `\u{202e}`).
 

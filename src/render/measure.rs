@@ -43,7 +43,7 @@ pub struct BuiltinScene {
 #[doc(hidden)]
 macro_rules! builtin {
     ($set:literal, $name:literal) => {
-        $crate::study::measure::BuiltinScene {
+        $crate::render::measure::BuiltinScene {
             name: $name,
             path: concat!("scenes/", $set, "/", $name, ".xml"),
             text: include_str!(concat!(
