@@ -735,8 +735,8 @@ fn with_text_chunk(png: &[u8], at: usize, keyword: &str, text: &str) -> Vec<u8> 
 }
 
 /// A part with two "RayOfLight part" records is refused, naming the file:
-/// which one would be the part's? (Issue 26, item 18.) Before its pixels
-/// or after them.
+/// which one would be the part's? Both before its pixels, or both after
+/// them.
 #[test]
 fn a_part_with_two_records_is_refused() {
     let dir = tempfile::tempdir().unwrap();

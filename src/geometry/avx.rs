@@ -8,7 +8,7 @@
 //! same IEEE operations: add, subtract, multiply, divide, square root,
 //! ordered comparisons that are false for NaN, selection by mask); the
 //! tests below check them against f64 on random and special values, and
-//! tests/lanes.rs renders with all three widths and compares the images.
+//! tests/render/lanes.rs renders with all three widths and compares the images.
 //!
 //! This is one of the crate's two modules with `unsafe` (the other,
 //! [`crate::system::allocator`], calls glibc's malloc). Its single invariant: an

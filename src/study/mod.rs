@@ -142,7 +142,7 @@ pub struct References {
     /// The default image supersampled [`MAX_AA`]×[`MAX_AA`]: the
     /// reference of the anti-aliasing methods. Rendered only when asked,
     /// on the exact fast path (256 plain renders would dominate the study;
-    /// the fast path's image is the plain one, see tests/exact_shortcuts.rs).
+    /// the fast path's image is the plain one, see tests/render/exact_shortcuts.rs).
     pub supersampled: Option<RgbImage>,
 }
 

@@ -97,6 +97,47 @@ pub fn env_or(name: &str, default: u64) -> u64 {
         .unwrap_or(default)
 }
 
+/// A new temporary folder holding `files` (name, text) as a user's folder
+/// holds them: the folder readable by all (0755), each file 0644, so that
+/// a command run as another user can read them.
+pub fn folder_with(files: &[(&str, &str)]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, text) in files {
+        fs::write(dir.path().join(name), text).unwrap();
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).unwrap();
+        for (name, _) in files {
+            fs::set_permissions(dir.path().join(name), fs::Permissions::from_mode(0o644)).unwrap();
+        }
+    }
+    dir
+}
+
+/// A new temporary folder holding one scene file `name` with `text`: the
+/// folder (kept while it lives) and the file's path.
+pub fn scene_file(name: &str, text: &str) -> (tempfile::TempDir, std::path::PathBuf) {
+    let dir = folder_with(&[(name, text)]);
+    let path = dir.path().join(name);
+    (dir, path)
+}
+
+/// A named pipe at `path` (coreutils' `mkfifo`).
+#[cfg(unix)]
+pub fn mkfifo(path: &Path) {
+    let made = Command::new("mkfifo").arg(path).status().unwrap().success();
+    assert!(made, "mkfifo {}", path.display());
+}
+
+/// Whether the tests run as root (in CI they do: the tests that act as
+/// another user need it).
+#[cfg(unix)]
+pub fn is_root() -> bool {
+    rustix::process::geteuid().is_root()
+}
+
 /// A scene file holding `text` in a new temporary folder, opened as a
 /// document: the folder (kept while it lives), the file's path, the
 /// document.
@@ -108,9 +149,7 @@ pub fn document_on(
     std::path::PathBuf,
     rayoflight::gui::document::Document,
 ) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    fs::write(&path, text).unwrap();
+    let (dir, path) = scene_file("scene.xml", text);
     let doc = rayoflight::gui::document::Document::open(&path).unwrap();
     (dir, path, doc)
 }
@@ -127,7 +166,7 @@ pub fn golden_scenes() -> Vec<std::path::PathBuf> {
     scenes
 }
 
-/// libxml2's `xmllint --noout` as an oracle of well-formed XML (issue 26):
+/// libxml2's `xmllint --noout` as an oracle of well-formed XML:
 /// for each file, the line of the first error xmllint reports, or `None`
 /// when it finds the file well-formed (warnings and namespace errors, which
 /// leave its exit status 0, do not count). `None` as a whole when xmllint

@@ -1,4 +1,4 @@
--- A real LSP client for tests/lsp.rs: Neovim's own (0.7 and later),
+-- A real LSP client for tests/desktop/lsp.rs: Neovim's own (0.7 and later),
 -- headless, on the scene s.xml of the current folder. It types an error
 -- after non-ASCII text, waits for the diagnostic, fixes it, asks for
 -- completion, hover and symbols, and writes what it got as JSON to

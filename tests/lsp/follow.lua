@@ -1,4 +1,4 @@
--- For tests/gui_window.rs: Neovim's LSP client on $ROL_FILE turns the
+-- For tests/window.rs: Neovim's LSP client on $ROL_FILE turns the
 -- red sphere blue without saving, then breaks the text, then quits
 -- without saving; a few seconds between, for screenshots.
 local id = vim.lsp.start_client({ name = 'rayoflight', cmd = { os.getenv('ROL_BIN'), 'lsp' }, root_dir = vim.fn.getcwd() })

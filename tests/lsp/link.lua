@@ -1,4 +1,4 @@
--- For tests/lsp.rs: Neovim's LSP client on s.xml changes a value without
+-- For tests/desktop/lsp.rs: Neovim's LSP client on s.xml changes a value without
 -- saving, waits, then saves (:write) and quits. The server is $ROL_BIN lsp.
 local id = vim.lsp.start_client({ name = 'rayoflight', cmd = { os.getenv('ROL_BIN'), 'lsp' }, root_dir = vim.fn.getcwd() })
 vim.cmd('edit s.xml')

@@ -1,4 +1,4 @@
--- For tests/lsp.rs and tests/gui_window.rs: Neovim's LSP client on
+-- For tests/desktop/lsp.rs and tests/window.rs: Neovim's LSP client on
 -- $ROL_FILE, saying it shows documents when a server asks
 -- (window/showDocument: Neovim 0.8 and later have this handler; 0.7 needs
 -- it given, as here). It puts the cursor on line $ROL_CURSOR_LINE

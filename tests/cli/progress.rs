@@ -5,10 +5,9 @@
 //! for a short render.
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
-use common::{TINY, mirrors_text, stderr};
-use std::fs;
+use crate::common::{TINY, mirrors_text, stderr};
 use std::path::Path;
 use std::process::Command;
 
@@ -30,16 +29,12 @@ fn on_a_terminal(dir: &Path, args: &str) -> String {
 /// AVX-512 (two mirrors, depth 10 000): well past the bar's one second on
 /// a machine several times faster. (At 96×72 it took one second, and a
 /// faster CI machine finished it before the bar showed.)
-fn workdir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    fs::write(dir.path().join("slow.xml"), mirrors_text(10_000, 192, 144)).unwrap();
-    fs::write(dir.path().join("tiny.xml"), TINY).unwrap();
-    dir
-}
-
 #[test]
 fn a_long_render_on_a_terminal_shows_its_progress() {
-    let dir = workdir();
+    let dir = common::folder_with(&[
+        ("slow.xml", &mirrors_text(10_000, 192, 144)),
+        ("tiny.xml", TINY),
+    ]);
     let shown = on_a_terminal(dir.path(), "slow.xml -out a.png --threads 1");
     assert!(shown.contains('%'), "{shown:?}");
     assert!(shown.contains("Mrays/s"), "{shown:?}");
@@ -51,7 +46,10 @@ fn a_long_render_on_a_terminal_shows_its_progress() {
 
 #[test]
 fn no_bar_when_quiet_piped_or_short() {
-    let dir = workdir();
+    let dir = common::folder_with(&[
+        ("slow.xml", &mirrors_text(10_000, 192, 144)),
+        ("tiny.xml", TINY),
+    ]);
     let quiet = on_a_terminal(dir.path(), "slow.xml -out b.png --threads 1 --quiet");
     assert!(!quiet.contains('%'), "{quiet:?}");
     let short = on_a_terminal(dir.path(), "tiny.xml -out c.png");

@@ -3,19 +3,19 @@
 //! merges with files other programs saved, and the questions asked before
 //! anything is dropped or replaced. One test per defect found by trying
 //! the app by hand (numbered as in the issue), then the features.
-#![cfg(feature = "gui")]
 
-use std::path::{Path, PathBuf};
+use crate::common;
+use crate::util::{app_on, ka, parse, read, step_until};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::{Command, RayOfLightApp};
 use rayoflight::gui::document::{Document, Reload, SaveError, fingerprint_file};
-use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
-use rayoflight::scene::edit::{Coef, Edit, Field, Item, NewElement, Owner, Value};
+use rayoflight::scene::edit::{Edit, Field, Item, NewElement, Owner, Value};
 use rayoflight::scene::merge::Choice;
 use rayoflight::scene::{self, Illumination, Scene, Shape};
 
@@ -72,51 +72,6 @@ const RED_BLOCK: &str = r#"  <!-- RED sphere, left -->
   </sphere>
 "#;
 
-fn parse(text: &str) -> Scene {
-    scene::parse(text, Path::new("t.xml")).unwrap()
-}
-
-fn file_with(text: &str) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    std::fs::write(&path, text).unwrap();
-    (dir, path)
-}
-
-fn ka(object: usize) -> Field {
-    Field::Material {
-        object,
-        coef: Coef::Ka,
-    }
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap()
-}
-
-fn app_on(doc: Document) -> Harness<'static, RayOfLightApp> {
-    let app = RayOfLightApp::new(&egui::Context::default(), doc, Persisted::in_memory());
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
-    harness.run_steps(3);
-    harness
-}
-
-/// Steps the app until `done` holds (at most 10 s).
-fn step_until(
-    harness: &mut Harness<'_, RayOfLightApp>,
-    what: &str,
-    done: impl Fn(&RayOfLightApp) -> bool,
-) {
-    let start = Instant::now();
-    while !done(harness.state()) {
-        assert!(start.elapsed() < Duration::from_secs(10), "{what}");
-        harness.step();
-        std::thread::sleep(Duration::from_millis(10));
-    }
-}
-
 fn ctrl(harness: &mut Harness<'_, RayOfLightApp>, key: egui::Key) {
     harness.key_press_modifiers(egui::Modifiers::COMMAND, key);
     harness.run_steps(2);
@@ -137,14 +92,14 @@ fn until_saved(harness: &mut Harness<'_, RayOfLightApp>) {
 // ----- the defects -----
 
 #[test]
-fn defect_1_opening_a_scene_never_changes_it() {
+fn opening_a_scene_never_changes_it() {
     let extreme = SCENE
         .replace(r#"width="16""#, r#"width="9000""#)
         .replace(r#"height="12""#, r#"height="1""#)
         .replace(r#"eyeDistance="2""#, r#"eyeDistance="1e-7""#);
     let tiny_far = std::fs::read_to_string("scenes/study/tiny-far.xml").unwrap();
     for text in [extreme, tiny_far] {
-        let (_dir, path) = file_with(&text);
+        let (_dir, path) = common::scene_file("scene.xml", &text);
         let mut harness = app_on(Document::open(&path).unwrap());
         // Open everything the panel can show.
         for label in ["Transformation (1 step)", "Transformation (2 steps)"] {
@@ -162,8 +117,8 @@ fn defect_1_opening_a_scene_never_changes_it() {
 }
 
 #[test]
-fn defect_2_removing_an_element_keeps_every_other_elements_text() {
-    let (_dir, path) = file_with(SCENE);
+fn removing_an_element_keeps_every_other_elements_text() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Remove(Item::Object(0))).unwrap();
     doc.save().unwrap();
@@ -193,8 +148,8 @@ fn defect_2_removing_an_element_keeps_every_other_elements_text() {
 }
 
 #[test]
-fn defect_3_ctrl_s_never_writes_over_a_file_that_does_not_load() {
-    let (_dir, path) = file_with(SCENE);
+fn ctrl_s_never_writes_over_a_file_that_does_not_load() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     let broken = SCENE.replace(
         "<model type=\"phong\"/>",
@@ -214,8 +169,8 @@ fn defect_3_ctrl_s_never_writes_over_a_file_that_does_not_load() {
 }
 
 #[test]
-fn defect_3_ctrl_s_right_after_another_program_wrote_keeps_its_text() {
-    let (_dir, path) = file_with(SCENE);
+fn ctrl_s_right_after_another_program_wrote_keeps_its_text() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     // `cp other.xml scene.xml`, then Ctrl+S before the watcher said a word.
     let other = SCENE.replace(
@@ -243,8 +198,8 @@ fn defect_3_ctrl_s_right_after_another_program_wrote_keeps_its_text() {
 }
 
 #[test]
-fn defect_3_ctrl_s_with_the_conflict_question_open_writes_nothing() {
-    let (_dir, path) = file_with(SCENE);
+fn ctrl_s_with_the_conflict_question_open_writes_nothing() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut harness = app_on(Document::open(&path).unwrap());
     harness.get_by_label("lambert").click();
     harness.run_steps(2);
@@ -252,9 +207,12 @@ fn defect_3_ctrl_s_with_the_conflict_question_open_writes_nothing() {
     // Another program changes the same value; the watcher reports it.
     let theirs = SCENE.replace("type=\"phong\"", "type=\"ambient\"");
     std::fs::write(&path, &theirs).unwrap();
-    step_until(&mut harness, "the conflict question never came", |app| {
-        app.document().conflict().is_some()
-    });
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the conflict question never came",
+        |app| app.document().conflict().is_some(),
+    );
     harness.run_steps(2);
     harness.get_by_label("The file changed on disk");
     ctrl(&mut harness, egui::Key::S);
@@ -269,8 +227,8 @@ fn defect_3_ctrl_s_with_the_conflict_question_open_writes_nothing() {
 }
 
 #[test]
-fn defect_4_unsaved_edits_are_applied_onto_the_other_programs_version() {
-    let (_dir, path) = file_with(SCENE);
+fn unsaved_edits_are_applied_onto_the_other_programs_version() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(1), Value::Number(0.5))).unwrap();
     let theirs = SCENE
@@ -293,8 +251,8 @@ fn defect_4_unsaved_edits_are_applied_onto_the_other_programs_version() {
 }
 
 #[test]
-fn defect_5_a_file_written_back_to_an_older_content_is_seen() {
-    let (_dir, path) = file_with(SCENE);
+fn a_file_written_back_to_an_older_content_is_seen() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     let a = SCENE.replace("type=\"phong\"", "type=\"lambert\"");
     std::fs::write(&path, &a).unwrap();
@@ -337,8 +295,8 @@ fn next_loaded(rx: &std::sync::mpsc::Receiver<FileEvent>) -> Scene {
 }
 
 #[test]
-fn defect_5_the_watcher_reports_a_content_it_reported_before() {
-    let (_dir, path) = file_with(SCENE);
+fn the_watcher_reports_a_content_it_reported_before() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let (rx, _watcher) = watch(&path);
     let a = SCENE.replace("type=\"phong\"", "type=\"lambert\"");
     let b = SCENE.replace("type=\"phong\"", "type=\"ambient\"");
@@ -356,7 +314,7 @@ fn defect_5_the_watcher_reports_a_content_it_reported_before() {
 
 #[cfg(unix)]
 #[test]
-fn defect_6_a_symlinked_scene_is_written_and_watched_through_the_link() {
+fn a_symlinked_scene_is_written_and_watched_through_the_link() {
     let dir = tempfile::tempdir().unwrap();
     std::fs::create_dir(dir.path().join("work")).unwrap();
     std::fs::create_dir(dir.path().join("real")).unwrap();
@@ -381,7 +339,7 @@ fn defect_6_a_symlinked_scene_is_written_and_watched_through_the_link() {
 }
 
 #[test]
-fn defect_7_a_folder_deleted_and_made_again_is_watched_again() {
+fn a_folder_deleted_and_made_again_is_watched_again() {
     let dir = tempfile::tempdir().unwrap();
     let folder = dir.path().join("d");
     std::fs::create_dir(&folder).unwrap();
@@ -405,8 +363,8 @@ fn defect_7_a_folder_deleted_and_made_again_is_watched_again() {
 }
 
 #[test]
-fn defect_8_nothing_drops_unsaved_edits_or_replaces_a_file_without_asking() {
-    let (dir, path) = file_with(SCENE);
+fn nothing_drops_unsaved_edits_or_replaces_a_file_without_asking() {
+    let (dir, path) = common::scene_file("scene.xml", SCENE);
     let other = dir.path().join("other.xml");
     std::fs::write(
         &other,
@@ -457,7 +415,7 @@ fn defect_8_nothing_drops_unsaved_edits_or_replaces_a_file_without_asking() {
 /// report of the save arrived after the switch).
 #[test]
 fn save_first_then_open_shows_the_file_opened() {
-    let (dir, path) = file_with(SCENE);
+    let (dir, path) = common::scene_file("scene.xml", SCENE);
     let other = dir.path().join("other.xml");
     let other_text = SCENE.replace(r#"type="phong""#, r#"type="ambient""#);
     std::fs::write(&other, &other_text).unwrap();
@@ -485,8 +443,8 @@ fn save_first_then_open_shows_the_file_opened() {
 }
 
 #[test]
-fn defect_9_enter_in_an_untouched_angle_field_changes_nothing() {
-    let (_dir, path) = file_with(SCENE);
+fn enter_in_an_untouched_angle_field_changes_nothing() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut harness = app_on(Document::open(&path).unwrap());
     harness.get_by_label("#3 BLUE sphere").click();
     harness.run_steps(2);
@@ -507,9 +465,9 @@ fn defect_9_enter_in_an_untouched_angle_field_changes_nothing() {
 }
 
 #[test]
-fn defect_10_a_file_broken_at_launch_opens_with_the_error_and_waits() {
+fn a_file_broken_at_launch_opens_with_the_error_and_waits() {
     let broken = SCENE.replace("<model type=\"phong\"/>", "<model type=\"phong\">");
-    let (_dir, path) = file_with(&broken);
+    let (_dir, path) = common::scene_file("scene.xml", &broken);
     let doc = Document::open(&path).unwrap();
     assert!(doc.is_placeholder());
     assert!(
@@ -524,17 +482,20 @@ fn defect_10_a_file_broken_at_launch_opens_with_the_error_and_waits() {
     assert_eq!(read(&path), broken);
     // The fix arrives through the watcher.
     std::fs::write(&path, SCENE).unwrap();
-    step_until(&mut harness, "the fixed file never loaded", |app| {
-        !app.document().is_placeholder()
-    });
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the fixed file never loaded",
+        |app| !app.document().is_placeholder(),
+    );
     let doc = harness.state().document();
     assert_eq!(doc.scene(), &parse(SCENE));
     assert!(doc.error().is_none() && !doc.has_unsaved_edits());
 }
 
 #[test]
-fn defect_11_a_picked_object_opens_once_and_then_folds() {
-    let (_dir, path) = file_with(SCENE);
+fn a_picked_object_opens_once_and_then_folds() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut harness = app_on(Document::open(&path).unwrap());
     // The middle of the picture is the green sphere.
     harness.state_mut().pick(8.0, 6.0);
@@ -564,7 +525,7 @@ fn defect_11_a_picked_object_opens_once_and_then_folds() {
 
 #[test]
 fn undo_and_redo_name_the_step_and_survive_a_save() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(1), Value::Number(0.5))).unwrap();
     doc.apply(Edit::Remove(Item::Light(1))).unwrap();
@@ -586,7 +547,7 @@ fn undo_and_redo_name_the_step_and_survive_a_save() {
 
 #[test]
 fn revert_is_one_step_and_keeps_every_elements_text() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(1), Value::Number(0.5))).unwrap();
     doc.save().unwrap();
@@ -614,7 +575,7 @@ fn revert_is_one_step_and_keeps_every_elements_text() {
 
 #[test]
 fn a_whole_drag_is_one_undo_step() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     for v in [0.3, 0.4, 0.5] {
         doc.apply_step(vec![Edit::Set(ka(0), Value::Number(v))], true)
@@ -633,7 +594,7 @@ fn a_whole_drag_is_one_undo_step() {
 
 #[test]
 fn ctrl_z_and_the_edit_menu_undo_and_redo_in_the_app() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut harness = app_on(Document::open(&path).unwrap());
     harness.get_by_label("lambert").click();
     harness.run_steps(2);
@@ -664,7 +625,7 @@ fn ctrl_z_and_the_edit_menu_undo_and_redo_in_the_app() {
 
 #[test]
 fn conflicts_show_both_values_and_either_can_win() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(0), Value::Number(0.5))).unwrap();
     doc.apply(Edit::Set(
@@ -705,7 +666,7 @@ fn conflicts_show_both_values_and_either_can_win() {
 /// drag, and choosing on one row could save a value no row showed.
 #[test]
 fn a_dragged_value_is_one_conflict() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     for v in [0.25, 0.3, 0.35, 0.4, 0.45] {
         doc.apply_step(vec![Edit::Set(ka(0), Value::Number(v))], true)
@@ -726,7 +687,7 @@ fn a_dragged_value_is_one_conflict() {
 
 #[test]
 fn object_labels_come_from_the_comment_above() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let mut doc = Document::open(&path).unwrap();
     assert_eq!(doc.object_label(0), "#1 RED sphere");
     assert_eq!(doc.object_label(2), "#3 BLUE sphere");
@@ -739,7 +700,7 @@ fn object_labels_come_from_the_comment_above() {
 
 #[test]
 fn the_object_search_finds_by_number_and_by_label() {
-    let (_dir, path) = file_with(SCENE);
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
     let doc = Document::open(&path).unwrap();
     assert_eq!(doc.find_objects("2"), [1]);
     assert_eq!(doc.find_objects("#3"), [2]);
@@ -1013,7 +974,7 @@ fn a_save_runs_beside_the_window_and_edits_made_meanwhile_stay_unsaved() {
         })
         .collect();
     let text = SCENE.replacen("<scene>\n", &format!("<scene>\n{spheres}"), 1);
-    let (_dir, path) = file_with(&text);
+    let (_dir, path) = common::scene_file("scene.xml", &text);
     let mut harness = app_on(Document::open(&path).unwrap());
     harness.get_by_label("lambert").click();
     harness.run_steps(2);

@@ -3,8 +3,7 @@
 
 use std::path::Path;
 
-mod common;
-use common::Rng;
+use crate::common::Rng;
 
 use rayoflight::math::{Transform, TransformStep, Vec3};
 use rayoflight::scene::edit::EditError;

@@ -4,9 +4,9 @@
 //! unclamped sum) to the last bit. Also: anti-aliasing, --set, a pixel
 //! outside the image, the text form.
 
-mod common;
+use crate::common;
 
-use common::{Rng, rayoflight, stderr, stdout};
+use crate::common::{Rng, rayoflight, stderr, stdout};
 use serde_json::Value;
 use std::path::Path;
 

@@ -1,4 +1,4 @@
-//! The README's examples, run as a newcomer would type them (issue 28):
+//! The README's examples, run as a newcomer would type them:
 //! every ```` ```console ```` block is a transcript — `$ command` lines,
 //! each followed by what it prints (stdout and stderr together) — and is
 //! run in a fresh folder holding a copy of `scenes/`, with the built

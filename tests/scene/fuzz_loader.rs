@@ -10,8 +10,8 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::Path;
 use std::time::{Duration, Instant};
 
-mod common;
-use common::{Rng, env_or};
+use crate::common;
+use crate::common::{Rng, env_or};
 
 const NUMBERS: &[&str] = &[
     "1e308",
@@ -62,7 +62,7 @@ const SNIPPETS: &[&str] = &[
     "\"",
     "'",
     "=",
-    // Well-formedness that quick-xml does not check (issue 26, item 18).
+    // Well-formedness that quick-xml does not check.
     "\u{0}",
     "\u{1}",
     "\u{c}",
@@ -204,7 +204,7 @@ fn fuzz_parse_and_render() {
     assert!(runs > 0);
 }
 
-/// The differential oracle of well-formed XML (issue 26, item 18): every
+/// The differential oracle of well-formed XML: every
 /// mutated input that libxml2 (`xmllint --noout`) finds not well-formed
 /// must be refused with a line and column. (The converse need not hold: a
 /// well-formed file can break the scene format.) Inputs go to xmllint in

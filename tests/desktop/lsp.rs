@@ -1,10 +1,10 @@
-//! `rayoflight lsp` with a real client (issue 29): Neovim, headless, its
+//! `rayoflight lsp` with a real client: Neovim, headless, its
 //! own LSP client scripted in Lua (`tests/lsp/client.lua`), on a copy of
 //! the example scene. Diagnostics come at the right place after
 //! non-ASCII text as the buffer changes, and go when it is fixed;
 //! completion, hover and symbols answer; the file is never written.
 
-mod common;
+use crate::common;
 
 use std::fs;
 use std::path::Path;
@@ -368,7 +368,7 @@ fn write_framed(
     input.write_all(tail.as_bytes())
 }
 
-/// Issue 43, item 4: a header cannot exhaust the server. A length of a
+/// A header cannot exhaust the server. A length of a
 /// terabyte announced, with or without its bytes, aborted it ("memory
 /// allocation of 1000000000000 bytes failed"); now the message is
 /// refused for its size, said to the editor and on stderr, and the

@@ -10,7 +10,7 @@
 //! `target/golden-diff/<name>.png` (our render next to it as
 //! `<name>-ours.png`).
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -7,26 +7,19 @@
 //! the binary is run as `nobody` (util-linux `runuser`).
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
-use common::{TINY, files_in, stderr};
+use crate::common::{TINY, files_in, stderr};
 use std::fs;
 use std::os::unix::fs::PermissionsExt;
 use std::path::Path;
 use std::process::{Command, Output};
 
-fn is_root() -> bool {
-    Command::new("id")
-        .arg("-u")
-        .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
-}
-
 /// Runs the binary headless; as `nobody` when we are root, so that file
 /// permissions mean something.
 fn run(dir: &Path, args: &[&str], unprivileged: bool) -> Output {
     let bin = env!("CARGO_BIN_EXE_rayoflight");
-    let mut command = if unprivileged && is_root() {
+    let mut command = if unprivileged && common::is_root() {
         let mut c = Command::new("runuser");
         c.args(["-u", "nobody", "--", bin]);
         c
@@ -43,23 +36,11 @@ fn run(dir: &Path, args: &[&str], unprivileged: bool) -> Output {
 }
 
 /// A directory anyone may enter, holding the tiny scene.
-fn workdir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).unwrap();
-    fs::write(dir.path().join("tiny.xml"), TINY).unwrap();
-    fs::set_permissions(
-        dir.path().join("tiny.xml"),
-        fs::Permissions::from_mode(0o644),
-    )
-    .unwrap();
-    dir
-}
-
 #[test]
 fn a_full_disk_is_reported_and_the_old_image_kept() {
     // A full file system of its own: an 8 KiB tmpfs, filled, mounted in a
     // private mount namespace (unshare) so that nothing else sees it.
-    let dir = workdir();
+    let dir = common::folder_with(&[("tiny.xml", TINY)]);
     let full = dir.path().join("full");
     fs::create_dir(&full).unwrap();
     let script = format!(
@@ -71,7 +52,7 @@ fn a_full_disk_is_reported_and_the_old_image_kept() {
         bin = env!("CARGO_BIN_EXE_rayoflight"),
     );
     let mut command = Command::new("unshare");
-    if !is_root() {
+    if !common::is_root() {
         command.arg("--map-root-user");
     }
     let o = command
@@ -92,7 +73,7 @@ fn a_full_disk_is_reported_and_the_old_image_kept() {
 
 #[test]
 fn a_read_only_directory_is_reported_without_leftovers() {
-    let dir = workdir();
+    let dir = common::folder_with(&[("tiny.xml", TINY)]);
     let out = dir.path().join("ro");
     fs::create_dir(&out).unwrap();
     fs::set_permissions(&out, fs::Permissions::from_mode(0o555)).unwrap();
@@ -108,7 +89,7 @@ fn a_read_only_directory_is_reported_without_leftovers() {
 
 #[test]
 fn a_read_only_image_is_not_replaced() {
-    let dir = workdir();
+    let dir = common::folder_with(&[("tiny.xml", TINY)]);
     let image = dir.path().join("tiny.png");
     fs::write(&image, b"old").unwrap();
     fs::set_permissions(&image, fs::Permissions::from_mode(0o444)).unwrap();
@@ -121,7 +102,7 @@ fn a_read_only_image_is_not_replaced() {
 
 #[test]
 fn an_unreadable_scene_is_reported() {
-    let dir = workdir();
+    let dir = common::folder_with(&[("tiny.xml", TINY)]);
     fs::set_permissions(
         dir.path().join("tiny.xml"),
         fs::Permissions::from_mode(0o000),

@@ -9,19 +9,13 @@
 //! (10 million objects) are checked just over it, where the loader stops.
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
-use common::{TINY, mirrors_text, stderr, stdout};
+use crate::common::{TINY, mirrors_text, stderr, stdout};
 use std::fs;
 use std::os::unix::fs::PermissionsExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-/// Rows whose behaviour another branch of issue 26 changes: their check
-/// runs, and while it fails on this branch that is reported, not a
-/// failure. A pending row whose check passes fails the test, so that the
-/// integrator empties this list once the branches are merged.
-const PENDING_OTHER_BRANCH: &[&str] = &[];
 
 /// One row of the table: what is limited, the limit, the error text
 /// (backquoted in the table; `…` stands for any text).
@@ -107,7 +101,7 @@ fn every_documented_limit_is_the_programs() {
     let mut failures = Vec::new();
     for row in &rows {
         if !CHECKS.iter().any(|(what, _)| *what == row.what) {
-            failures.push(format!("{}: no check in tests/limits.rs", row.what));
+            failures.push(format!("{}: no check in tests/cli/limits.rs", row.what));
         }
     }
     for (what, _) in CHECKS {
@@ -115,27 +109,14 @@ fn every_documented_limit_is_the_programs() {
             failures.push(format!("{what}: checked, but not in docs/limits.md"));
         }
     }
-    for pending in PENDING_OTHER_BRANCH {
-        assert!(
-            CHECKS.iter().any(|(what, _)| what == pending),
-            "{pending}: pending, but no such check"
-        );
-    }
     for row in &rows {
         let Some((_, check)) = CHECKS.iter().find(|(what, _)| *what == row.what) else {
             continue;
         };
-        let dir = workdir();
+        let dir = common::folder_with(&[("tiny.xml", TINY)]);
         let result = check(dir.path(), &row.error);
-        let pending = PENDING_OTHER_BRANCH.contains(&row.what.as_str());
-        match (result, pending) {
-            (Ok(()), false) => {}
-            (Err(why), false) => failures.push(format!("{}: {why}", row.what)),
-            (Ok(()), true) => failures.push(format!(
-                "{}: the check passes now: remove it from PENDING_OTHER_BRANCH",
-                row.what
-            )),
-            (Err(why), true) => eprintln!("pending (another branch): {}: {why}", row.what),
+        if let Err(why) = result {
+            failures.push(format!("{}: {why}", row.what));
         }
     }
     assert!(failures.is_empty(), "\n{}", failures.join("\n"));
@@ -145,13 +126,6 @@ fn every_documented_limit_is_the_programs() {
 
 /// A folder anyone may enter (some checks run as `nobody`) holding
 /// `tiny.xml`.
-fn workdir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    fs::set_permissions(dir.path(), fs::Permissions::from_mode(0o755)).unwrap();
-    fs::write(dir.path().join("tiny.xml"), TINY).unwrap();
-    dir
-}
-
 fn bin() -> &'static str {
     env!("CARGO_BIN_EXE_rayoflight")
 }
@@ -237,13 +211,6 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     fs::write(&path, text).unwrap();
     path
-}
-
-fn is_root() -> bool {
-    Command::new("id")
-        .arg("-u")
-        .output()
-        .is_ok_and(|o| String::from_utf8_lossy(&o.stdout).trim() == "0")
 }
 
 // ----- scene loading -----
@@ -598,7 +565,7 @@ fn transformation(dir: &Path, error: &str) -> Result<(), String> {
 }
 
 fn not_writable(dir: &Path, error: &str) -> Result<(), String> {
-    if !is_root() {
+    if !common::is_root() {
         return Err("needs root, to own files as other users".into());
     }
     // Another user's private image in a folder anyone may write.
@@ -706,12 +673,8 @@ fn webp_size(dir: &Path, error: &str) -> Result<(), String> {
     side_limit(dir, error, "webp", 16_383)
 }
 
-fn mkfifo(path: &Path) {
-    assert!(Command::new("mkfifo").arg(path).status().unwrap().success());
-}
-
 fn image_to_special(dir: &Path, error: &str) -> Result<(), String> {
-    mkfifo(&dir.join("pipe.png"));
+    common::mkfifo(&dir.join("pipe.png"));
     refused(
         &run(dir, &["tiny.xml", "-out", "pipe.png"]),
         1,
@@ -730,7 +693,7 @@ fn image_to_special(dir: &Path, error: &str) -> Result<(), String> {
 
 fn text_to_special(dir: &Path, error: &str) -> Result<(), String> {
     let pipe = dir.join("pipe.pov");
-    mkfifo(&pipe);
+    common::mkfifo(&pipe);
     let o = run(dir, &["export-pov", "tiny.xml", "-out", "pipe.pov"]);
     refused(&o, 1, error, "a FIFO nobody reads")?;
     // With a reader, the text goes into the FIFO, which stays one.
@@ -808,7 +771,7 @@ fn closed_stdout(dir: &Path, error: &str) -> Result<(), String> {
 }
 
 fn sticky_links(dir: &Path, error: &str) -> Result<(), String> {
-    if !is_root() {
+    if !common::is_root() {
         return Err("needs root, to own files as other users".into());
     }
     // A /tmp of our own: anyone may write, the sticky bit set, owned by

@@ -5,9 +5,9 @@
 //! geometric passes agree with the pick (object), are unit (normal) and
 //! positive (depth).
 
-mod common;
+use crate::common;
 
-use common::{rayoflight, stderr};
+use crate::common::{rayoflight, stderr};
 use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{self, Cancel, Pass, PassImage, Progress, object_ids, prepare};
 use rayoflight::scene::{self, Scene};

@@ -580,7 +580,7 @@ fn journal_entries(home: &Path) -> Vec<PathBuf> {
         .unwrap_or_default()
 }
 
-/// Issue 25, item 3, on the real process: unsaved edits outlive kill -9
+/// On the real process: unsaved edits outlive kill -9
 /// and a logout's SIGTERM, come back on screen on the next start, and
 /// Ctrl+S then writes them.
 #[test]
@@ -814,7 +814,7 @@ fn neovim(opened: &Window, script: &str, run: &str, vars: &[(&str, &str)]) -> Ki
     Killed(editor)
 }
 
-/// The editor's unsaved text on screen (issue 29): Neovim with
+/// The editor's unsaved text on screen: Neovim with
 /// `rayoflight lsp` turns the red sphere blue without saving, and the
 /// window shows it, the file untouched and the panel read-only; a broken
 /// text keeps the blue picture with the banner; when the editor quits,
@@ -890,7 +890,7 @@ fn outline_at(image: &image::RgbImage) -> (f64, usize) {
     (x, n)
 }
 
-/// Picture ↔ source (issue 29): Neovim with `rayoflight lsp` on the
+/// Picture ↔ source: Neovim with `rayoflight lsp` on the
 /// app's file puts its cursor in the red sphere's element, and the window
 /// outlines the red sphere; a click on the green sphere in the window
 /// makes the server ask Neovim to show the green sphere's element
@@ -1018,7 +1018,7 @@ fn until_writing(dir: &Path) {
     }
 }
 
-/// Issue 44, item 4, on the real process: SIGTERM while Ctrl+S writes a
+/// On the real process: SIGTERM while Ctrl+S writes a
 /// large scene stops the save, and its temporary file (as big as the
 /// file) is gone before the app ends; the file is as it was and the edit
 /// in the journal. `kill -9` in the middle of a save leaves the temporary

@@ -20,9 +20,9 @@
 //! - A write past the file-size limit fails in one line, nothing left.
 #![cfg(target_os = "linux")]
 
-mod common;
+use crate::common;
 
-use common::{files_in, rayoflight, stderr};
+use crate::common::{files_in, rayoflight, stderr};
 use rayoflight::cluster::part::{self, Part};
 use rayoflight::cluster::region::Region;
 use rayoflight::render::request::RenderRequest;
@@ -448,7 +448,7 @@ fn out_of_descriptors_edit_says_so_and_blames_no_one() {
     assert!(edited_at.is_some_and(|n| n <= 8), "{edited_at:?}");
 }
 
-/// Issue 43, item 5: `study` on a 4000×4000 scene under 256 MB of address
+/// `study` on a 4000×4000 scene under 256 MB of address
 /// space refused in one line before printing anything, with or without
 /// more threads; it aborted ("memory allocation of 144096000 bytes
 /// failed") when it drew a failure's picture. The same scene at a size

@@ -1,13 +1,11 @@
-//! At home on the desktop, in the shell and in the editor (issue 28): the
+//! At home on the desktop, in the shell and in the editor: the
 //! completions a real bash computes from the generated script, the man
 //! pages as man renders them, the schema as xmllint applies it to every
 //! scene and to the bad-input corpus, `install-desktop` into a temporary
 //! data folder and back out, the repository's desktop files through
 //! desktop-file-validate and appstreamcli, and `new`.
 
-mod common;
-
-use common::{files_in, rayoflight, stderr, stdout, tool};
+use crate::common::{files_in, rayoflight, stderr, stdout, tool};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -842,7 +840,7 @@ fn new_writes_the_example_and_never_over_a_file() {
     assert_eq!(stdout(&o), rayoflight::EXAMPLE_SCENE);
 }
 
-/// Issue 43, item 6: install-desktop writes and deletes only what it
+/// Install-desktop writes and deletes only what it
 /// owns. After an install, a file another program replaced and an icon
 /// the user edited are left by `--uninstall` and named (it deleted both);
 /// a desktop entry replaced by a link to the user's notes is not written

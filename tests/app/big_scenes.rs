@@ -1,5 +1,5 @@
 //! A big scene costs the app what it costs the command line, not a copy
-//! more per place that holds it (issue 15, item 6): the objects of the
+//! more per place that holds it: the objects of the
 //! file's scene, the edited one, the one being rendered and the one read
 //! back after a save are shared where they are the same; a scene is
 //! prepared once however often the camera moves; a save scans only the
@@ -9,10 +9,7 @@
 //! memory a save leaves behind in the allocator, which only memory shows
 //! (`src/cli/allocator.rs`).
 
-// The app's document, watcher and worker are in the GUI build.
-#![cfg(feature = "gui")]
-
-mod common;
+use crate::common;
 
 use rayoflight::gui::document::{Document, FileRead, Reload, SaveStep};
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};

@@ -3,9 +3,8 @@
 //! an undoable edit of the camera that saves to a file the CLI renders to
 //! the same picture; a click still selects; Home returns to the file's
 //! camera.
-#![cfg(feature = "gui")]
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -46,16 +45,7 @@ const SCENE: &str = r#"<scene>
 const MIDDLE: Pos2 = Pos2::new(780.0, 460.0);
 
 fn app(path: &Path) -> Harness<'static, RayOfLightApp> {
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::open(path).unwrap(),
-        Persisted::in_memory(),
-    );
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
-    harness.run_steps(3);
-    harness
+    crate::util::app_on(Document::open(path).unwrap())
 }
 
 /// The app on `path` once its first full picture is on screen: a click
@@ -712,7 +702,7 @@ fn view_pass_shows_a_pass_and_the_inspector_its_values() {
     assert_eq!(harness.state().pass_shown(), (render::Pass::Final, None));
 }
 
-/// Issue 25, item 7: what a gesture writes is the shortest decimal within a
+/// What a gesture writes is the shortest decimal within a
 /// fraction of a pixel, with no identity steps: many orbits there and
 /// back, a light dragged, and the file holds short numbers only.
 #[test]
@@ -768,7 +758,7 @@ fn gestures_write_no_float_noise() {
     );
 }
 
-/// Issue 25, item 9: a light's marker and G need only the camera's
+/// A light's marker and G need only the camera's
 /// projection, so they work with a non-uniformly scaled (or sheared)
 /// camera, which orbit, pan and dolly refuse with a message.
 #[test]

@@ -7,9 +7,9 @@
 //! RAYOFLIGHT_FUZZ_SECONDS (default 5, CI 60); repeatable with
 //! RAYOFLIGHT_FUZZ_SEED.
 
-mod common;
+use crate::common;
 
-use common::{Rng, env_or, files_in};
+use crate::common::{Rng, env_or, files_in};
 use rayoflight::scene::edit::{Edit, Edited, Field, Item, NewElement};
 use rayoflight::scene::{self, splice};
 use std::panic::{AssertUnwindSafe, catch_unwind};

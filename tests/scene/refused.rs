@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use rayoflight::scene::{self, LoadError, LoadErrorKind, Position};
 
-mod common;
+use crate::common;
 
 /// File, expected `(line, column)` (`None`: the error has no position), and
 /// words the message must contain.

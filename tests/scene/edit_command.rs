@@ -2,11 +2,11 @@
 //! binary: what the scene file holds afterwards, byte for byte, and that
 //! every refusal leaves it as it was.
 
-mod common;
+use crate::common;
 
-use common::{files_in, rayoflight, stderr, stdout};
+use crate::common::{files_in, rayoflight, stderr, stdout};
 use std::fs;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Output;
 
 /// Two spheres and a light, 8×8, with comments and formatting that an edit
@@ -35,13 +35,6 @@ const SCENE: &str = r#"<?xml version="1.0"?>
 "#;
 
 /// A temporary directory holding `s.xml`.
-fn workdir() -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("s.xml");
-    fs::write(&scene, SCENE).unwrap();
-    (dir, scene)
-}
-
 fn succeeds(o: &Output) {
     assert!(o.status.success(), "{}", stderr(o));
     assert_eq!(stderr(o), "");
@@ -55,7 +48,7 @@ fn scene_with(from: &str, to: &str) -> String {
 
 #[test]
 fn edit_in_place_changes_only_the_edited_value() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let o = rayoflight(
         dir.path(),
         &["edit", "s.xml", "--set", "object[2].material.ka=0.5"],
@@ -71,7 +64,7 @@ fn edit_in_place_changes_only_the_edited_value() {
 
 #[test]
 fn several_edits_keep_every_other_byte() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let o = rayoflight(
         dir.path(),
         &[
@@ -97,7 +90,7 @@ fn several_edits_keep_every_other_byte() {
 
 #[test]
 fn out_writes_elsewhere_and_leaves_the_scene_untouched() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     for (args, out) in [
         (
             &["edit", "s.xml", "--set", "camera.width=4", "-out", "a.xml"][..],
@@ -134,7 +127,7 @@ fn out_writes_elsewhere_and_leaves_the_scene_untouched() {
 
 #[test]
 fn edits_apply_in_the_order_given() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     // Adding first makes object[3] exist for the --set after it.
     succeeds(&rayoflight(
         dir.path(),
@@ -159,7 +152,7 @@ fn edits_apply_in_the_order_given() {
     );
 
     // The other way round, object[3] does not exist yet: nothing is done.
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let o = rayoflight(
         dir.path(),
         &[
@@ -180,7 +173,7 @@ fn edits_apply_in_the_order_given() {
 
     // Interleaved flags keep their relative order: remove object 1, then
     // the old object 2 is object[1].
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     succeeds(&rayoflight(
         dir.path(),
         &[
@@ -204,7 +197,7 @@ fn edits_apply_in_the_order_given() {
 
 #[test]
 fn remove_takes_the_comment_above_along() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     succeeds(&rayoflight(
         dir.path(),
         &["edit", "s.xml", "--remove", "object[2]"],
@@ -217,7 +210,7 @@ fn remove_takes_the_comment_above_along() {
 
 #[test]
 fn an_edit_that_changes_nothing_does_not_touch_the_file() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let before = fs::metadata(&scene).unwrap();
     // The value it has, in other spellings.
     for value in ["0.4", "0.40", "4e-1"] {
@@ -238,7 +231,7 @@ fn an_edit_that_changes_nothing_does_not_touch_the_file() {
 #[test]
 fn the_scene_keeps_its_mode() {
     use std::os::unix::fs::PermissionsExt;
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     fs::set_permissions(&scene, fs::Permissions::from_mode(0o640)).unwrap();
     succeeds(&rayoflight(
         dir.path(),
@@ -255,7 +248,7 @@ fn the_scene_keeps_its_mode() {
 #[cfg(unix)]
 #[test]
 fn through_a_symbolic_link_the_target_changes_and_the_link_stays() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     fs::create_dir(dir.path().join("sub")).unwrap();
     std::os::unix::fs::symlink("../s.xml", dir.path().join("sub/link.xml")).unwrap();
     succeeds(&rayoflight(
@@ -345,7 +338,7 @@ fn refused_edits_name_the_problem_and_touch_nothing() {
         ),
     ];
     for (flags, status, message) in cases {
-        let (dir, scene) = workdir();
+        let (dir, scene) = common::scene_file("s.xml", SCENE);
         let args: Vec<&str> = ["edit", "s.xml"].iter().chain(*flags).copied().collect();
         let o = rayoflight(dir.path(), &args);
         let err = stderr(&o);
@@ -359,7 +352,7 @@ fn refused_edits_name_the_problem_and_touch_nothing() {
 
 #[test]
 fn a_scene_that_does_not_load_is_an_error_with_its_position() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let broken = "<scene>\n  <camera width=\"4\" height=\"4\" eyeDistance=\"1\"/>\n  <material ka=\"-1\"/>\n</scene>\n";
     fs::write(&scene, broken).unwrap();
     let o = rayoflight(dir.path(), &["edit", "s.xml", "--set", "model.depth=3"]);
@@ -382,7 +375,7 @@ fn a_scene_that_does_not_load_is_an_error_with_its_position() {
 #[test]
 fn a_read_only_scene_is_not_replaced() {
     use std::os::unix::fs::PermissionsExt;
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     fs::set_permissions(&scene, fs::Permissions::from_mode(0o444)).unwrap();
     let o = rayoflight(dir.path(), &["edit", "s.xml", "--set", "model.depth=3"]);
     assert_eq!(o.status.code(), Some(1));
@@ -393,7 +386,7 @@ fn a_read_only_scene_is_not_replaced() {
 
 #[test]
 fn edit_help_lists_the_paths() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("s.xml", SCENE);
     let o = rayoflight(dir.path(), &["edit", "--help"]);
     succeeds(&o);
     let help = stdout(&o);
@@ -409,7 +402,7 @@ fn pixels(dir: &Path, name: &str) -> image::RgbImage {
 
 #[test]
 fn set_on_a_render_gives_the_image_of_the_edited_file() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let sets = ["object[2].material.ka=0.9", "light[1].x=-3"];
     // No --no-gui: --set alone makes the render headless, in the GUI build
     // too (there is no display here).
@@ -447,7 +440,7 @@ fn set_on_a_render_gives_the_image_of_the_edited_file() {
 
 #[test]
 fn set_works_with_the_other_render_flags() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("s.xml", SCENE);
     let set = "object[1].color.blue=1";
     succeeds(&rayoflight(
         dir.path(),
@@ -505,7 +498,7 @@ fn a_refused_set_on_a_render_writes_no_image() {
             "rayoflight: unknown flag '--remove'; see 'rayoflight --help'\n",
         ),
     ] {
-        let (dir, scene) = workdir();
+        let (dir, scene) = common::scene_file("s.xml", SCENE);
         let o = rayoflight(dir.path(), args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
         assert_eq!(stderr(&o), message);
@@ -513,7 +506,7 @@ fn a_refused_set_on_a_render_writes_no_image() {
         assert_eq!(fs::read_to_string(&scene).unwrap(), SCENE);
     }
     // --set with no scene: the usage.
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("s.xml", SCENE);
     let o = rayoflight(dir.path(), &["--set", "model.depth=1"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
@@ -523,7 +516,7 @@ fn a_refused_set_on_a_render_writes_no_image() {
     );
 }
 
-/// Issue 43, item 9: a file whose lines end with a lone CR (classic Mac
+/// A file whose lines end with a lone CR (classic Mac
 /// OS) gets an added element on a line of its own, ended the same way, as
 /// LF and CRLF files do: the result is the LF file's, its endings CR. (It
 /// was glued to the line before: `</sphere><sphere/>`.)
@@ -546,7 +539,7 @@ fn an_added_element_has_a_line_of_its_own_in_every_line_ending() {
     }
 }
 
-/// Issue 43, item 9: a file in UTF-16 without a byte order mark is named
+/// A file in UTF-16 without a byte order mark is named
 /// as such (scenes are UTF-8), not `unexpected text "\u{0}"` at 1:1.
 #[test]
 fn a_utf16_file_is_named_as_such() {

@@ -1,4 +1,4 @@
-//! The CLI at the system's edges (issues 26 and 43), through the built
+//! The CLI at the system's edges, through the built
 //! binary: links another user planted in a shared folder, as the last
 //! part of a path or a folder part, renames racing a write, files of
 //! other users, hard links, concurrent writers, signals, names that hold
@@ -10,9 +10,9 @@
 //! and the group 4000 need no entry in /etc/passwd).
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
-use common::{TINY, files_in, stderr};
+use crate::common::{TINY, files_in, stderr};
 use std::fs;
 use std::os::unix::fs::{MetadataExt, PermissionsExt, symlink};
 use std::path::{Path, PathBuf};
@@ -21,13 +21,9 @@ use std::time::{Duration, Instant};
 
 const BIN: &str = env!("CARGO_BIN_EXE_rayoflight");
 
-fn is_root() -> bool {
-    rustix::process::geteuid().is_root()
-}
-
 /// Whether a test that needs root can run: it must in CI.
 fn root_or_skip(test: &str) -> bool {
-    if is_root() {
+    if common::is_root() {
         return true;
     }
     assert!(
@@ -746,7 +742,7 @@ fn tiny_at(width: u32, height: u32) -> String {
     )
 }
 
-/// Issue 43, item 1: a write can be redirected by no rename. In a sticky
+/// A write can be redirected by no rename. In a sticky
 /// folder that everyone may write, user 65534 keeps `out.png` (hard
 /// linked, so rewritten in place) and `s.xml` (likewise), and as soon as
 /// root's temporary file appears renames its own link to root's private
@@ -856,7 +852,7 @@ fn a_rename_race_redirects_no_write() {
     assert!(won >= 3, "the race was hardly run: {outcomes:#?}");
 }
 
-/// Issue 43, item 3: the kernel's rule holds for a link in any part of a
+/// The kernel's rule holds for a link in any part of a
 /// path, not only the last. User 65534 plants, in the shared folder,
 /// links to folders of root's; every command that writes a file or makes
 /// a folder refuses to go through them, and nothing lands in root's
@@ -934,7 +930,7 @@ fn links_another_user_planted_as_folders_are_not_followed() {
     assert!(theirs.join("out.png").exists());
 }
 
-/// Issue 43, item 8: a file name cannot forge a line of output. `explain`
+/// A file name cannot forge a line of output. `explain`
 /// printed a name's line break raw (a file named `a\nFAKE LINE: render
 /// ok.xml` made a line "FAKE LINE: render ok"), and so did `study`'s
 /// table and failure summary; `study.csv` kept raw ESC and BEL bytes.
@@ -978,7 +974,7 @@ fn file_names_forge_no_line_of_output() {
     );
 }
 
-/// Issue 43, item 7: `sheet` stopped by a signal while it decodes its
+/// `sheet` stopped by a signal while it decodes its
 /// inputs (before any write) says so and exits 128 + the signal's number,
 /// as every other command; the default action ended it silently.
 #[test]
@@ -1029,7 +1025,7 @@ fn a_signal_while_the_sheet_decodes_is_said() {
     }
 }
 
-/// Issue 44, item 1: a crash during the rewrite in place of a hard-linked
+/// A crash during the rewrite in place of a hard-linked
 /// scene never leaves it mixed. `edit` of a 100 MB scene of two names is
 /// killed (SIGKILL) at several points: while it copies the old bytes
 /// aside (the file untouched), and 0, 5 and 20 ms after the rewrite's
@@ -1122,7 +1118,7 @@ fn a_crash_during_a_rewrite_in_place_is_finished_by_the_next_reader() {
     assert!(mixed_at_kill > 0, "no kill left the file mixed");
 }
 
-/// Issue 44, item 4: a write killed in the middle (`kill -9`, a power
+/// A write killed in the middle (`kill -9`, a power
 /// cut) leaves its temporary file, as big as the file; the next write
 /// beside it removes it, and the copy of a hard-linked file's old bytes
 /// that no record names. Never a file being written (locked), another
@@ -1179,7 +1175,7 @@ fn what_a_killed_write_left_is_removed_by_the_next_write_beside_it() {
     // A writer still at work holds its file locked.
     let held = fs::File::open(dir.path().join(".rayoflight-locked.tmp")).unwrap();
     held.lock().unwrap();
-    let others = is_root().then(|| {
+    let others = common::is_root().then(|| {
         let p = plant(".rayoflight-other1.tmp", true);
         chown(&p, 65534, 65534);
         p

@@ -1,11 +1,12 @@
-//! Nothing the user wrote is lost or altered (issue 25): undoing a reload
+//! Nothing the user wrote is lost or altered: undoing a reload
 //! gives back the text before it byte for byte, and unsaved edits follow
 //! their element by its identity when another program inserts, removes or
 //! moves elements around it. Each defect found by hand first, then a
 //! property test that interleaves another program's changes with the
 //! app's edits and saves.
-#![cfg(feature = "gui")]
 
+use crate::common;
+use crate::util::{app_keeping, app_on, ka, parse, read, step_until};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
@@ -19,9 +20,9 @@ use rayoflight::gui::preview::RenderState;
 use rayoflight::gui::settings::Persisted;
 use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
+use rayoflight::scene;
 use rayoflight::scene::edit::{Coef, Edit, Field, Item, Value};
 use rayoflight::scene::merge::Choice;
-use rayoflight::scene::{self, Scene};
 
 /// The example scene (`scenes/example.xml`) with comments above and inside
 /// the light, and a number spelled `-2.0e0`.
@@ -57,37 +58,15 @@ const EXAMPLE: &str = r#"<?xml version="1.0"?>
 </scene>
 "#;
 
-fn parse(text: &str) -> Scene {
-    scene::parse(text, Path::new("t.xml")).unwrap()
-}
-
-fn file_with(text: &str) -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("scene.xml");
-    std::fs::write(&path, text).unwrap();
-    (dir, path)
-}
-
-fn read(path: &Path) -> String {
-    std::fs::read_to_string(path).unwrap()
-}
-
 /// Another program writes `text`; the watcher hands it to the document.
 fn they_write(doc: &mut Document, path: &Path, text: &str) -> Reload {
     std::fs::write(path, text).unwrap();
     doc.file_loaded(text.to_owned(), parse(text))
 }
 
-fn ka(object: usize) -> Field {
-    Field::Material {
-        object,
-        coef: Coef::Ka,
-    }
-}
-
 #[test]
-fn item_1_undoing_a_reload_gives_back_the_text_byte_for_byte() {
-    let (_dir, path) = file_with(EXAMPLE);
+fn undoing_a_reload_gives_back_the_text_byte_for_byte() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     // sed -i 's/light x="1"/light x="5"/'
     let theirs = EXAMPLE.replace(r#"light x="1""#, r#"light x="5""#);
@@ -104,11 +83,11 @@ fn item_1_undoing_a_reload_gives_back_the_text_byte_for_byte() {
 }
 
 #[test]
-fn item_1_undoing_another_programs_removals_restores_their_text_in_place() {
+fn undoing_another_programs_removals_restores_their_text_in_place() {
     let red = "<!-- small red ball -->\n<sphere>\n <color red=\"1.0\" green=\"0.2\" blue=\"0.0\"/>\n <material ka=\"0.4\" kd=\"0.5\" ks=\"0.3\" m=\"1\"/>\n <transformation>\n  <translate x=\"-2\" y=\"0\" z=\"-2\"/>\n </transformation>\n</sphere>\n";
     let light = "<!-- the only light -->\n<light x=\"1\" y=\"-4\" z=\"-2.0e0\">\n <!-- white, full strength -->\n <color red=\"1.0\" green=\"1.0\" blue=\"1.0\"/>\n</light>\n";
     assert!(EXAMPLE.contains(red) && EXAMPLE.contains(light));
-    let (_dir, path) = file_with(EXAMPLE);
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     let without_red = EXAMPLE.replace(red, "");
     assert_eq!(they_write(&mut doc, &path, &without_red), Reload::Replaced);
@@ -123,8 +102,8 @@ fn item_1_undoing_another_programs_removals_restores_their_text_in_place() {
 }
 
 #[test]
-fn item_1_undoing_a_merge_and_a_revert_gives_back_their_texts() {
-    let (_dir, path) = file_with(EXAMPLE);
+fn undoing_a_merge_and_a_revert_gives_back_their_texts() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(1), Value::Number(0.9))).unwrap();
     let theirs = EXAMPLE.replace("<!-- the only light -->", "<!-- the key light -->");
@@ -150,8 +129,8 @@ fn item_1_undoing_a_merge_and_a_revert_gives_back_their_texts() {
 }
 
 #[test]
-fn item_2_an_edit_stays_on_its_object_when_another_program_inserts_above() {
-    let (_dir, path) = file_with(EXAMPLE);
+fn an_edit_stays_on_its_object_when_another_program_inserts_above() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     assert_eq!(doc.object_label(0), "#1 big green ball sphere");
     doc.apply(Edit::Set(ka(0), Value::Number(0.9))).unwrap();
@@ -169,8 +148,8 @@ fn item_2_an_edit_stays_on_its_object_when_another_program_inserts_above() {
 }
 
 #[test]
-fn item_2_an_edit_on_an_object_another_program_removed_is_a_conflict() {
-    let (_dir, path) = file_with(EXAMPLE);
+fn an_edit_on_an_object_another_program_removed_is_a_conflict() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(0), Value::Number(0.9))).unwrap();
     let green_end = EXAMPLE.find("<!-- small red ball -->").unwrap();
@@ -192,8 +171,8 @@ fn item_2_an_edit_on_an_object_another_program_removed_is_a_conflict() {
 }
 
 #[test]
-fn item_2_edits_follow_their_light_and_object_across_a_reordering() {
-    let (_dir, path) = file_with(EXAMPLE);
+fn edits_follow_their_light_and_object_across_a_reordering() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(1), Value::Number(0.25))).unwrap();
     // Another program puts the red ball first.
@@ -319,7 +298,7 @@ fn random_changes_from_both_sides_keep_every_edit_on_its_element_and_undo_to_the
         }
         text.push_str("  <light x=\"0\" y=\"-4\" z=\"-4\"/>\n  <camera width=\"8\" height=\"8\" eyeDistance=\"1\"/>\n</scene>\n");
         let original = text.clone();
-        let (_dir, path) = file_with(&text);
+        let (_dir, path) = common::scene_file("scene.xml", &text);
         let mut doc = Document::open(&path).unwrap();
         // What each ball's ka must be: the app's last edit of it, or as
         // written; a ball either side removed is gone.
@@ -446,11 +425,11 @@ fn replace_atomically(path: &Path, text: &str) {
 }
 
 #[test]
-fn item_4_a_file_fixed_before_the_watch_starts_is_shown() {
+fn a_file_fixed_before_the_watch_starts_is_shown() {
     // Broken at launch, fixed (renamed into place) before the watcher
     // starts: no event and no later stamp tells; the watcher must start
     // from the bytes the document read.
-    let (_dir, path) = file_with("<scene>\n  <sphere>\n");
+    let (_dir, path) = common::scene_file("scene.xml", "<scene>\n  <sphere>\n");
     let doc = Document::open(&path).unwrap();
     assert!(doc.is_placeholder() && doc.error().is_some());
     replace_atomically(&path, EXAMPLE);
@@ -479,8 +458,8 @@ fn item_4_a_file_fixed_before_the_watch_starts_is_shown() {
 }
 
 #[test]
-fn item_5_saving_over_a_fifo_refuses_at_once_and_the_good_file_comes_back() {
-    let (_dir, path) = file_with(EXAMPLE);
+fn saving_over_a_fifo_refuses_at_once_and_the_good_file_comes_back() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let mut doc = Document::open(&path).unwrap();
     doc.apply(Edit::Set(ka(0), Value::Number(0.9))).unwrap();
     std::fs::remove_file(&path).unwrap();
@@ -514,7 +493,7 @@ fn item_5_saving_over_a_fifo_refuses_at_once_and_the_good_file_comes_back() {
 }
 
 #[test]
-fn item_10_rayoflight_stats_0_is_off() {
+fn rayoflight_stats_0_is_off() {
     use rayoflight::gui::app::stats_wanted;
     use std::ffi::OsStr;
     for off in [
@@ -534,46 +513,33 @@ fn item_10_rayoflight_stats_0_is_off() {
 
 // ----- unsaved work outlives the process (item 3) -----
 
-/// The app on `doc`, its journal in `journal` (none without), three
-/// frames drawn.
-fn app_on(doc: Document, journal: Option<&Path>) -> Harness<'static, RayOfLightApp> {
+fn app_with_journal(doc: Document, journal: &Path) -> Harness<'static, RayOfLightApp> {
     let persisted = Persisted {
-        journal: journal.map(Path::to_owned),
+        journal: Some(journal.to_owned()),
         ..Persisted::in_memory()
     };
     app_keeping(doc, persisted)
 }
 
-/// The app on `doc`, keeping what it remembers as `persisted`, three
-/// frames drawn.
-fn app_keeping(doc: Document, persisted: Persisted) -> Harness<'static, RayOfLightApp> {
-    let app = RayOfLightApp::new(&egui::Context::default(), doc, persisted);
-    let mut harness = Harness::builder()
-        .with_size(egui::vec2(1200.0, 900.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
-    harness.run_steps(3);
-    harness
+/// Runs frames until `folder` holds `n` journal entries: an edit reaches
+/// the journal within [`JOURNALED_WITHIN`]. The time it took.
+fn until_entries(harness: &mut Harness<'_, RayOfLightApp>, folder: &Path, n: usize) -> Duration {
+    step_until(harness, JOURNALED_WITHIN, "the journal", |_| {
+        journal_entries(folder).len() == n
+    })
 }
 
-fn app_with_journal(doc: Document, journal: &Path) -> Harness<'static, RayOfLightApp> {
-    app_on(doc, Some(journal))
-}
+/// How soon an edit is in the journal (the app writes it after a short
+/// pause in the typing).
+const JOURNALED_WITHIN: Duration = Duration::from_millis(1500);
 
-/// Steps the app until `done` holds; returns how long it took (at most
-/// `limit`).
-fn step_until(
-    harness: &mut Harness<'_, RayOfLightApp>,
-    limit: Duration,
-    what: &str,
-    done: impl Fn(&RayOfLightApp) -> bool,
-) -> Duration {
-    let start = Instant::now();
-    while !done(harness.state()) {
-        assert!(start.elapsed() < limit, "{what} within {limit:?}");
-        harness.step();
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    start.elapsed()
+/// Clicks the illumination model `model` in the panel (one edit), then
+/// runs frames until the window's journal in `folder` holds it: what a
+/// user has done before a crash. The time the journal took.
+fn choose_model(harness: &mut Harness<'_, RayOfLightApp>, model: &str, folder: &Path) -> Duration {
+    harness.get_by_label(model).click();
+    harness.run_steps(1);
+    until_entries(harness, folder, 1)
 }
 
 fn journal_entries(folder: &Path) -> Vec<PathBuf> {
@@ -589,14 +555,7 @@ fn journal_entries(folder: &Path) -> Vec<PathBuf> {
 /// exit).
 fn crash_with_an_edit_journaled(path: &Path, folder: &Path) {
     let mut harness = app_with_journal(Document::open(path).unwrap(), folder);
-    harness.get_by_label("lambert").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(folder).is_empty(),
-    );
+    choose_model(&mut harness, "lambert", folder);
     crash(harness);
 }
 
@@ -612,7 +571,7 @@ fn status_says(harness: &Harness<'_, RayOfLightApp>, words: &str) -> bool {
     harness.query_by_label_contains(words).is_some()
 }
 
-/// Issue 43, item 2: a journal folder that another user owns, or that
+/// A journal folder that another user owns, or that
 /// others may write in, is not used: edits planted there are never
 /// restored (so never saved into the scene by Ctrl+S), and the status
 /// says why. The same folder made the user's own again gives them back.
@@ -620,7 +579,7 @@ fn status_says(harness: &Harness<'_, RayOfLightApp>, words: &str) -> bool {
 #[test]
 fn a_journal_folder_others_may_write_is_not_used() {
     use std::os::unix::fs::PermissionsExt;
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let state = dir.path().join("state");
     let folder = Persisted::in_homes(None, Some(&state)).journal.unwrap();
     assert_eq!(folder, state.join("rayoflight/journal"));
@@ -630,7 +589,7 @@ fn a_journal_folder_others_may_write_is_not_used() {
     let set_mode =
         |m: u32| std::fs::set_permissions(&folder, std::fs::Permissions::from_mode(m)).unwrap();
     set_mode(0o777);
-    let root = rustix::process::geteuid().is_root();
+    let root = common::is_root();
     if root {
         std::os::unix::fs::chown(&folder, Some(65534), Some(65534)).unwrap();
     }
@@ -666,22 +625,15 @@ fn a_journal_folder_others_may_write_is_not_used() {
 }
 
 #[test]
-fn item_3_unsaved_edits_are_journaled_and_restored_after_a_crash() {
-    let (dir, path) = file_with(EXAMPLE);
+fn unsaved_edits_are_journaled_and_restored_after_a_crash() {
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("state/rayoflight/journal");
     let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
     assert!(
         journal_entries(&folder).is_empty(),
         "nothing unsaved, no journal"
     );
-    harness.get_by_label("lambert").click();
-    harness.run_steps(1);
-    let took = step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
+    let took = choose_model(&mut harness, "lambert", &folder);
     eprintln!("edit to journal: {took:?}");
     #[cfg(unix)]
     {
@@ -722,14 +674,7 @@ fn item_3_unsaved_edits_are_journaled_and_restored_after_a_crash() {
     );
 
     // An edit undone: nothing unsaved, no journal.
-    harness.get_by_label("phong").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
+    choose_model(&mut harness, "phong", &folder);
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     step_until(
         &mut harness,
@@ -740,8 +685,8 @@ fn item_3_unsaved_edits_are_journaled_and_restored_after_a_crash() {
 }
 
 #[test]
-fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
-    let (dir, path) = file_with(EXAMPLE);
+fn restored_edits_merge_with_a_file_changed_meanwhile() {
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     crash_with_an_edit_journaled(&path, &folder);
     // Another program inserts a sphere and moves the light meanwhile.
@@ -770,14 +715,7 @@ fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
     );
 
     // A conflict: both changed the model.
-    harness.get_by_label("phong").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
+    choose_model(&mut harness, "phong", &folder);
     crash(harness);
     let ambient = read(&path).replace(r#"type="lambert""#, r#"type="ambient""#);
     std::fs::write(&path, &ambient).unwrap();
@@ -789,8 +727,8 @@ fn item_3_restored_edits_merge_with_a_file_changed_meanwhile() {
 }
 
 #[test]
-fn item_3_a_damaged_journal_is_set_aside_with_a_notice() {
-    let (dir, path) = file_with(EXAMPLE);
+fn a_damaged_journal_is_set_aside_with_a_notice() {
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     crash_with_an_edit_journaled(&path, &folder);
     // Cut short, as by a full disk.
@@ -809,18 +747,18 @@ fn item_3_a_damaged_journal_is_set_aside_with_a_notice() {
         "kept aside, not lost"
     );
     // Another file of the same name elsewhere never gets it.
-    let (_other_dir, other) = file_with(EXAMPLE);
+    let (_other_dir, other) = common::scene_file("scene.xml", EXAMPLE);
     let harness = app_with_journal(Document::open(&other).unwrap(), &folder);
     assert!(!harness.state().document().has_unsaved_edits());
 }
 
 #[test]
-fn item_6_a_camera_brought_back_to_the_files_leaves_its_text_alone() {
+fn a_camera_brought_back_to_the_files_leaves_its_text_alone() {
     let text = EXAMPLE.replace(
         r#"<translate x="0" y="0" z="-20"/>"#,
         r#"<translate y="-3" z="-8"/>"#,
     );
-    let (_dir, path) = file_with(&text);
+    let (_dir, path) = common::scene_file("scene.xml", &text);
     let mut doc = Document::open(&path).unwrap();
     let home = doc.scene().camera.transform.steps().to_vec();
     // An orbit, then Home, then another value.
@@ -871,9 +809,9 @@ fn until_done(harness: &mut Harness<'_, RayOfLightApp>, limit: Duration) {
 }
 
 #[test]
-fn item_8_esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
-    let (_dir, path) = file_with(&many_spheres(200_000));
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+fn esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
+    let (_dir, path) = common::scene_file("scene.xml", &many_spheres(200_000));
+    let mut harness = app_on(Document::open(&path).unwrap());
     until_done(&mut harness, Duration::from_secs(60));
     let before = harness.state().preview().image().clone();
     // An edit, and Esc while the scene is being prepared again: no pixel
@@ -903,8 +841,8 @@ fn item_8_esc_before_the_first_pixels_says_cancelled_and_f5_renders_again() {
 
 #[test]
 fn a_pick_waiting_for_a_cancelled_render_is_dropped_with_a_notice() {
-    let (_dir, path) = file_with(&many_spheres(200_000));
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    let (_dir, path) = common::scene_file("scene.xml", &many_spheres(200_000));
+    let mut harness = app_on(Document::open(&path).unwrap());
     until_done(&mut harness, Duration::from_secs(60));
     // An edit, a pick while the scene is prepared again (it waits for
     // the worker), then Esc before the worker has prepared it: no render
@@ -930,9 +868,9 @@ fn a_pick_waiting_for_a_cancelled_render_is_dropped_with_a_notice() {
 }
 
 #[test]
-fn item_10_esc_closes_the_help_and_o_hides_the_overlays() {
-    let (_dir, path) = file_with(EXAMPLE);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+fn esc_closes_the_help_and_o_hides_the_overlays() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap());
     until_done(&mut harness, Duration::from_secs(30));
     harness.key_press(egui::Key::F1);
     harness.run_steps(2);
@@ -954,11 +892,11 @@ fn item_10_esc_closes_the_help_and_o_hides_the_overlays() {
 }
 
 #[test]
-fn item_10_a_large_file_opens_beside_the_window_and_esc_stops_waiting() {
+fn a_large_file_opens_beside_the_window_and_esc_stops_waiting() {
     let text = many_spheres(60_000);
     assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
-    let (_dir, path) = file_with(&text);
-    let mut harness = app_on(Document::empty(), None);
+    let (_dir, path) = common::scene_file("scene.xml", &text);
+    let mut harness = app_on(Document::empty());
     // Esc while it loads: the window stops waiting; the late result is
     // dropped.
     harness
@@ -993,9 +931,9 @@ fn item_10_a_large_file_opens_beside_the_window_and_esc_stops_waiting() {
 }
 
 #[test]
-fn item_10_the_status_says_reading_while_a_large_changed_file_is_read() {
+fn the_status_says_reading_while_a_large_changed_file_is_read() {
     let text = many_spheres(60_000);
-    let (_dir, path) = file_with(&text);
+    let (_dir, path) = common::scene_file("scene.xml", &text);
     let doc = Document::open(&path).unwrap();
     let (rx, _watcher) = watch(&path, &doc);
     let theirs = text.replace("<model type=\"phong\"/>", "<model type=\"lambert\"/>");
@@ -1017,8 +955,8 @@ fn item_10_the_status_says_reading_while_a_large_changed_file_is_read() {
 }
 
 #[test]
-fn item_10_a_load_says_how_far_it_has_got() {
-    let (_dir, path) = file_with(&many_spheres(60_000));
+fn a_load_says_how_far_it_has_got() {
+    let (_dir, path) = common::scene_file("scene.xml", &many_spheres(60_000));
     let progress = std::sync::Arc::new(scene::LoadProgress::default());
     let seen = std::thread::scope(|s| {
         let loader = s.spawn(|| scene::load_counting(&path, &[], Some(&progress)));
@@ -1039,10 +977,10 @@ fn item_10_a_load_says_how_far_it_has_got() {
 }
 
 #[test]
-fn item_10_the_app_says_reading_while_a_large_changed_file_is_read() {
+fn the_app_says_reading_while_a_large_changed_file_is_read() {
     let text = many_spheres(60_000);
-    let (_dir, path) = file_with(&text);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    let (_dir, path) = common::scene_file("scene.xml", &text);
+    let mut harness = app_on(Document::open(&path).unwrap());
     until_done(&mut harness, Duration::from_secs(60));
     let theirs = text.replace("<model type=\"phong\"/>", "<model type=\"lambert\"/>");
     replace_atomically(&path, &theirs);
@@ -1064,9 +1002,9 @@ fn item_10_the_app_says_reading_while_a_large_changed_file_is_read() {
 }
 
 #[test]
-fn item_10_an_idle_window_says_idle_not_a_stale_frame_rate() {
-    let (_dir, path) = file_with(EXAMPLE);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+fn an_idle_window_says_idle_not_a_stale_frame_rate() {
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap());
     until_done(&mut harness, Duration::from_secs(30));
     for _ in 0..10 {
         harness.step();
@@ -1080,18 +1018,11 @@ fn item_10_an_idle_window_says_idle_not_a_stale_frame_rate() {
 }
 
 #[test]
-fn item_3_discarding_the_edits_removes_their_journal() {
-    let (dir, path) = file_with(EXAMPLE);
+fn discarding_the_edits_removes_their_journal() {
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     let mut harness = app_with_journal(Document::open(&path).unwrap(), &folder);
-    harness.get_by_label("lambert").click();
-    harness.run_steps(1);
-    step_until(
-        &mut harness,
-        Duration::from_millis(1500),
-        "the journal",
-        |_| !journal_entries(&folder).is_empty(),
-    );
+    choose_model(&mut harness, "lambert", &folder);
     // Open the built-in example, and answer "Discard edits".
     harness
         .state_mut()
@@ -1132,8 +1063,8 @@ fn the_selection_follows_its_object_through_another_programs_change() {
         sphere("GREEN", 4.0),
         sphere("BLUE", 5.0)
     );
-    let (_dir, path) = file_with(&text);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    let (_dir, path) = common::scene_file("scene.xml", &text);
+    let mut harness = app_on(Document::open(&path).unwrap());
     until_done(&mut harness, Duration::from_secs(30));
     harness.get_by_label("#2 GREEN sphere").click();
     harness.run_steps(2);
@@ -1188,7 +1119,7 @@ fn the_selection_follows_its_object_through_another_programs_change() {
     assert_eq!(harness.state().selected_object(), None);
 }
 
-// ----- issue 44: one journal per window, found by the file's identity -----
+// ----- one journal per window, found by the file's identity -----
 
 /// Selects the object labelled `object` in the list, then types `value`
 /// over the panel's field that shows `old`, as a user does (the field
@@ -1208,13 +1139,6 @@ fn type_value(harness: &mut Harness<'_, RayOfLightApp>, object: &str, old: f64, 
     harness.run_steps(2);
 }
 
-/// Runs frames until `folder` holds `n` journal entries.
-fn until_entries(harness: &mut Harness<'_, RayOfLightApp>, folder: &Path, n: usize) {
-    step_until(harness, Duration::from_secs(3), "the journal", |_| {
-        journal_entries(folder).len() == n
-    });
-}
-
 fn material(doc: &Document, object: usize, coef: Coef) -> f64 {
     let field = Field::Material { object, coef };
     match field.get(doc.scene()).unwrap() {
@@ -1223,12 +1147,12 @@ fn material(doc: &Document, object: usize, coef: Coef) -> f64 {
     }
 }
 
-/// Issue 44, item 2 (a): two windows on one file each keep their own
+/// Two windows on one file each keep their own
 /// entry; both killed, the next start restores both windows' edits (the
 /// one journal file held only the last window's: A's edit was lost).
 #[test]
 fn two_windows_on_one_file_both_keep_their_edits_through_a_crash() {
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     let mut a = app_with_journal(Document::open(&path).unwrap(), &folder);
     let mut b = app_with_journal(Document::open(&path).unwrap(), &folder);
@@ -1277,12 +1201,12 @@ fn two_windows_on_one_file_both_keep_their_edits_through_a_crash() {
     until_entries(&mut d, &folder, 0);
 }
 
-/// Issue 44, item 2 (b): a window opened on a file another window is
+/// A window opened on a file another window is
 /// editing never takes that window's edits, and undoing its own removes
 /// only its own entry; the first window's edit outlives its crash.
 #[test]
 fn a_window_never_takes_the_journal_of_a_window_still_open() {
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     let mut a = app_with_journal(Document::open(&path).unwrap(), &folder);
     type_value(&mut a, "#2 small red ball sphere", 0.4, "0.61");
@@ -1305,12 +1229,12 @@ fn a_window_never_takes_the_journal_of_a_window_still_open() {
     assert_eq!(doc.scene().model.illumination, scene::Illumination::Whitted);
 }
 
-/// Issue 44, item 2: two dead windows that set one value differently:
+/// Two dead windows that set one value differently:
 /// the restart asks, as for any conflict, and writes nothing until then;
 /// the entries go once it is settled.
 #[test]
 fn two_dead_windows_that_changed_one_value_are_asked_about() {
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     let mut a = app_with_journal(Document::open(&path).unwrap(), &folder);
     let mut b = app_with_journal(Document::open(&path).unwrap(), &folder);
@@ -1349,14 +1273,14 @@ fn two_dead_windows_that_changed_one_value_are_asked_about() {
     assert_eq!(read(&path), EXAMPLE);
 }
 
-/// Issue 44, item 5: the journal knows the file, not the path string: an
+/// The journal knows the file, not the path string: an
 /// edit made through a link comes back at the real path; a file moved
 /// since comes back at its new path; an unrelated file put at the old
 /// path is not merged with them but asked about.
 #[cfg(unix)]
 #[test]
 fn unsaved_edits_follow_their_file_through_links_and_moves() {
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     let link = dir.path().join("link.xml");
     std::os::unix::fs::symlink(&path, &link).unwrap();
@@ -1422,12 +1346,12 @@ fn unsaved_edits_follow_their_file_through_links_and_moves() {
     assert_eq!(s.model.depth, 5, "onto the file as it is");
 }
 
-/// Issue 44, item 8: a save that finished before the app was killed (its
+/// A save that finished before the app was killed (its
 /// entry not yet removed): the next start says the edits are in the file
 /// already, not "restored … merged", and nothing is unsaved.
 #[test]
 fn edits_saved_before_a_crash_are_not_restored_again() {
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     crash_with_an_edit_journaled(&path, &folder);
     // The save's new file, renamed into place as the app saves.
@@ -1447,15 +1371,15 @@ fn edits_saved_before_a_crash_are_not_restored_again() {
     until_entries(&mut harness, &folder, 0);
 }
 
-/// Issue 44, item 3: after the user settles a conflict, the selection
+/// After the user settles a conflict, the selection
 /// (the list, the panel, the next edit) is still the object it was, and
 /// the dialog numbers the value as the file numbers it now. (The
 /// selection was left on the number, which another program's insertion
 /// above had given to another object.)
 #[test]
 fn the_selection_keeps_its_object_when_a_conflict_is_settled() {
-    let (_dir, path) = file_with(EXAMPLE);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap());
     type_value(&mut harness, "#2 small red ball sphere", 0.4, "0.11");
     assert_eq!(harness.state().selected_object(), Some(1));
     assert_eq!(material(harness.state().document(), 1, Coef::Ka), 0.11);
@@ -1504,13 +1428,13 @@ fn the_selection_keeps_its_object_when_a_conflict_is_settled() {
     );
 }
 
-/// Issue 44, found trying it by hand: undoing a restore that was merged
+/// Undoing a restore that was merged
 /// with another program's change gives the file back as it opened, in one
 /// step. (It took two, and the second left an "unsaved edit" that put the
 /// other program's value back to the old one, which Ctrl+S would write.)
 #[test]
 fn undoing_a_restore_merged_with_the_files_change_gives_the_file_back() {
-    let (dir, path) = file_with(EXAMPLE);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let folder = dir.path().join("journal");
     crash_with_an_edit_journaled(&path, &folder);
     let theirs = EXAMPLE.replace(r#"<material ka="0.4""#, r#"<material ka="0.6""#);
@@ -1528,14 +1452,14 @@ fn undoing_a_restore_merged_with_the_files_change_gives_the_file_back() {
     until_entries(&mut harness, &folder, 0);
 }
 
-/// Issue 44, item 6: a value typed a key at a time is one undo step,
+/// A value typed a key at a time is one undo step,
 /// ended by Enter (typing "0.19" over 0.4 left three); and every Ctrl+Z
 /// press is one step, however fast they come (five in one frame, as a
 /// held key repeats, undid one).
 #[test]
 fn a_typed_value_is_one_step_and_every_undo_press_counts() {
-    let (_dir, path) = file_with(EXAMPLE);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap());
     harness.get_by_label("#2 small red ball sphere").click();
     harness.run_steps(2);
     harness
@@ -1574,13 +1498,13 @@ fn a_typed_value_is_one_step_and_every_undo_press_counts() {
     assert!(!doc.has_unsaved_edits(), "five presses, five steps");
 }
 
-/// Issue 44, item 7: Ctrl+S after the file was renamed away asks (save
+/// Ctrl+S after the file was renamed away asks (save
 /// it there again, save as, cancel) rather than silently making a new
 /// file at the old name.
 #[test]
 fn saving_a_file_renamed_away_asks_first() {
-    let (dir, path) = file_with(EXAMPLE);
-    let mut harness = app_on(Document::open(&path).unwrap(), None);
+    let (dir, path) = common::scene_file("scene.xml", EXAMPLE);
+    let mut harness = app_on(Document::open(&path).unwrap());
     harness.get_by_label("lambert").click();
     harness.run_steps(1);
     let renamed = dir.path().join("renamed.xml");
@@ -1613,12 +1537,12 @@ fn saving_a_file_renamed_away_asks_first() {
     assert_eq!(read(&renamed), EXAMPLE, "the renamed file left alone");
 }
 
-/// Found trying issue 44 by hand: a notice too long for the status bar
+/// Found by hand: a notice too long for the status bar
 /// is cut with "…" and shown whole on hover, once (a tooltip of the app's
 /// own was drawn over egui's, the same text twice).
 #[test]
 fn a_long_notice_is_shown_whole_once_on_hover() {
-    let (_dir, path) = file_with(EXAMPLE);
+    let (_dir, path) = common::scene_file("scene.xml", EXAMPLE);
     let long = format!("a notice {}end", "long words ".repeat(60));
     let persisted = Persisted {
         refused: vec![long.clone()],

@@ -2,10 +2,9 @@
 //! wins, stale events dropped, cancellation), the picture assembled from
 //! tiles, the file watcher (atomic rename, plain write, delete and
 //! recreate, debounced), and the document's broken saves. Editing, undo,
-//! save-back and merges are tests/editing.rs.
-#![cfg(feature = "gui")]
+//! save-back and merges are tests/app/editing.rs.
 
-mod common;
+use crate::common;
 
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;

@@ -3,23 +3,15 @@
 //! Every render runs with `--no-gui`, which the GUI build needs to stay
 //! headless and the headless build accepts.
 
-mod common;
+use crate::common;
 
-use common::{TINY, files_in, rayoflight, stderr, stdout};
+use crate::common::{TINY, files_in, rayoflight, stderr, stdout};
 use std::fs;
-use std::path::PathBuf;
 
 /// A temporary directory holding `tiny.xml`.
-fn workdir() -> (tempfile::TempDir, PathBuf) {
-    let dir = tempfile::tempdir().unwrap();
-    let scene = dir.path().join("tiny.xml");
-    fs::write(&scene, TINY).unwrap();
-    (dir, scene)
-}
-
 #[test]
 fn renders_a_png_next_to_the_scene_by_default() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(stdout(&o), "", "silent without -time");
@@ -30,7 +22,7 @@ fn renders_a_png_next_to_the_scene_by_default() {
 
 #[test]
 fn time_prints_render_nanoseconds_and_out_picks_the_format() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(
         dir.path(),
         &["-time", "tiny.xml", "-out", "x.jpg", "--no-gui"],
@@ -51,7 +43,7 @@ fn time_prints_render_nanoseconds_and_out_picks_the_format() {
 
 #[test]
 fn threads_and_aa_do_not_change_the_default_image() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let run = |args: &[&str]| {
         let o = rayoflight(dir.path(), args);
         assert!(o.status.success(), "{}", stderr(&o));
@@ -66,7 +58,7 @@ fn threads_and_aa_do_not_change_the_default_image() {
 
 #[test]
 fn no_arguments_prints_usage_and_exits_2() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["--no-gui"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
@@ -78,7 +70,7 @@ fn no_arguments_prints_usage_and_exits_2() {
 
 #[test]
 fn help_and_version_succeed_on_stdout() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["--help"]);
     assert!(o.status.success());
     assert!(stdout(&o).contains("-o, --out <FILE>"), "{}", stdout(&o));
@@ -89,7 +81,7 @@ fn help_and_version_succeed_on_stdout() {
 
 #[test]
 fn unknown_flag_is_a_usage_error_that_names_it() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["tiny.xml", "--frobnicate"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(
@@ -102,7 +94,7 @@ fn unknown_flag_is_a_usage_error_that_names_it() {
 
 #[test]
 fn bad_flag_values_are_usage_errors() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     for args in [
         &["tiny.xml", "--threads", "0"][..],
         &["tiny.xml", "--aa", "17"],
@@ -117,7 +109,7 @@ fn bad_flag_values_are_usage_errors() {
 
 #[test]
 fn missing_scene_fails_with_its_name() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["--no-gui", "nope.xml"]);
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
@@ -128,7 +120,7 @@ fn missing_scene_fails_with_its_name() {
 
 #[test]
 fn scene_that_is_a_directory_fails() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     fs::create_dir(dir.path().join("d.xml")).unwrap();
     let o = rayoflight(dir.path(), &["--no-gui", "d.xml"]);
     assert_eq!(o.status.code(), Some(1));
@@ -138,7 +130,7 @@ fn scene_that_is_a_directory_fails() {
 
 #[test]
 fn unknown_extension_lists_the_supported_ones() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml", "-out", "x.xyz"]);
     assert_eq!(o.status.code(), Some(1));
     let err = stderr(&o);
@@ -151,7 +143,7 @@ fn unknown_extension_lists_the_supported_ones() {
 
 #[test]
 fn output_equal_to_the_scene_is_refused() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("tiny.xml", TINY);
     fs::create_dir(dir.path().join("sub")).unwrap();
     // The same file reached through another path, and a scene whose name
     // would make the default output be itself.
@@ -175,7 +167,7 @@ fn output_equal_to_the_scene_is_refused() {
 
 #[test]
 fn missing_output_directory_fails_without_leftovers() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(
         dir.path(),
         &["--no-gui", "tiny.xml", "-out", "no/such/dir/x.png"],
@@ -191,7 +183,7 @@ fn missing_output_directory_fails_without_leftovers() {
 
 #[test]
 fn output_that_is_a_directory_fails() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     fs::create_dir(dir.path().join("out.png")).unwrap();
     let o = rayoflight(dir.path(), &["--no-gui", "tiny.xml", "-out", "out.png"]);
     assert_eq!(o.status.code(), Some(1));
@@ -201,7 +193,7 @@ fn output_that_is_a_directory_fails() {
 
 #[test]
 fn a_broken_scene_leaves_an_existing_image_untouched() {
-    let (dir, scene) = workdir();
+    let (dir, scene) = common::scene_file("tiny.xml", TINY);
     let old = b"an older image".to_vec();
     fs::write(dir.path().join("tiny.png"), &old).unwrap();
     fs::write(
@@ -220,7 +212,7 @@ fn a_broken_scene_leaves_an_existing_image_untouched() {
 
 #[test]
 fn export_pov_writes_a_pov_file() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["export-pov", "tiny.xml"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let pov = fs::read_to_string(dir.path().join("tiny.pov")).unwrap();
@@ -232,7 +224,7 @@ fn export_pov_writes_a_pov_file() {
 #[cfg(feature = "gui")]
 #[test]
 fn without_a_display_the_app_names_no_gui() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     for args in [&[][..], &["tiny.xml"]] {
         let o = rayoflight(dir.path(), args);
         assert_eq!(o.status.code(), Some(2), "{args:?}");
@@ -247,7 +239,7 @@ fn without_a_display_the_app_names_no_gui() {
 
 #[test]
 fn study_writes_a_csv_row_per_method() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(
         dir.path(),
         &["study", "--out", "res", "--runs", "1", "tiny.xml"],
@@ -275,7 +267,7 @@ fn study_writes_a_csv_row_per_method() {
 
 #[test]
 fn study_bad_usage_exits_2() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     for args in [
         &["study", "--aa", "2"][..],
         &["study", "--frobnicate"],
@@ -295,7 +287,7 @@ fn study_bad_usage_exits_2() {
 #[test]
 fn study_draws_the_chart_and_a_picture_per_failure() {
     use rayoflight::study::chart::{CHART_SIZE, GAP};
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(
         dir.path(),
         &["study", "--out", "res", "--runs", "1", "tiny.xml"],
@@ -339,7 +331,7 @@ fn study_draws_the_chart_and_a_picture_per_failure() {
 
 #[test]
 fn plan_prints_what_auto_decides_and_writes_nothing() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = rayoflight(dir.path(), &["plan", "tiny.xml"]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = stdout(&o);
@@ -361,7 +353,7 @@ fn plan_prints_what_auto_decides_and_writes_nothing() {
 
 #[test]
 fn method_renders_with_a_study_method() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let render = |method: &str| {
         let out = format!("{method}.png");
         let o = rayoflight(
@@ -399,7 +391,7 @@ fn with_stdout_closed(dir: &std::path::Path, args: &[&str]) -> std::process::Out
 
 #[test]
 fn a_closed_stdout_is_an_error_for_every_command_that_prints() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     for args in [
         &["split", "tiny.xml", "--tasks", "2"][..],
         &["plan", "tiny.xml"],
@@ -438,7 +430,7 @@ fn a_closed_stdout_is_an_error_for_every_command_that_prints() {
 
 #[test]
 fn a_full_stdout_is_an_error() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     if !std::path::Path::new("/dev/full").exists() {
         return;
     }
@@ -466,7 +458,7 @@ fn a_full_stdout_is_an_error() {
 
 #[test]
 fn output_folders_are_checked_before_the_work() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     // The bench is a minute of work: its CSV's folder is checked first.
     let start = std::time::Instant::now();
     let o = rayoflight(
@@ -532,7 +524,7 @@ fn output_folders_are_checked_before_the_work() {
 
 #[test]
 fn negative_numbers_are_values_and_single_dash_words_are_named_whole() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     for (args, message) in [
         (
             &["tiny.xml", "--threads", "-1"][..],
@@ -564,11 +556,11 @@ fn negative_numbers_are_values_and_single_dash_words_are_named_whole() {
 }
 
 /// Every flag but the scene is the command line's: `-q` alone renders
-/// without a window, even where a display is said to be (issue 28).
+/// without a window, even where a display is said to be.
 #[cfg(feature = "gui")]
 #[test]
 fn quiet_alone_renders_without_opening_the_app() {
-    let (dir, _) = workdir();
+    let (dir, _) = common::scene_file("tiny.xml", TINY);
     let o = std::process::Command::new(env!("CARGO_BIN_EXE_rayoflight"))
         .args(["-q", "tiny.xml"])
         .current_dir(dir.path())

@@ -6,9 +6,9 @@
 //! bytes.
 #![cfg(unix)]
 
-mod common;
+use crate::common;
 
-use common::{TINY, files_in, mirrors_text, stderr};
+use crate::common::{TINY, files_in, mirrors_text, stderr};
 use std::ffi::OsStr;
 use std::fs;
 use std::os::unix::ffi::OsStrExt;
@@ -72,21 +72,12 @@ fn refused(dir: &Path, given: &[&str], status: i32, starts: &str) -> String {
 
 /// A folder with the tiny scene and a slow one (minutes of work: a
 /// refusal that came after rendering would time out).
-fn workdir() -> tempfile::TempDir {
-    let dir = tempfile::tempdir().unwrap();
-    fs::write(dir.path().join("tiny.xml"), TINY).unwrap();
-    fs::write(dir.path().join("slow.xml"), mirrors_text(10_000, 640, 360)).unwrap();
-    dir
-}
-
-fn mkfifo(path: &Path) {
-    let ok = Command::new("mkfifo").arg(path).status().unwrap().success();
-    assert!(ok, "mkfifo {}", path.display());
-}
-
 #[test]
 fn a_thread_count_past_the_bound_is_a_usage_error_at_once() {
-    let dir = workdir();
+    let dir = common::folder_with(&[
+        ("tiny.xml", TINY),
+        ("slow.xml", &mirrors_text(10_000, 640, 360)),
+    ]);
     let err = refused(
         dir.path(),
         &["tiny.xml", "--threads", "1000000000", "-out", "t.png"],
@@ -98,9 +89,12 @@ fn a_thread_count_past_the_bound_is_a_usage_error_at_once() {
 
 #[test]
 fn fifos_and_devices_are_refused_before_opening_them() {
-    let dir = workdir();
-    mkfifo(&dir.path().join("pipe.xml"));
-    mkfifo(&dir.path().join("pipe.png"));
+    let dir = common::folder_with(&[
+        ("tiny.xml", TINY),
+        ("slow.xml", &mirrors_text(10_000, 640, 360)),
+    ]);
+    common::mkfifo(&dir.path().join("pipe.xml"));
+    common::mkfifo(&dir.path().join("pipe.png"));
     refused(
         dir.path(),
         &["pipe.xml"],
@@ -139,7 +133,10 @@ fn fifos_and_devices_are_refused_before_opening_them() {
 
 #[test]
 fn an_oversized_scene_is_refused_without_reading_it() {
-    let dir = workdir();
+    let dir = common::folder_with(&[
+        ("tiny.xml", TINY),
+        ("slow.xml", &mirrors_text(10_000, 640, 360)),
+    ]);
     // Sparse: a GiB and one byte that takes no room on disk.
     let big = fs::File::create(dir.path().join("big.xml")).unwrap();
     big.set_len((1 << 30) + 1).unwrap();
@@ -155,7 +152,10 @@ fn an_oversized_scene_is_refused_without_reading_it() {
 
 #[test]
 fn the_output_is_checked_before_rendering() {
-    let dir = workdir();
+    let dir = common::folder_with(&[
+        ("tiny.xml", TINY),
+        ("slow.xml", &mirrors_text(10_000, 640, 360)),
+    ]);
     refused(
         dir.path(),
         &["slow.xml", "-out", "no/such/folder/out.png"],
@@ -188,7 +188,10 @@ fn the_output_is_checked_before_rendering() {
 
 #[test]
 fn output_names_are_the_users_bytes() {
-    let dir = workdir();
+    let dir = common::folder_with(&[
+        ("tiny.xml", TINY),
+        ("slow.xml", &mirrors_text(10_000, 640, 360)),
+    ]);
     let name = OsStr::from_bytes(b"bad\xff.png");
     let o = run_within(
         dir.path(),
