@@ -15,15 +15,18 @@
 //!   the prepared scene, tiles, the 8-bit image;
 //!   [`render::request`]: what a front end asks for (method,
 //!   anti-aliasing, threads, region) resolved into render options, with
-//!   one precedence.
-//! - [`output`]: images encoded by extension and written atomically.
+//!   one precedence; [`render::region`]: a rectangle of the image
+//!   (`--region`).
+//! - [`output`]: image files: the format by extension, the target checked
+//!   first, one PNG row writer, EXR; and the one font drawn into images.
 //! - [`pov`]: the POV-Ray 3.7 translation used to cross-check renders.
-//! - [`cluster`]: past one machine: a rectangle of the image
-//!   (`--region`) and the record a part's PNG keeps, regions of even cost
+//! - [`cluster`]: past one machine: the record a part's PNG keeps (which
+//!   region of the image it holds), regions of even cost
 //!   for many tasks, their parts put back together and checked, and the
 //!   renders of a sweep side by side (`sheet`).
 //! - [`study`]: speed against accuracy: every method on the study scenes,
-//!   measured; with `bench` (the benchmark scenes). What measures (render
+//!   measured; with `bench` (the benchmark scenes; its generated scenes
+//!   are `scene::generated`'s). What measures (render
 //!   time, medians, image differences, CSV: one way for the bench, the
 //!   study, `-time` and the tests) is `render::measure`.
 //! - [`desktop`]: the app's desktop entry, icons and scene MIME type,
@@ -31,7 +34,8 @@
 //!   (Unix): the editor's unsaved text from `rayoflight lsp` to the app,
 //!   over a socket of the user's own.
 //! - [`system`]: the process at the system's edges: files (special files,
-//!   links, permissions, locks, where a write lands), interrupts (SIGINT,
+//!   links, permissions, locks, where a write lands, and every file's one
+//!   atomic way out, `system::files::write`), interrupts (SIGINT,
 //!   SIGTERM and SIGHUP stop a write or a render cleanly), resources
 //!   (memory and open files asked for first), the allocator (glibc's
 //!   malloc tuned), and text from outside escaped for the terminal.

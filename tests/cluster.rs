@@ -9,9 +9,8 @@ mod common;
 use common::{Rng, rayoflight, stderr, stdout};
 use image::RgbImage;
 use rayoflight::cluster::part::{self, Part};
-use rayoflight::cluster::region::Region;
 use rayoflight::cluster::split;
-use rayoflight::output;
+use rayoflight::render::region::Region;
 use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{self, RenderOptions};
 use rayoflight::scene::{self, Scene};
@@ -276,7 +275,7 @@ fn assemble_refuses_what_does_not_fit_and_names_the_culprit() {
     let pixels = image::open(&bottom).unwrap().to_rgb8();
     let forged = |file: &str, part: Part, image: &RgbImage| {
         let path = d.join(file);
-        output::save_part(image, &part, &path).unwrap();
+        rayoflight::cluster::part::save(image, &part, &path).unwrap();
         path
     };
     let honest = Part::new(&scene, &options, halves[1]);

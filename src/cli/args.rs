@@ -17,7 +17,7 @@ use super::edit::{self, EditArg};
 use clap::builder::{PossibleValue, TypedValueParser};
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use clap::{ArgMatches, Args, CommandFactory, FromArgMatches, Parser, Subcommand, ValueHint};
-use rayoflight::cluster::region::Region;
+use rayoflight::render::region::Region;
 use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{self, Method, Pass};
 use rayoflight::scene::edit::{EditError, NewElement};

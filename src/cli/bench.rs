@@ -10,8 +10,10 @@ use rayoflight::cluster::{assemble, split};
 use rayoflight::render::measure::{Csv, Difference, RenderPool, Timed, median_of, render_timed};
 use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{Cancel, Progress, RenderStats};
+use rayoflight::scene::generated;
 use rayoflight::scene::{self, Scene};
 use rayoflight::study::bench;
+use rayoflight::system::files;
 use rayoflight::{output, pov};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -74,7 +76,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     }
     // The CSV's folder takes it, checked before the minutes of work.
     if let Some(path) = &args.csv {
-        output::check_file_target(path).map_err(|e| e.to_string())?;
+        files::check_file_target(path).map_err(|e| e.to_string())?;
     }
     let out = |text: &str| steps.print(text);
     let mut done = 0;
@@ -222,7 +224,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     let mut first = None;
     for n in sizes {
         step(&format!("{n} spheres"));
-        let text = bench::spheres_on_floor(n, 800, 600);
+        let text = generated::spheres_on_floor(n, 800, 600);
         let scene = scene::parse(&text, Path::new("generated.xml")).map_err(|e| e.to_string())?;
         let (median, stats, _) = time_render(&scene, args.threads, args.runs)?;
         let base = *first.get_or_insert(median);
@@ -320,7 +322,7 @@ pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     }
 
     if let Some(path) = &args.csv {
-        output::write_atomic(path, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+        files::write_atomic(path, csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
         out(&format!("\nCSV written to {}\n", path.display()))?;
     }
     Ok(())
@@ -414,8 +416,9 @@ fn split_section(
         let part = render(&request)?;
         let path = dir.path().join(format!("part-{k}.png"));
         let record = Part::new(&scene, &request.options(&scene), *region);
-        writing +=
-            timed(&mut || output::save_part(&part.image, &record, &path).map_err(|e| error(&e)))?;
+        writing += timed(&mut || {
+            rayoflight::cluster::part::save(&part.image, &record, &path).map_err(|e| error(&e))
+        })?;
         rendering += part.elapsed;
         rays += part.stats.rays;
         region_times.push(part.elapsed);
@@ -554,7 +557,7 @@ fn process_peak(args: &[std::ffi::OsString]) -> Result<(Duration, Option<f64>), 
     Ok((wall, peak_kb.map(|kb| kb / 1e3)))
 }
 
-/// The big scene: `n` spheres on a floor ([`bench::spheres_on_floor`],
+/// The big scene: `n` spheres on a floor ([`generated::spheres_on_floor`],
 /// 64x48) written to a file, then loaded, checked and prepared as the
 /// command line does, against `xmllint --stream --noout` reading the same
 /// file (libxml2 checking it is well-formed and building nothing), the
@@ -572,7 +575,7 @@ fn big_section(
     let dir = tempfile::tempdir().map_err(|e| error(&e))?;
     let path = dir.path().join(format!("spheres-{n}.xml"));
     let size = {
-        let text = bench::spheres_on_floor(n, 64, 48);
+        let text = generated::spheres_on_floor(n, 64, 48);
         std::fs::write(&path, &text).map_err(|e| error(&e))?;
         text.len()
     };
@@ -1101,7 +1104,7 @@ fn peak_memory(
     let Some(peak) = PeakMemory::start() else {
         return Ok(None);
     };
-    let text = bench::spheres_on_floor(n, width, height);
+    let text = generated::spheres_on_floor(n, width, height);
     let scene = scene::parse(&text, Path::new("generated.xml")).map_err(|e| e.to_string())?;
     let (_, _, image) = time_render(&scene, threads, 1)?;
     let image_mb = image.as_raw().len() as f64 / 1e6;

@@ -56,14 +56,14 @@ pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(
     // as every other command: the default action ended it silently.
     let _cleanly = rayoflight::system::interrupt::cleanly();
     let interrupted = || {
-        fail(output::OutputError::Interrupted {
+        fail(files::WriteError::Interrupted {
             path: out.to_owned(),
         })
     };
     output::format_for(out).map_err(fail)?;
     // The folder takes the sheet, checked before any image is read; its
     // size is checked once it is known.
-    output::check_file_target(out).map_err(fail)?;
+    files::check_file_target(out).map_err(fail)?;
     if let Some(image) = images.iter().find(|i| files::same_file(i, out)) {
         return Err(Failure::Error(format!(
             "{}: is one of the images: the sheet cannot be written over it",

@@ -146,7 +146,7 @@ fn run(args: impl IntoIterator<Item = std::ffi::OsString>) -> Result<(), Failure
             files::make_folders(&dir)
                 .map_err(|e| Failure::Error(format!("{}: {e}", dir.display())))?;
             for (name, page) in generated::man_pages().map_err(Failure::Error)? {
-                output::write_atomic(&dir.join(name), page.as_bytes()).map_err(fail)?;
+                files::write_atomic(&dir.join(name), page.as_bytes()).map_err(fail)?;
             }
             Ok(())
         }
@@ -217,7 +217,7 @@ fn new_scene(path: &Path) -> Result<(), Failure> {
     if path.as_os_str() == "-" {
         return stdout::write(rayoflight::EXAMPLE_SCENE).map_err(Failure::Error);
     }
-    output::write_new(path, rayoflight::EXAMPLE_SCENE.as_bytes()).map_err(fail)
+    files::write_new(path, rayoflight::EXAMPLE_SCENE.as_bytes()).map_err(fail)
 }
 
 /// Prints a line to stdout ([`stdout::write`]).
@@ -331,7 +331,7 @@ fn render_scene(r: RenderArgs) -> Result<(), Failure> {
             // A part records where it belongs, for `assemble`.
             Some(region) => {
                 let part = Part::new(scene, &request.options(scene), region);
-                output::save_part(&timed.image, &part, &out).map_err(fail)?
+                rayoflight::cluster::part::save(&timed.image, &part, &out).map_err(fail)?
             }
             None => output::save(&timed.image, &out).map_err(fail)?,
         }
@@ -371,7 +371,7 @@ fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
 /// ([`merge`]) and written again; a conflict writes nothing.
 fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
     if let Some(out) = &args.out {
-        output::check_file_target(out).map_err(fail)?;
+        files::check_file_target(out).map_err(fail)?;
     }
     let out = args.out.as_deref().unwrap_or(&args.scene);
     let in_place = files::same_file(&args.scene, out);
@@ -395,7 +395,7 @@ fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
         if new_text == text && in_place {
             return Ok(());
         }
-        let written = output::write_atomic_with(
+        let written = files::write_atomic_with(
             out,
             |w| w.write_all(new_text.as_bytes()),
             |_| {
@@ -414,8 +414,8 @@ fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
         match written {
             Ok(()) => return Ok(()),
             // Another file put at the name meanwhile: read it and merge.
-            Err(Rewrite::Output(output::OutputError::Moved { .. })) => {}
-            Err(Rewrite::Output(e)) => return Err(fail(e)),
+            Err(Rewrite::Write(files::WriteError::Moved { .. })) => {}
+            Err(Rewrite::Write(e)) => return Err(fail(e)),
             Err(Rewrite::Unreadable(e)) => {
                 return Err(Failure::Error(format!(
                     "{}: cannot read the file again before writing it: {e}; nothing was written",
@@ -452,16 +452,16 @@ const MAX_REREADS: usize = 8;
 
 /// Why `edit`'s write did not happen.
 enum Rewrite {
-    Output(output::OutputError),
+    Write(files::WriteError),
     /// The scene is not the text that was read any more.
     Changed,
     /// The scene could not be read again to find out.
     Unreadable(std::io::Error),
 }
 
-impl From<output::OutputError> for Rewrite {
-    fn from(e: output::OutputError) -> Rewrite {
-        Rewrite::Output(e)
+impl From<files::WriteError> for Rewrite {
+    fn from(e: files::WriteError) -> Rewrite {
+        Rewrite::Write(e)
     }
 }
 
@@ -474,14 +474,14 @@ fn refused(scene: &Path) -> impl FnOnce(EditError) -> Failure {
 fn export_pov(scene_path: &Path, out: Option<PathBuf>) -> Result<(), Failure> {
     let out = out.unwrap_or_else(|| scene_path.with_extension("pov"));
     refuse_same_file(scene_path, &out)?;
-    output::check_file_target(&out).map_err(fail)?;
+    files::check_file_target(&out).map_err(fail)?;
     let scene = scene::load(scene_path).map_err(fail)?;
     let header = pov::Header {
         scene: scene_path,
         written_to: &out,
     };
     let text = pov::export_named(&scene, Some(header));
-    output::write_atomic(&out, text.as_bytes()).map_err(fail)
+    files::write_atomic(&out, text.as_bytes()).map_err(fail)
 }
 
 /// The output must never replace the scene: not by another spelling of

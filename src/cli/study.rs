@@ -7,6 +7,7 @@
 use super::progress::Steps;
 use rayoflight::study::chart;
 use rayoflight::system::escape::visible;
+use rayoflight::system::files;
 use rayoflight::{output, study};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -43,7 +44,7 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         .map_err(|e| format!("{}: cannot create the folder: {e}", args.out.display()))?;
     let (csv, png) = (args.out.join("study.csv"), args.out.join("study.png"));
     for file in [&csv, &png] {
-        output::check_file_target(file).map_err(|e| e.to_string())?;
+        files::check_file_target(file).map_err(|e| e.to_string())?;
     }
     let methods = rayoflight::render::methods();
     out(&format!(
@@ -101,7 +102,7 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
     if let Some(e) = print_error.or(picture_error) {
         return Err(e);
     }
-    output::write_atomic(&csv, study::csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
+    files::write_atomic(&csv, study::csv(&rows).as_bytes()).map_err(|e| e.to_string())?;
     let picture = chart::chart(&rows).map_err(|e| e.to_string())?;
     output::save(&picture, &png).map_err(|e| e.to_string())?;
     let failed: Vec<String> = rows

@@ -19,8 +19,8 @@
 //! ([`crate::output::write_png`] for both): `cmp` finds no difference.
 
 use crate::cluster::part::{self, Part, PartError};
-use crate::cluster::region::Region;
 use crate::output::{self, OutputError};
+use crate::render::region::Region;
 use std::fs::File;
 use std::io::BufReader;
 use std::path::{Path, PathBuf};
@@ -113,6 +113,12 @@ pub enum AssembleError {
     },
     #[error(transparent)]
     Output(#[from] OutputError),
+}
+
+impl From<crate::system::files::WriteError> for AssembleError {
+    fn from(e: crate::system::files::WriteError) -> AssembleError {
+        AssembleError::Output(e.into())
+    }
 }
 
 type PngReader = png::Reader<BufReader<File>>;
@@ -421,7 +427,7 @@ pub fn assemble_until(
                 }
             }
         });
-        let written = output::write_atomic_with(
+        let written = crate::system::files::write_atomic_with(
             out,
             |w| {
                 output::write_png(w, width, height, &[], |row| match receive.recv() {

@@ -1,7 +1,8 @@
 //! Past one machine: what lets a render be cut into parts on a cluster
-//! and put back together.
+//! and put back together. A part covers a
+//! [`Region`](crate::render::region::Region) of the image, the render's own
+//! idea (what `--region` renders).
 //!
-//! - [`region`]: a rectangle of the image (`--region`);
 //! - [`part`]: the record a part's PNG keeps of where it belongs;
 //! - [`split`]: regions of even cost for many tasks;
 //! - [`assemble`]: the parts put back together, checked;
@@ -9,6 +10,5 @@
 
 pub mod assemble;
 pub mod part;
-pub mod region;
 pub mod sheet;
 pub mod split;

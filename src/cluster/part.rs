@@ -10,8 +10,8 @@
 //! region=0,0,400,300 image=800x600 render=5f0e3c2a91b7d408 version=0.1.0
 //! ```
 
-use crate::cluster::region::{Region, RegionError};
 use crate::render::RenderOptions;
+use crate::render::region::{Region, RegionError};
 use crate::scene::Scene;
 use std::fmt::{self, Write};
 
@@ -128,6 +128,16 @@ impl Write for Fnv1a {
         }
         Ok(())
     }
+}
+
+/// Writes a part of a render (`--region`) as a PNG whose record (a tEXt
+/// chunk under [`KEYWORD`]) says where it belongs.
+pub fn save(
+    image: &image::RgbImage,
+    part: &Part,
+    path: &std::path::Path,
+) -> Result<(), crate::output::OutputError> {
+    crate::output::save_png(image, &[(KEYWORD, &part.to_string())], path)
 }
 
 #[cfg(test)]

@@ -1,9 +1,9 @@
 //! A contact sheet: images side by side in a grid, each named under its
 //! picture, to compare the renders of a sweep (`rayoflight sheet`) at a
-//! glance. The names are drawn with the study chart's embedded font, so
+//! glance. The names are drawn with the embedded font
+//! ([`crate::output::font`]), so
 //! the sheet needs no system font and works in the headless build.
 
-use crate::study::chart::register_font;
 use image::{Rgb, RgbImage};
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -175,7 +175,7 @@ pub fn draw<'a, E: From<SheetError>>(
         );
         image::imageops::replace(&mut sheet, &*picture, i64::from(x + dx), i64::from(y + dy));
     }
-    register_font().map_err(|e| SheetError::Draw(e.to_string()))?;
+    crate::output::font::register().map_err(|e| SheetError::Draw(e.to_string()))?;
     let err = |e: DrawingAreaErrorKind<_>| SheetError::Draw(e.to_string());
     {
         let area = BitMapBackend::with_buffer(&mut sheet, (width, height)).into_drawing_area();

@@ -13,7 +13,7 @@
 //! one whose two sides, each given its share of the tasks, leave the
 //! dearest task the least work.
 
-use crate::cluster::region::Region;
+use crate::render::region::Region;
 use crate::render::{RenderOptions, TILE_SIZE, Tile, prepare};
 use crate::scene::Scene;
 use rayon::prelude::*;

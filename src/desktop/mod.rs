@@ -97,7 +97,7 @@ pub enum DesktopError {
         source: std::io::Error,
     },
     #[error(transparent)]
-    Write(#[from] crate::output::OutputError),
+    Write(#[from] crate::system::files::WriteError),
     #[error("{}: the record of what install-desktop wrote is damaged (line {line}); nothing was removed", path.display())]
     Manifest { path: PathBuf, line: usize },
     #[error(
@@ -404,13 +404,13 @@ pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
     to_write.pop();
     for (relative, bytes) in &to_write {
         let path = home.join(relative);
-        crate::output::write_atomic(&path, bytes)?;
+        crate::system::files::write_atomic(&path, bytes)?;
         manifest
             .files
             .push((relative.clone(), Some(fingerprint(bytes))));
         done.files.push(path);
     }
-    crate::output::write_atomic(&home.join(MANIFEST), manifest.text().as_bytes())?;
+    crate::system::files::write_atomic(&home.join(MANIFEST), manifest.text().as_bytes())?;
     refresh(home, &mut done);
     Ok(done)
 }

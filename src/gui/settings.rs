@@ -207,7 +207,7 @@ fn store(file: Option<&Path>, text: &str) {
     if let Some(dir) = file.parent() {
         let _ = std::fs::create_dir_all(dir);
     }
-    let _ = crate::output::write_atomic(file, text.as_bytes());
+    let _ = crate::system::files::write_atomic(file, text.as_bytes());
 }
 
 /// The recent files: the list and where it is stored.

@@ -6,7 +6,8 @@
 //! [`Progress`]) that [`render`], the
 //! app's worker and `--region` share: a region of the image is traced in
 //! the whole image's tiles, so its pixels are the whole render's.
-//! [`RenderOptions`] holds every method choice (and the region to render);
+//! [`RenderOptions`] holds every method choice (and the [`region`] to
+//! render: a rectangle of the image, what a cluster's part covers);
 //! its default gives the reference image (docs/study.md). [`render_pass`]
 //! renders one term of the formula (or the hit's normal, depth, object)
 //! through the same tile loop; [`explain`] says why a pixel has its colour, from the
@@ -31,6 +32,7 @@ mod pool;
 mod prepared;
 mod progress;
 mod progressive;
+pub mod region;
 pub mod request;
 mod tile;
 
@@ -49,8 +51,8 @@ pub use progress::{Progress, time_left};
 pub use progressive::{LastPrepared, Step, passes, render_progressive};
 pub use tile::{Cancel, TILE_SIZE, Tile};
 
-use crate::cluster::region::{Region, RegionError};
 use crate::geometry::{Ray, Real, Vector};
+use crate::render::region::{Region, RegionError};
 use crate::scene::Scene;
 use crate::shading::{SurfacePoint, reflect};
 use image::RgbImage;

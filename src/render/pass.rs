@@ -503,7 +503,7 @@ type Kept<U> = (Vec<U>, Option<(f64, f64)>, u64);
 /// once `cancel` is set.
 fn keep_tiles<U: Copy + Default + Send>(
     prepared: &super::Prepared,
-    region: crate::cluster::region::Region,
+    region: crate::render::region::Region,
     cancel: &Cancel,
     progress: &Progress,
     mut buffer: Vec<U>,

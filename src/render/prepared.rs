@@ -935,8 +935,8 @@ impl Prepared {
     }
 
     /// The whole of this view's image.
-    pub fn frame(&self) -> crate::cluster::region::Region {
-        crate::cluster::region::Region::whole(self.width(), self.height())
+    pub fn frame(&self) -> crate::render::region::Region {
+        crate::render::region::Region::whole(self.width(), self.height())
     }
 
     pub fn height(&self) -> u32 {

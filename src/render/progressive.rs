@@ -275,7 +275,7 @@ mod tests {
     fn an_edit_of_surfaces_keeps_the_geometry_and_the_image_is_the_same() {
         use crate::shading::Illumination;
         // Enough spheres for a hierarchy, a plane, reflections.
-        let text = crate::study::bench::spheres_on_floor(40, 64, 48);
+        let text = crate::scene::generated::spheres_on_floor(40, 64, 48);
         let mut scene = crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap();
         scene.model.illumination = Illumination::Whitted;
         let last = LastPrepared::default();

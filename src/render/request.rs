@@ -12,7 +12,7 @@
 //! 3. the thread count (none: rayon's pool, one thread per core), and the
 //!    region of the image to render (none: all of it).
 
-use crate::cluster::region::Region;
+use crate::render::region::Region;
 use crate::render::{self, Method, RenderOptions};
 use crate::scene::Scene;
 

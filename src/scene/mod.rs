@@ -16,9 +16,12 @@
 //! format's elements and attributes as data, which the loader reads with
 //! and [`schema`] writes as an XML Schema for editors; [`language`] answers
 //! what an editor asks of a text (errors, completion, hover, outline).
+//! [`generated`] makes scenes by program (n spheres on a floor) for the
+//! bench and for tests that want many objects.
 
 pub mod edit;
 mod error;
+pub mod generated;
 pub mod grammar;
 pub mod identity;
 pub mod language;

@@ -3,23 +3,17 @@
 //! amplified difference).
 //!
 //! The chart is drawn with `plotters` into an RGB buffer, its text with
-//! DejaVu Sans compiled into the binary (`assets/fonts/`, licence beside
-//! it), so it needs no system font and no window: it works in the
-//! headless build. The caller saves the image with [`crate::output`].
+//! DejaVu Sans compiled into the binary ([`crate::output::font`]), so it
+//! needs no system font and no window: it works in the headless build. The caller saves the image with [`crate::output`].
 
 use super::{FAIL_BELOW, Row};
 use image::{Rgb, RgbImage};
 use plotters::coord::Shift;
 use plotters::element::{DashedPathElement, Drawable, PointCollection};
 use plotters::prelude::*;
-use plotters::style::FontStyle;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters_backend::DrawingErrorKind;
 use std::ops::Range;
-use std::sync::Once;
-
-/// DejaVu Sans (assets/fonts/LICENSE-DejaVu.txt).
-const FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// The chart's size in pixels.
 pub const CHART_SIZE: (u32, u32) = (1200, 760);
@@ -46,17 +40,6 @@ pub struct ChartError(String);
 
 fn err<E: std::fmt::Display>(e: E) -> ChartError {
     ChartError(e.to_string())
-}
-
-/// Makes DejaVu Sans plotters' `sans-serif` font (once).
-pub(crate) fn register_font() -> Result<(), ChartError> {
-    static ONCE: Once = Once::new();
-    let mut result = Ok(());
-    ONCE.call_once(|| {
-        result = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT)
-            .map_err(|_| ChartError("the embedded font is not a valid TrueType font".into()));
-    });
-    result
 }
 
 /// The fastest row of each scene that did not fail (ties: the first), in
@@ -176,7 +159,7 @@ pub fn chart(rows: &[Row]) -> Result<RgbImage, ChartError> {
 
 /// [`chart`], and where it put the plotting area and the legend.
 fn render(rows: &[Row]) -> Result<(RgbImage, Layout), ChartError> {
-    register_font()?;
+    crate::output::font::register().map_err(err)?;
     let (w, h) = CHART_SIZE;
     let mut buffer = vec![0u8; w as usize * h as usize * 3];
     let layout = {

@@ -24,7 +24,7 @@ use crate::common;
 
 use crate::common::{files_in, rayoflight, stderr};
 use rayoflight::cluster::part::{self, Part};
-use rayoflight::cluster::region::Region;
+use rayoflight::render::region::Region;
 use rayoflight::render::request::RenderRequest;
 use rayoflight::scene;
 use std::fs;

@@ -45,7 +45,7 @@ pub enum SaveError {
     #[error("{0}")]
     Edit(#[from] EditError),
     #[error("{0}")]
-    Output(#[from] crate::output::OutputError),
+    Write(#[from] crate::system::files::WriteError),
     /// Another program wrote the file between the save's read and its
     /// rename (the save reads it again just before): nothing was written.
     #[error("another program changed the file while it was being saved")]

@@ -146,7 +146,7 @@ impl SaveJob {
             // another file at its name: merge.
             Err(
                 SaveError::ChangedMeanwhile
-                | SaveError::Output(crate::output::OutputError::Moved { .. }),
+                | SaveError::Write(crate::system::files::WriteError::Moved { .. }),
             ) => self.read_theirs(),
             Err(e) => SaveOutcome::Failed(e),
         }
@@ -178,13 +178,13 @@ fn write_scene(
     let edited = &version.edited;
     let rewrite = splice::plan_source(&version.source, &version.source_scene, edited)?;
     let mut written = None;
-    crate::output::write_atomic_with(
+    crate::system::files::write_atomic_with(
         path,
         |w| rewrite.write_to(w),
         |new: &Path| -> Result<(), SaveError> {
             // Read back as a stream twice (its fingerprint, its scene),
             // never whole: a million objects' text is 214 MB.
-            let io = |source| crate::output::OutputError::Io {
+            let io = |source| crate::system::files::WriteError::Io {
                 path: path.to_owned(),
                 source,
             };

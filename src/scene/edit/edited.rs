@@ -594,7 +594,7 @@ mod tests {
     use crate::scene::edit::{Field, Value};
 
     fn example() -> Edited {
-        let text = crate::study::bench::spheres_on_floor(20, 8, 6);
+        let text = crate::scene::generated::spheres_on_floor(20, 8, 6);
         Edited::new(crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap())
     }
 

@@ -8,10 +8,12 @@
 //! leave half done ([`rewrite`]); the folders the user's own state lives in (settings, the
 //! journal, the editor link's sockets), which must be the user's and
 //! writable by no one else ([`own_folder`]). Where a write lands, held by
-//! descriptors so that no rename can redirect it, is [`place`]'s.
+//! descriptors so that no rename can redirect it, is [`place`]'s; every
+//! file's one atomic way out is [`write`](mod@write)'s.
 
 mod place;
 mod rewrite;
+pub mod write;
 
 #[cfg(unix)]
 pub use place::NewFile;
@@ -19,6 +21,7 @@ pub use place::{Kind, Place, PlaceError, make_folders};
 #[cfg(unix)]
 pub use rewrite::rewrite_in_place;
 pub use rewrite::{Finished, finish, finish_at};
+pub use write::{WriteError, check_file_target, write_atomic, write_atomic_with, write_new};
 
 use std::fs::Metadata;
 use std::path::{Path, PathBuf};

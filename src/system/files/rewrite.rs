@@ -68,7 +68,7 @@ fn copy_over(from: &mut File, to: &mut File) -> std::io::Result<u64> {
 /// the folder became meanwhile, the file written is the one that was
 /// opened and checked. `new` must be complete and synced, and a record
 /// a crash left of an earlier rewrite finished first ([`finish_at`], as
-/// [`crate::output::write_atomic_with`] does before any write): this
+/// [`super::write_atomic_with`] does before any write): this
 /// record never replaces one.
 #[cfg(unix)]
 pub fn rewrite_in_place(
