@@ -39,8 +39,11 @@
 //!   SIGTERM and SIGHUP stop a write or a render cleanly), resources
 //!   (memory and open files asked for first), the allocator (glibc's
 //!   malloc tuned), and text from outside escaped for the terminal.
-//! - `gui` (feature `gui`): the desktop previewer, which uses only the
-//!   modules above.
+//! - `session` (feature `session`): the app's model without a window: the
+//!   document and its undo, the journal of unsaved edits, the file
+//!   watcher, the render worker, the settings.
+//! - `gui` (feature `gui`, on `session`): the desktop previewer's window,
+//!   which uses only the modules above.
 //!
 //! The core never prints and knows nothing of windows or terminals.
 
@@ -59,6 +62,8 @@ pub mod output;
 pub mod pov;
 pub mod render;
 pub mod scene;
+#[cfg(feature = "session")]
+pub mod session;
 pub mod shading;
 pub mod study;
 pub mod system;

@@ -717,7 +717,7 @@ fn big_section(
 /// The stages of [`app_document`], each with the app's peak memory after
 /// it, in MB: run in a process of its own on `path` (which it edits and
 /// saves). `None` in a build without the app.
-#[cfg(feature = "gui")]
+#[cfg(feature = "session")]
 fn app_document_peaks(path: &Path, threads: usize) -> Result<Option<Vec<(String, f64)>>, String> {
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
     let output = Command::new(exe)
@@ -743,14 +743,14 @@ fn app_document_peaks(path: &Path, threads: usize) -> Result<Option<Vec<(String,
     Ok(Some(stages))
 }
 
-#[cfg(not(feature = "gui"))]
+#[cfg(not(feature = "session"))]
 fn app_document_peaks(_: &Path, _: usize) -> Result<Option<Vec<(String, f64)>>, String> {
     Ok(None)
 }
 
-#[cfg(not(feature = "gui"))]
+#[cfg(not(feature = "session"))]
 pub fn app_document(_: &Path, _: usize) -> Result<(), String> {
-    Err("--app-document: this build has no app (built without the gui feature)".to_owned())
+    Err("--app-document: this build has no app (built without the session feature, which gui includes)".to_owned())
 }
 
 /// The app on `path` as a user meets it, less the window: the document
@@ -760,11 +760,11 @@ pub fn app_document(_: &Path, _: usize) -> Result<(), String> {
 /// peak resident memory so far and its resident memory now, in kB (`after
 /// an edit 534000 521000`): the child `rayoflight bench --app-document
 /// FILE` of the big section.
-#[cfg(feature = "gui")]
+#[cfg(feature = "session")]
 pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
-    use rayoflight::gui::document::Document;
-    use rayoflight::gui::journal::{Entry, Job, Writer};
     use rayoflight::scene::edit::{Edit, Field, Value};
+    use rayoflight::session::document::Document;
+    use rayoflight::session::journal::{Entry, Job, Writer};
 
     let error = |e: &dyn std::fmt::Display| e.to_string();
     let say = |stage: &str| {
@@ -775,7 +775,7 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
     if let Some(e) = doc.error() {
         return Err(e.to_owned());
     }
-    let worker = rayoflight::gui::worker::Worker::spawn(threads, || {});
+    let worker = rayoflight::session::worker::Worker::spawn(threads, || {});
     picture(&worker, doc.scene())?;
     say("after the picture");
 
@@ -808,8 +808,8 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
         .recv()
         .map_err(|_| "the save's thread panicked".to_owned())?;
     match doc.save_done(job, outcome).map_err(|e| error(&e))? {
-        rayoflight::gui::document::SaveStep::Done(_) => {}
-        rayoflight::gui::document::SaveStep::Again => {
+        rayoflight::session::document::SaveStep::Done(_) => {}
+        rayoflight::session::document::SaveStep::Again => {
             doc.save().map(|_| ()).map_err(|e| error(&e))?
         }
     }
@@ -819,9 +819,9 @@ pub fn app_document(path: &Path, threads: usize) -> Result<(), String> {
 
 /// The full-size picture of `scene` from the app's worker, as the app
 /// asks for it.
-#[cfg(feature = "gui")]
-fn picture(worker: &rayoflight::gui::worker::Worker, scene: &Scene) -> Result<(), String> {
-    use rayoflight::gui::worker::{self, Event};
+#[cfg(feature = "session")]
+fn picture(worker: &rayoflight::session::worker::Worker, scene: &Scene) -> Result<(), String> {
+    use rayoflight::session::worker::{self, Event};
     let passes = worker::passes(scene.camera.width, scene.camera.height);
     let generation = worker.request_passes(
         std::sync::Arc::new(scene.clone()),
@@ -997,9 +997,9 @@ fn time_render(
 /// window, from the request to the full picture (every pass, as the user
 /// waits for it). A new worker each run: the first render of a scene
 /// prepares it, as the command line does.
-#[cfg(feature = "gui")]
+#[cfg(feature = "session")]
 fn app_time(scene: &Scene, threads: usize, runs: usize) -> Result<Option<Duration>, String> {
-    use rayoflight::gui::worker::{self, Event, Worker};
+    use rayoflight::session::worker::{self, Event, Worker};
     let scene = std::sync::Arc::new(scene.clone());
     let passes = worker::passes(scene.camera.width, scene.camera.height);
     median_of(runs, || {
@@ -1031,7 +1031,7 @@ fn app_time(scene: &Scene, threads: usize, runs: usize) -> Result<Option<Duratio
 }
 
 /// Without the app (a headless build), nothing to time.
-#[cfg(not(feature = "gui"))]
+#[cfg(not(feature = "session"))]
 fn app_time(_: &Scene, _: usize, _: usize) -> Result<Option<Duration>, String> {
     Ok(None)
 }

@@ -5,43 +5,24 @@
 //! - [`app`]: the window: layout, menus, keys, the picture.
 //! - [`panel`]: the side panel's widgets; they return edits, never change
 //!   the scene themselves.
-//! - [`document`]: the file's text, the scene with its unsaved edits, undo
-//!   and redo, saves that never write over unread text, merges.
-//! - [`worker`]: the background render thread, coarse to fine, newest wins.
-//! - [`pace`]: how coarse to render while the mouse moves.
-//! - [`settings`]: what the app remembers between runs, the recent files
-//!   among it.
-//! - [`editor`]: the user's editor, started on the scene at an element
-//!   (Edit › Open in editor).
-//! - [`preview`]: the picture assembled from the worker's tiles.
-//! - [`texture`]: that picture on the GPU, uploaded a changed tile (or a
-//!   band of rows) at a time.
-//! - [`watcher`]: the file watcher (notify), debounced.
-//! - [`journal`]: the unsaved edits kept on disk as they are made, restored
-//!   after a crash or a logout.
+//! - [`texture`]: the preview's picture on the GPU, uploaded a changed
+//!   tile (or a band of rows) at a time.
 //! - [`study`]: the Study window and the live preview's choice of method.
 //!
-//! It reaches the core only through `scene`, `render`, `study`,
-//! `output` and `desktop` (the window's id and icon).
+//! What the window shows and changes is the app's model,
+//! [`crate::session`]: the document and its undo, the journal, the
+//! watcher, the render worker, the settings. This module draws it and
+//! turns input into its calls; it reaches the core only through `session`,
+//! `scene`, `render`, `study`, `output` and `desktop` (the window's id and
+//! icon).
 
 pub mod app;
-pub mod document;
-pub mod editor;
-pub mod journal;
-pub mod pace;
 mod panel;
-pub mod preview;
-pub mod settings;
 pub mod study;
 pub mod texture;
-pub mod watcher;
-pub mod worker;
 
+use crate::session::{document, settings};
 use std::path::Path;
-
-/// Files at least this large open on a thread of their own, the window
-/// showing at once (a million spheres are 170 MB and take seconds).
-pub const BACKGROUND_BYTES: u64 = 4 << 20;
 
 #[derive(Debug, thiserror::Error)]
 pub enum GuiError {
@@ -110,7 +91,10 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
     let later = scene
         .map(Path::to_owned)
         .or_else(|| persisted.settings.last_file.clone())
-        .filter(|p| std::fs::metadata(p).is_ok_and(|m| m.is_file() && m.len() >= BACKGROUND_BYTES));
+        .filter(|p| {
+            std::fs::metadata(p)
+                .is_ok_and(|m| m.is_file() && m.len() >= crate::session::BACKGROUND_BYTES)
+        });
     let doc = match &later {
         Some(_) => document::Document::empty(),
         None => first_document(scene, &persisted.settings)?,

@@ -1,5 +1,5 @@
 //! The preview's picture on the GPU: one texture kept in step with the
-//! [`Preview`](super::preview::Preview) by uploading only what changed.
+//! [`Preview`](crate::session::preview::Preview) by uploading only what changed.
 //!
 //! The worker's tiles are recorded as [`Dirty`] regions and only those are
 //! uploaded. When the whole picture changes (a new size, or a coarse pass
@@ -19,83 +19,9 @@
 //! render. The averaged picture is also the truer one (nearest sampling
 //! drops most pixels).
 
+use crate::session::preview::{Dirty, Region};
 use egui::{Color32, ColorImage, Pos2, Rect, TextureHandle, TextureId, TextureOptions};
 use image::RgbImage;
-
-/// A rectangle of the image, in pixels.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct Region {
-    pub x: u32,
-    pub y: u32,
-    pub width: u32,
-    pub height: u32,
-}
-
-/// What of the image changed since the texture was last uploaded.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
-pub enum Dirty {
-    #[default]
-    Nothing,
-    /// These tiles: only they are uploaded (a 4000×4000 image is 48 MB; a
-    /// tile is 3 KB to 50 KB).
-    Regions(Vec<Region>),
-    /// Everything (a new size, or a coarse picture written at full size).
-    Whole,
-}
-
-impl Region {
-    pub fn area(&self) -> u64 {
-        u64::from(self.width) * u64::from(self.height)
-    }
-
-    /// The smallest region holding both.
-    fn union(self, other: Region) -> Region {
-        let x = self.x.min(other.x);
-        let y = self.y.min(other.y);
-        let right = (self.x + self.width).max(other.x + other.width);
-        let bottom = (self.y + self.height).max(other.y + other.height);
-        Region {
-            x,
-            y,
-            width: right - x,
-            height: bottom - y,
-        }
-    }
-}
-
-impl Dirty {
-    /// Past this many regions in one frame, a new one joins the region it
-    /// grows least (tiles come in bands: neighbours join into a band, and
-    /// a band at the top never joins one at the bottom into the whole
-    /// image).
-    const MAX_REGIONS: usize = 64;
-
-    pub fn add(&mut self, region: Region) {
-        if region.width == 0 || region.height == 0 {
-            return;
-        }
-        match self {
-            Dirty::Whole => {}
-            Dirty::Nothing => *self = Dirty::Regions(vec![region]),
-            Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => {
-                let growth = |r: &Region| r.union(region).area() - r.area();
-                if let Some(nearest) = list.iter_mut().min_by_key(|r| growth(r)) {
-                    *nearest = nearest.union(region);
-                }
-            }
-            Dirty::Regions(list) => list.push(region),
-        }
-    }
-
-    /// Pixels to upload.
-    pub fn area(&self, whole: u64) -> u64 {
-        match self {
-            Dirty::Nothing => 0,
-            Dirty::Regions(list) => list.iter().map(Region::area).sum(),
-            Dirty::Whole => whole,
-        }
-    }
-}
 
 /// Pixels converted and uploaded per frame while the whole picture goes up
 /// band by band: a few milliseconds of work on the development machine.

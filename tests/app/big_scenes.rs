@@ -11,12 +11,12 @@
 
 use crate::common;
 
-use rayoflight::gui::document::{Document, FileRead, Reload, SaveStep};
-use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
-use rayoflight::gui::worker::{Event, Worker};
 use rayoflight::render::request::RenderRequest;
 use rayoflight::scene::edit::{Edit, Field, Value};
 use rayoflight::scene::{self, Scene, Shape};
+use rayoflight::session::document::{Document, FileRead, Reload, SaveStep};
+use rayoflight::session::watcher::{FileEvent, SceneWatcher};
+use rayoflight::session::worker::{Event, Worker};
 use std::path::Path;
 use std::sync::Arc;
 use std::sync::mpsc;
@@ -91,7 +91,7 @@ fn a_save_is_read_back_sharing_the_objects_on_screen() {
 #[test]
 fn a_large_file_the_app_saved_is_not_read_back() {
     let text = spheres_text(30_000);
-    assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
+    assert!(text.len() as u64 >= rayoflight::session::BACKGROUND_BYTES);
     let (_dir, path, mut doc) = common::document_on(&text);
     let (rx, watcher) = watched(&path, &doc);
     doc.apply(set("object[4].color.red", 0.75)).unwrap();

@@ -12,12 +12,12 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::{Command, RayOfLightApp};
-use rayoflight::gui::document::{Document, Reload, SaveError, fingerprint_file};
-use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
 use rayoflight::scene::edit::{Edit, Field, Item, NewElement, Owner, Value};
 use rayoflight::scene::merge::Choice;
 use rayoflight::scene::{self, Illumination, Scene, Shape};
+use rayoflight::session::document::{Document, Reload, SaveError, fingerprint_file};
+use rayoflight::session::watcher::{FileEvent, SceneWatcher};
 
 /// Three spheres and two lights, a comment above each, comments inside.
 const SCENE: &str = r#"<?xml version="1.0"?>

@@ -1,17 +1,23 @@
-//! The app without a display: its worker, watcher and picture; editing, undo
-//! and save-back through the document; unsaved work kept through crashes and
-//! other programs' writes; looking around with the mouse; big scenes shared,
-//! not copied.
-// The app's document, watcher and worker are in the GUI build.
-#![cfg(feature = "gui")]
+//! The app without a display: its model's worker, watcher and picture, and
+//! big scenes shared, not copied (feature `session`: no window); editing,
+//! undo and save-back through the document, unsaved work kept through
+//! crashes and other programs' writes, the panel, looking around with the
+//! mouse (feature `gui`, driven by egui_kittest).
+#![cfg(feature = "session")]
 
 #[path = "../common/mod.rs"]
 mod common;
 
+#[cfg(feature = "gui")]
 mod util;
 
 mod background;
 mod big_scenes;
+#[cfg(feature = "gui")]
 mod editing;
+#[cfg(feature = "gui")]
+mod panel;
+#[cfg(feature = "gui")]
 mod unsaved_work;
+#[cfg(feature = "gui")]
 mod viewport;

@@ -15,14 +15,14 @@ use std::time::{Duration, Instant};
 use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use rayoflight::gui::app::RayOfLightApp;
-use rayoflight::gui::document::{Document, Reload, SaveError};
-use rayoflight::gui::preview::RenderState;
-use rayoflight::gui::settings::Persisted;
-use rayoflight::gui::watcher::{FileEvent, SceneWatcher};
 use rayoflight::math::TransformStep;
 use rayoflight::scene;
 use rayoflight::scene::edit::{Coef, Edit, Field, Item, Value};
 use rayoflight::scene::merge::Choice;
+use rayoflight::session::document::{Document, Reload, SaveError};
+use rayoflight::session::preview::RenderState;
+use rayoflight::session::settings::Persisted;
+use rayoflight::session::watcher::{FileEvent, SceneWatcher};
 
 /// The example scene (`scenes/example.xml`) with comments above and inside
 /// the light, and a number spelled `-2.0e0`.
@@ -894,7 +894,7 @@ fn esc_closes_the_help_and_o_hides_the_overlays() {
 #[test]
 fn a_large_file_opens_beside_the_window_and_esc_stops_waiting() {
     let text = many_spheres(60_000);
-    assert!(text.len() as u64 >= rayoflight::gui::BACKGROUND_BYTES);
+    assert!(text.len() as u64 >= rayoflight::session::BACKGROUND_BYTES);
     let (_dir, path) = common::scene_file("scene.xml", &text);
     let mut harness = app_on(Document::empty());
     // Esc while it loads: the window stops waiting; the late result is
@@ -1513,7 +1513,7 @@ fn saving_a_file_renamed_away_asks_first() {
         &mut harness,
         Duration::from_secs(10),
         "the file missing",
-        |app| *app.document().state() == rayoflight::gui::document::FileState::Missing,
+        |app| *app.document().state() == rayoflight::session::document::FileState::Missing,
     );
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
     harness.run_steps(3);

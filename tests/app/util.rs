@@ -6,10 +6,10 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use rayoflight::gui::app::RayOfLightApp;
-use rayoflight::gui::document::Document;
-use rayoflight::gui::settings::Persisted;
 use rayoflight::scene::edit::{Coef, Field};
 use rayoflight::scene::{self, Scene};
+use rayoflight::session::document::Document;
+use rayoflight::session::settings::Persisted;
 
 /// The app on `doc` with the settings `persisted`, in a 1200×900 window,
 /// its first frames drawn.

@@ -14,14 +14,14 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::Queryable;
 use glam::DVec3;
 use rayoflight::gui::app::{Command, RayOfLightApp};
-use rayoflight::gui::document::Document;
-use rayoflight::gui::preview::RenderState;
-use rayoflight::gui::settings::Persisted;
 use rayoflight::render::{
     self,
     navigate::{self, Pose},
 };
 use rayoflight::scene;
+use rayoflight::session::document::Document;
+use rayoflight::session::preview::RenderState;
+use rayoflight::session::settings::Persisted;
 
 const SCENE: &str = r#"<scene>
   <!-- GREEN sphere -->
@@ -486,7 +486,7 @@ fn the_app_starts_from_its_saved_settings() {
 fn without_a_file_the_app_reopens_the_last_one_if_it_is_still_there() {
     let (dir, path) = file();
     let mut settings = Persisted::in_memory().settings;
-    fn first(s: &rayoflight::gui::settings::Settings) -> Document {
+    fn first(s: &rayoflight::session::settings::Settings) -> Document {
         rayoflight::gui::first_document(None, s).unwrap()
     }
     assert!(

@@ -141,16 +141,16 @@ pub fn is_root() -> bool {
 /// A scene file holding `text` in a new temporary folder, opened as a
 /// document: the folder (kept while it lives), the file's path, the
 /// document.
-#[cfg(feature = "gui")]
+#[cfg(feature = "session")]
 pub fn document_on(
     text: &str,
 ) -> (
     tempfile::TempDir,
     std::path::PathBuf,
-    rayoflight::gui::document::Document,
+    rayoflight::session::document::Document,
 ) {
     let (dir, path) = scene_file("scene.xml", text);
-    let doc = rayoflight::gui::document::Document::open(&path).unwrap();
+    let doc = rayoflight::session::document::Document::open(&path).unwrap();
     (dir, path, doc)
 }
 

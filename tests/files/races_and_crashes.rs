@@ -653,8 +653,8 @@ fn a_loop_of_links_and_a_pipe_are_named_as_such() {
 #[cfg(feature = "gui")]
 #[test]
 fn the_apps_save_waits_for_the_lock_and_merges() {
-    use rayoflight::gui::document::Reload;
     use rayoflight::scene::edit::{Edit, Field, Value};
+    use rayoflight::session::document::Reload;
     let (_dir, path, mut doc) = common::document_on(TINY);
     doc.apply(Edit::Set(
         Field::parse("object[1].material.ka").unwrap(),

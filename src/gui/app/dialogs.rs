@@ -5,14 +5,29 @@
 
 use super::command::Command;
 use super::{Background, RayOfLightApp};
-use crate::gui::document::{Document, Reload, SaveError, SaveJob, SaveOutcome, SaveStep};
 use crate::render;
 use crate::scene::merge::Choice;
+use crate::session::document::{Document, Reload, SaveError, SaveJob, SaveOutcome, SaveStep};
 use egui::Key;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::sync::atomic::AtomicU64;
 use std::time::{Duration, Instant};
+
+/// The dialogs' part: the path being typed, the question waiting for an
+/// answer and the choices made in a conflict, the export and the save
+/// under way, the keys-and-mouse window.
+#[derive(Default)]
+pub(super) struct Dialogs {
+    pub(super) path_prompt: Option<PathPrompt>,
+    pub(super) confirm: Option<Confirm>,
+    /// The user's choice for each conflict of the pending merge.
+    pub(super) conflict_choices: Vec<Choice>,
+    pub(super) export: Option<Export>,
+    pub(super) saving: Option<Saving>,
+    /// The keys-and-mouse window is shown.
+    pub(super) help: bool,
+}
 
 /// A question the app is waiting on.
 #[derive(Debug, Clone, PartialEq)]
@@ -70,7 +85,7 @@ impl RayOfLightApp {
     /// read), with the status saying so and Esc to stop waiting.
     pub(super) fn open(&mut self, path: &Path) {
         let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
-        if bytes < crate::gui::BACKGROUND_BYTES {
+        if bytes < crate::session::BACKGROUND_BYTES {
             match Document::open(path) {
                 Ok(doc) => self.replace_document(doc),
                 Err(e) => self.notify(e.to_string()),
@@ -78,12 +93,12 @@ impl RayOfLightApp {
             return;
         }
         // An open still under way is stopped: this one replaces it.
-        if let Some(earlier) = &self.loading {
+        if let Some(earlier) = &self.files.loading {
             earlier.progress.stop();
         }
-        let id = self.loading.as_ref().map_or(1, |l| l.id + 1);
+        let id = self.files.loading.as_ref().map_or(1, |l| l.id + 1);
         let progress = Arc::new(crate::scene::LoadProgress::default());
-        self.loading = Some(Loading {
+        self.files.loading = Some(Loading {
             id,
             path: path.to_owned(),
             bytes,
@@ -91,7 +106,7 @@ impl RayOfLightApp {
             progress: Arc::clone(&progress),
         });
         let (tx, ctx, path) = (
-            self.background_tx.clone(),
+            self.background.tx.clone(),
             self.ctx.clone(),
             path.to_owned(),
         );
@@ -107,10 +122,10 @@ impl RayOfLightApp {
     /// A background open ended.
     pub(super) fn opened(&mut self, id: u64, result: Result<Document, crate::scene::LoadError>) {
         // Cancelled, or another open since: dropped.
-        if self.loading.as_ref().is_none_or(|l| l.id != id) {
+        if self.files.loading.as_ref().is_none_or(|l| l.id != id) {
             return;
         }
-        self.loading = None;
+        self.files.loading = None;
         match result {
             Ok(doc) => self.replace_document(doc),
             Err(e) => self.notify(e.to_string()),
@@ -120,7 +135,7 @@ impl RayOfLightApp {
     /// Esc while a file is being opened: stop waiting for it, and stop
     /// the load itself (its thread frees what it made and ends).
     pub(super) fn cancel_loading(&mut self) -> bool {
-        let Some(loading) = self.loading.take() else {
+        let Some(loading) = self.files.loading.take() else {
             return false;
         };
         loading.progress.stop();
@@ -138,7 +153,7 @@ impl RayOfLightApp {
     /// The status of a background open: how far it has got, and
     /// "opening big.xml (170 MB)… 2 s — Esc stops".
     pub(super) fn loading_status(&self) -> Option<(f32, String)> {
-        let loading = self.loading.as_ref()?;
+        let loading = self.files.loading.as_ref()?;
         Some((
             loading.progress.fraction() as f32,
             format!(
@@ -157,8 +172,10 @@ impl RayOfLightApp {
     /// renamed or deleted since it was read): a new file at its old path
     /// is not what every user expects.
     pub(super) fn save_then(&mut self, then: Option<Command>) {
-        if *self.doc.state() == crate::gui::document::FileState::Missing && self.saving.is_none() {
-            self.confirm = Some(Confirm::Missing(then));
+        if *self.doc.state() == crate::session::document::FileState::Missing
+            && self.dialogs.saving.is_none()
+        {
+            self.dialogs.confirm = Some(Confirm::Missing(then));
             return;
         }
         self.save_now(then);
@@ -166,7 +183,7 @@ impl RayOfLightApp {
 
     /// Saves to the document's path, then runs `then`.
     fn save_now(&mut self, then: Option<Command>) {
-        if self.saving.is_some() {
+        if self.dialogs.saving.is_some() {
             self.notify("already saving: wait for it".into());
             return;
         }
@@ -176,19 +193,19 @@ impl RayOfLightApp {
         };
         // The watcher reads the saved file back: it shares what is shown.
         // A large one it does not read back: the job tells it the bytes.
-        let job = match &self.watcher {
+        let job = match &self.files.watcher {
             Some(watcher) => {
                 watcher.share(&self.doc.scene().objects);
                 job.announcing(watcher.own_writes())
             }
             None => job,
         };
-        self.saving = Some(Saving {
+        self.dialogs.saving = Some(Saving {
             then,
             merged: false,
             started: Instant::now(),
         });
-        let tx = self.background_tx.clone();
+        let tx = self.background.tx.clone();
         let ctx = self.ctx.clone();
         job.spawn(move |job, outcome| {
             let _ = tx.send(Background::Saved(Box::new(job), outcome));
@@ -199,7 +216,7 @@ impl RayOfLightApp {
     /// A save ended: what it did, then what was to follow it, then the
     /// watcher's reports held back while it ran.
     pub(super) fn saved(&mut self, job: SaveJob, outcome: SaveOutcome) {
-        let Some(saving) = self.saving.take() else {
+        let Some(saving) = self.dialogs.saving.take() else {
             return;
         };
         // The file's version taken, or merged with the edits: the
@@ -209,7 +226,7 @@ impl RayOfLightApp {
                 // The file's changes were merged with the edits: write both.
                 self.after_edit();
                 self.save_then(saving.then);
-                if let Some(next) = &mut self.saving {
+                if let Some(next) = &mut self.dialogs.saving {
                     next.merged = true;
                 }
                 return;
@@ -231,10 +248,10 @@ impl RayOfLightApp {
                 self.execute(then);
             } else if self.doc.conflict().is_none() {
                 // Edited while saving, or not saved: ask again.
-                self.confirm = Some(Confirm::Discard(then));
+                self.dialogs.confirm = Some(Confirm::Discard(then));
             }
         }
-        for event in std::mem::take(&mut self.deferred_file_events) {
+        for event in std::mem::take(&mut self.files.deferred) {
             self.file_event(event);
         }
     }
@@ -244,7 +261,7 @@ impl RayOfLightApp {
             SaveError::NoPath => self.start_dialog(DialogKind::SaveAs),
             SaveError::Conflict => {
                 self.notify("the file changed on disk: choose between the versions".into());
-                self.conflict_choices.clear();
+                self.dialogs.conflict_choices.clear();
             }
             e => self.notify(format!("not saved: {e}")),
         }
@@ -265,7 +282,7 @@ impl RayOfLightApp {
     /// shows its progress and can cancel it. The pass shown (View › Pass)
     /// is what is exported; an EXR holds its floats, unclamped.
     pub(super) fn export(&mut self, path: PathBuf) {
-        if let Some(export) = &self.export {
+        if let Some(export) = &self.dialogs.export {
             self.notify(format!(
                 "already exporting {}: wait for it or cancel it",
                 export.path.display()
@@ -284,7 +301,7 @@ impl RayOfLightApp {
         // the chosen anti-aliasing.
         let request = crate::render::request::RenderRequest {
             method: None,
-            aa: Some(self.aa),
+            aa: Some(self.choice.aa),
             threads: None,
             region: None,
         };
@@ -294,20 +311,20 @@ impl RayOfLightApp {
             stop: Arc::new(AtomicU64::new(0)),
             started: Instant::now(),
         };
-        let job = crate::gui::worker::ExportJob {
-            pass: crate::output::takes_pass(self.pass, &path).then_some(self.pass),
+        let job = crate::session::worker::ExportJob {
+            pass: crate::output::takes_pass(self.passes.pass, &path).then_some(self.passes.pass),
             scene,
             request,
             progress: export.progress.clone(),
             cancel: render::Cancel::new(export.stop.clone(), 0),
         };
-        self.export = Some(export);
-        let tx = self.background_tx.clone();
+        self.dialogs.export = Some(export);
+        let tx = self.background.tx.clone();
         let ctx = self.ctx.clone();
         // Rendered by the worker, beside the preview; written here, on the
         // export's thread.
         self.worker.export(job, move |rendered| {
-            use crate::gui::worker::Exported;
+            use crate::session::worker::Exported;
             let written = rendered.map(|done| {
                 done.map(|image| match image {
                     Exported::Pass(image) => crate::output::save_pass(&image, &path),
@@ -326,7 +343,7 @@ impl RayOfLightApp {
 
     /// The export ended (see [`Background::Exported`]).
     pub(super) fn exported(&mut self, path: &Path, result: Result<bool, String>) {
-        self.export = None;
+        self.dialogs.export = None;
         self.notify(match result {
             Ok(true) => format!("exported {}", path.display()),
             Ok(false) => format!("export of {} cancelled", path.display()),
@@ -335,7 +352,7 @@ impl RayOfLightApp {
     }
 
     pub(super) fn start_dialog(&mut self, kind: DialogKind) {
-        let tx = self.background_tx.clone();
+        let tx = self.background.tx.clone();
         let ctx = self.ctx.clone();
         let start_dir = self.doc.path().and_then(Path::parent).map(Path::to_owned);
         std::thread::spawn(move || {
@@ -366,7 +383,7 @@ impl RayOfLightApp {
             // A dialog that closes at once without a choice could not open
             // (no desktop portal): offer a plain path field instead.
             None if took < Duration::from_millis(300) => {
-                self.path_prompt = Some(PathPrompt::new(kind, None))
+                self.dialogs.path_prompt = Some(PathPrompt::new(kind, None))
             }
             None => {}
         }
@@ -383,18 +400,18 @@ impl RayOfLightApp {
     /// Holds back closing the window while there are unsaved edits (ask)
     /// or a save runs (close when it is done).
     pub(super) fn guard_close(&mut self, ctx: &egui::Context) {
-        if !ctx.input(|i| i.viewport().close_requested()) || self.allow_close {
+        if !ctx.input(|i| i.viewport().close_requested()) || self.ending.allow_close {
             return;
         }
         // The window's close button asks as Quit does.
-        if self.saving.is_some() || self.doc.has_unsaved_edits() {
+        if self.dialogs.saving.is_some() || self.doc.has_unsaved_edits() {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.run(Command::Quit);
         }
     }
 
     pub(super) fn modals(&mut self, ui: &mut egui::Ui) {
-        if let Some(confirm) = self.confirm.clone() {
+        if let Some(confirm) = self.dialogs.confirm.clone() {
             self.confirm_modal(ui, confirm);
         }
         if self.doc.conflict().is_some() {
@@ -474,7 +491,7 @@ impl RayOfLightApp {
             answer = Some(Answer::Cancel);
         }
         let Some(answer) = answer else { return };
-        self.confirm = None;
+        self.dialogs.confirm = None;
         match (answer, confirm) {
             (Answer::Cancel, _) => {}
             (Answer::Go, Confirm::Replace(path)) => self.save_as(&path),
@@ -500,7 +517,8 @@ impl RayOfLightApp {
         let conflicts = pending.conflicts().to_vec();
         let restore = pending.is_restore();
         let onto_the_file = pending.is_restore_onto_the_file();
-        self.conflict_choices
+        self.dialogs
+            .conflict_choices
             .resize(conflicts.len(), Choice::Theirs);
         let mut done = None;
         let (heading, text, yours, theirs, take_theirs) = match (restore, onto_the_file) {
@@ -541,7 +559,10 @@ impl RayOfLightApp {
                 ui.strong(yours);
                 ui.strong(theirs);
                 ui.end_row();
-                for (c, choice) in conflicts.iter().zip(self.conflict_choices.iter_mut()) {
+                for (c, choice) in conflicts
+                    .iter()
+                    .zip(self.dialogs.conflict_choices.iter_mut())
+                {
                     ui.label(&c.path);
                     ui.add_enabled_ui(c.can_keep_yours, |ui| {
                         ui.radio_value(choice, Choice::Mine, &c.yours);
@@ -552,7 +573,7 @@ impl RayOfLightApp {
             });
             ui.horizontal(|ui| {
                 if ui.button("Apply these choices").clicked() {
-                    done = Some(self.conflict_choices.clone());
+                    done = Some(self.dialogs.conflict_choices.clone());
                 }
                 let keep_mine = match (restore, onto_the_file) {
                     (false, _) => "Keep all of mine",
@@ -578,7 +599,7 @@ impl RayOfLightApp {
                 Ok(_) => self.notify("merged".into()),
                 Err(e) => self.notify(format!("not saved: {e}")),
             }
-            self.conflict_choices.clear();
+            self.dialogs.conflict_choices.clear();
             self.journal_soon();
             self.after_edit();
         }
@@ -586,7 +607,7 @@ impl RayOfLightApp {
 
     pub(super) fn path_prompt_modal(&mut self, ui: &mut egui::Ui) {
         let mut chosen = None;
-        let Some(prompt) = &mut self.path_prompt else {
+        let Some(prompt) = &mut self.dialogs.path_prompt else {
             return;
         };
         let mut close = false;
@@ -616,7 +637,7 @@ impl RayOfLightApp {
             });
         });
         if close {
-            let prompt = self.path_prompt.take();
+            let prompt = self.dialogs.path_prompt.take();
             if let (Some(prompt), Some(path)) = (prompt, chosen) {
                 self.path_chosen(prompt.kind, path);
             }

@@ -7,16 +7,40 @@
 //! cursor is in, selected).
 
 use super::{Background, RayOfLightApp};
-use crate::gui::document::Reload;
-use crate::gui::pace::Pace;
 use crate::gui::panel::Selection;
-use crate::gui::preview::RenderState;
 use crate::gui::study;
-use crate::gui::watcher::FileEvent;
-use crate::gui::worker::Event;
+use crate::session::document::Reload;
+use crate::session::pace::Pace;
+use crate::session::preview::RenderState;
+use crate::session::watcher::FileEvent;
+use crate::session::worker::Event;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
+
+/// The open file as the app follows it: its watcher (and which one is
+/// current: events of an older one, for a file no longer open, are
+/// dropped), the reports held while a save runs, a large changed file
+/// being read, a file being opened in the background.
+#[derive(Default)]
+pub(super) struct Files {
+    pub(super) watcher: Option<crate::session::watcher::SceneWatcher>,
+    pub(super) generation: u64,
+    /// The watcher's reports that came while a save ran: handled after
+    /// it, as they came.
+    pub(super) deferred: Vec<FileEvent>,
+    pub(super) reading: bool,
+    pub(super) loading: Option<super::dialogs::Loading>,
+}
+
+/// What the preview renders with: the anti-aliasing (exports' too) and
+/// the live preview's method (auto unless chosen in the Study window) and
+/// the one while a value is dragged.
+#[derive(Default)]
+pub(super) struct RenderChoice {
+    pub(super) aa: u32,
+    pub(super) methods: study::PreviewMethods,
+}
 
 /// How long an interactive picture may keep the next one waiting (one
 /// that was cancelled never says it is done).
@@ -57,7 +81,7 @@ impl RayOfLightApp {
     /// while-dragging method when one is set and a button is held.
     ///
     /// While the mouse moves the camera or drags a value, only one pass is
-    /// rendered, as coarse as keeps [`TARGET_FPS`](crate::gui::pace::TARGET_FPS)
+    /// rendered, as coarse as keeps [`TARGET_FPS`](crate::session::pace::TARGET_FPS)
     /// pictures a second; the next request after the mouse stops refines
     /// from that scale.
     pub(super) fn request_render(&mut self) {
@@ -72,8 +96,8 @@ impl RayOfLightApp {
             return;
         }
         self.schedule.render_pending = false;
-        let dragging = self.methods.dragging.is_some() && interacting;
-        let request = self.methods.request(dragging, self.aa);
+        let dragging = self.choice.methods.dragging.is_some() && interacting;
+        let request = self.choice.methods.request(dragging, self.choice.aa);
         self.schedule.rendered_dragging = dragging;
         let camera = &self.doc.scene().camera;
         let (width, height) = (camera.width, camera.height);
@@ -86,7 +110,7 @@ impl RayOfLightApp {
         } else {
             let passes = match self.schedule.interactive.take() {
                 Some(scale) => Pace::refine(scale),
-                None => crate::gui::worker::passes(width, height),
+                None => crate::session::worker::passes(width, height),
             };
             self.worker.request_passes(scene, request, passes)
         };
@@ -94,7 +118,7 @@ impl RayOfLightApp {
         self.schedule.asked = Some(Asked {
             generation,
             at: Instant::now(),
-            frames: self.frame_stats.frames_drawn,
+            frames: self.status.frame_stats.frames_drawn,
         });
         self.schedule.in_flight = interacting.then(|| (generation, Instant::now()));
         self.study.superseded(generation);
@@ -105,8 +129,8 @@ impl RayOfLightApp {
 
     /// A drag of the camera or of a value is under way.
     pub(super) fn interacting(&self) -> bool {
-        self.interaction.is_navigating()
-            || self.interaction.is_grabbing()
+        self.screen.interaction.is_navigating()
+            || self.screen.interaction.is_grabbing()
             || self.ctx.dragged_id().is_some()
     }
 
@@ -131,11 +155,12 @@ impl RayOfLightApp {
                             ..
                         } => {
                             self.schedule.pace.measured(*rays, *elapsed);
-                            if self.frame_stats.stats && *scale == 1 {
+                            if self.status.frame_stats.stats && *scale == 1 {
                                 // The frames drawn while it rendered.
                                 let (frames, per_second) = match self.schedule.asked {
                                     Some(asked) if asked.generation == event.generation() => {
-                                        let frames = self.frame_stats.frames_drawn - asked.frames;
+                                        let frames =
+                                            self.status.frame_stats.frames_drawn - asked.frames;
                                         let secs = asked.at.elapsed().as_secs_f64().max(1e-9);
                                         (frames, frames as f64 / secs)
                                     }
@@ -152,7 +177,7 @@ impl RayOfLightApp {
                     };
                     let generation = event.generation();
                     if self.preview.apply(newest, event) && finished {
-                        self.frame_stats.pictures.push_back(Instant::now());
+                        self.status.frame_stats.pictures.push_back(Instant::now());
                         // The interactive picture is done: the next one.
                         if self
                             .schedule
@@ -172,14 +197,14 @@ impl RayOfLightApp {
         if study_ended && !matches!(self.preview.state(), RenderState::Done { .. }) {
             self.request_render();
         }
-        while let Ok(message) = self.background.try_recv() {
+        while let Ok(message) = self.background.rx.try_recv() {
             match message {
                 Background::Ids(key, ids) => self.outline_ready(key, ids),
                 Background::Pass(key, image) => self.pass_ready(key, *image),
-                Background::File(generation, _) if generation != self.watch_generation => {}
+                Background::File(generation, _) if generation != self.files.generation => {}
                 // What the watcher saw while a save ran comes after it.
-                Background::File(_, event) if self.saving.is_some() => {
-                    self.deferred_file_events.push(event);
+                Background::File(_, event) if self.dialogs.saving.is_some() => {
+                    self.files.deferred.push(event);
                 }
                 Background::File(_, event) => self.file_event(event),
                 Background::Saved(job, outcome) => self.saved(*job, outcome),
@@ -229,7 +254,7 @@ impl RayOfLightApp {
     }
 
     pub(super) fn file_event(&mut self, event: FileEvent) {
-        self.reading = matches!(event, FileEvent::Reading);
+        self.files.reading = matches!(event, FileEvent::Reading);
         match event {
             FileEvent::Loaded(read) => match self.keeping_selection(|app| app.doc.file_read(*read))
             {
@@ -238,7 +263,7 @@ impl RayOfLightApp {
                     self.notify("the file changed on disk: your edits were applied onto it".into());
                     self.after_edit();
                 }
-                Reload::Conflict => self.conflict_choices.clear(),
+                Reload::Conflict => self.dialogs.conflict_choices.clear(),
                 Reload::Unchanged | Reload::Broken => {}
             },
             FileEvent::Broken(error) => {
@@ -271,12 +296,12 @@ impl RayOfLightApp {
             study::Action::Cancel => self.worker.cancel(),
             study::Action::Preview(name) => {
                 if let Some(method) = crate::render::method(name) {
-                    self.methods.preview = method;
+                    self.choice.methods.preview = method;
                     self.request_render();
                 }
             }
             study::Action::WhileDragging(name) => {
-                self.methods.dragging = name.and_then(crate::render::method);
+                self.choice.methods.dragging = name.and_then(crate::render::method);
             }
         }
     }

@@ -3,18 +3,27 @@
 //! ([`crate::render::Prepared::explain`]: the render's own numbers), and
 //! draws the path over the picture. Clicking a term selects the object
 //! and the coefficient it comes from in the panel. The worker traces the
-//! tree ([`crate::gui::worker::Worker::explain`]); the window goes on
+//! tree ([`crate::session::worker::Worker::explain`]); the window goes on
 //! drawing meanwhile, and the newest explain asked for wins.
 
 use super::{Interaction, RayOfLightApp, picture};
 use crate::gui::panel::Selection;
-use crate::gui::preview::RenderState;
 use crate::render::explain::{Bounce, Sample, describe_ray, number, vector};
 use crate::render::{Explanation, navigate};
 use crate::scene::edit::{Coef, Field};
+use crate::session::preview::RenderState;
 use egui::{Color32, Pos2, Vec2};
 use glam::DVec3;
 use std::collections::BTreeMap;
+
+/// The explain part: the pixel explained in its window, the one the worker
+/// is tracing, and a pick or explain waiting for the scene to be prepared.
+#[derive(Default)]
+pub(super) struct ExplainState {
+    pub(super) explained: Option<Shown>,
+    pub(super) explaining: Option<Explaining>,
+    pub(super) waiting: Option<picture::Waiting>,
+}
 
 /// The explained pixel on screen.
 pub(super) struct Shown {
@@ -50,24 +59,24 @@ impl RayOfLightApp {
     /// Explains pixel (x, y) of the picture: its tree in the window, its
     /// path over the picture.
     pub fn explain_pixel(&mut self, x: u32, y: u32) {
-        if self.interaction.is_explain_armed() {
-            self.interaction = Interaction::Idle;
+        if self.screen.interaction.is_explain_armed() {
+            self.screen.interaction = Interaction::Idle;
         }
         let scene = self.doc.scene();
         // The worker's prepared scene (the method of the picture, its
         // rays per pixel); until it has prepared this scene (it is
         // rendering it), the explain waits for it.
         let Some(prepared) = self.worker.prepared(scene) else {
-            self.waiting = Some(picture::Waiting::Explain(x, y));
+            self.explain.waiting = Some(picture::Waiting::Explain(x, y));
             return;
         };
         static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
         let id = NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        self.explaining = Some(Explaining {
+        self.explain.explaining = Some(Explaining {
             id,
             generation: self.worker.newest(),
         });
-        let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
+        let (tx, ctx) = (self.background.tx.clone(), self.ctx.clone());
         self.worker.explain(prepared, (x, y), move |explanation| {
             let _ = tx.send(super::Background::Explained(id, explanation.map(Box::new)));
             ctx.request_repaint();
@@ -77,16 +86,16 @@ impl RayOfLightApp {
     /// The worker's answer to explain request `id`: shown if it is the
     /// newest asked for.
     pub(super) fn explained(&mut self, id: u64, explanation: Option<Box<Explanation>>) {
-        let Some(explaining) = self.explaining.take_if(|e| e.id == id) else {
+        let Some(explaining) = self.explain.explaining.take_if(|e| e.id == id) else {
             return;
         };
         let Some(explanation) = explanation else {
             // Outside the picture (it shrank).
-            self.explained = None;
+            self.explain.explained = None;
             return;
         };
         let explanation = *explanation;
-        let sample = self.explained.as_ref().map_or(0, |s| s.sample);
+        let sample = self.explain.explained.as_ref().map_or(0, |s| s.sample);
         let sample = sample.min(explanation.samples.len() - 1);
         let labels = explanation
             .samples
@@ -94,7 +103,7 @@ impl RayOfLightApp {
             .flat_map(|s| &s.bounces)
             .map(|b| (b.object, self.doc.object_label(b.object)))
             .collect();
-        self.explained = Some(Shown {
+        self.explain.explained = Some(Shown {
             explanation,
             labels,
             sample,
@@ -105,44 +114,48 @@ impl RayOfLightApp {
     /// Whether the worker is tracing a pixel to explain (for tests and
     /// tools driving the app).
     pub fn is_explaining(&self) -> bool {
-        self.explaining.is_some()
+        self.explain.explaining.is_some()
     }
 
     /// Once the picture of an edited scene (or a moved camera) is done,
     /// the same pixel is explained again: the numbers follow the edits.
     pub(super) fn refresh_explained(&mut self) {
-        let Some(shown) = &self.explained else {
+        let Some(shown) = &self.explain.explained else {
             return;
         };
         let newest = self.worker.newest();
         let done = matches!(self.preview.state(), RenderState::Done { .. })
             && self.preview.generation() == newest;
-        if shown.generation != newest && done && !self.interacting() && self.explaining.is_none() {
+        if shown.generation != newest
+            && done
+            && !self.interacting()
+            && self.explain.explaining.is_none()
+        {
             let (x, y) = (shown.explanation.x, shown.explanation.y);
-            let armed = self.interaction.is_explain_armed();
+            let armed = self.screen.interaction.is_explain_armed();
             self.explain_pixel(x, y);
             if armed {
-                self.interaction = Interaction::ExplainArmed;
+                self.screen.interaction = Interaction::ExplainArmed;
             }
         }
     }
 
     /// The pixel explained in the window, if any.
     pub fn explanation(&self) -> Option<&Explanation> {
-        self.explained.as_ref().map(|s| &s.explanation)
+        self.explain.explained.as_ref().map(|s| &s.explanation)
     }
 
     /// The window of the explained pixel.
     pub(super) fn explain_window(&mut self, ctx: &egui::Context) {
         // The pixel of the finished picture of the scene explained.
-        let on_screen = self.explained.as_ref().and_then(|shown| {
+        let on_screen = self.explain.explained.as_ref().and_then(|shown| {
             let done = matches!(self.preview.state(), RenderState::Done { .. })
                 && self.preview.generation() == shown.generation;
             let (x, y) = (shown.explanation.x, shown.explanation.y);
             let image = self.preview.image();
             (done && x < image.width() && y < image.height()).then(|| image.get_pixel(x, y).0)
         });
-        let Some(shown) = &mut self.explained else {
+        let Some(shown) = &mut self.explain.explained else {
             return;
         };
         let mut open = true;
@@ -199,7 +212,7 @@ impl RayOfLightApp {
             };
         }
         if !open {
-            self.explained = None;
+            self.explain.explained = None;
         }
     }
 
@@ -210,7 +223,7 @@ impl RayOfLightApp {
         painter: &egui::Painter,
         to_screen: impl Fn(f64, f64) -> Pos2,
     ) {
-        let Some(shown) = &self.explained else {
+        let Some(shown) = &self.explain.explained else {
             return;
         };
         let e = &shown.explanation;

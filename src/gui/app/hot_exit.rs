@@ -1,4 +1,4 @@
-//! The app's side of the journal of unsaved edits ([`crate::gui::journal`]):
+//! The app's side of the journal of unsaved edits ([`crate::session::journal`]):
 //! keeping this window's entry as edits are made; when a scene opens,
 //! restoring the entries of windows that are gone (every one made on this
 //! file, one after the other, each merged onto the edits before it, a
@@ -14,8 +14,17 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use super::RayOfLightApp;
-use crate::gui::document::Reload;
-use crate::gui::journal::{self, Claimed, Entry, Job, Match, Writer};
+use crate::session::document::Reload;
+use crate::session::journal::{self, Claimed, Entry, Job, Match, Writer};
+
+/// How the app ends: the user chose to quit without saving, or a signal
+/// asked it to end (and when the app saw it).
+#[derive(Default)]
+pub(super) struct Ending {
+    pub(super) allow_close: bool,
+    pub(super) signalled: Arc<AtomicBool>,
+    pub(super) signalled_at: Option<Instant>,
+}
 
 /// The journal as the app keeps it.
 pub(super) struct HotExit {
@@ -107,22 +116,24 @@ impl RayOfLightApp {
     /// removes the journal once nothing is unsaved, and ends the app on a
     /// signal.
     pub(super) fn keep_journal(&mut self, ctx: &egui::Context) {
-        if self.signalled.load(Ordering::SeqCst) {
+        if self.ending.signalled.load(Ordering::SeqCst) {
             // A save or an export under way stops at its next write (the
             // signal is recorded for it too, `crate::system::interrupt`) and
             // removes its temporary file: the app ends once it has, or
             // after STOP_WAIT.
-            let since = *self.signalled_at.get_or_insert_with(Instant::now);
-            if let Some(export) = &self.export {
+            let since = *self.ending.signalled_at.get_or_insert_with(Instant::now);
+            if let Some(export) = &self.dialogs.export {
                 export.cancel();
             }
-            if (self.saving.is_some() || self.export.is_some()) && since.elapsed() < STOP_WAIT {
+            if (self.dialogs.saving.is_some() || self.dialogs.export.is_some())
+                && since.elapsed() < STOP_WAIT
+            {
                 ctx.request_repaint_after(Duration::from_millis(5));
                 return;
             }
             self.flush_journal();
             // Nothing asks: the edits are in the journal.
-            self.allow_close = true;
+            self.ending.allow_close = true;
             ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             return;
         }
@@ -131,7 +142,7 @@ impl RayOfLightApp {
             return;
         };
         if let Some(e) = hot.writer.error() {
-            self.notice = Some((e, Instant::now()));
+            self.status.notice = Some((e, Instant::now()));
         }
         let generation = self.doc.generation();
         if hot.kept == Some(generation) {

@@ -7,7 +7,7 @@ use super::command::{BINDINGS, Command, MOUSE, Trigger, binding};
 use super::dialogs::{Confirm, DialogKind, PathPrompt};
 use super::picture::View;
 use super::{Interaction, RayOfLightApp};
-use crate::gui::document::Document;
+use crate::session::document::Document;
 use std::path::{Path, PathBuf};
 
 impl RayOfLightApp {
@@ -27,7 +27,7 @@ impl RayOfLightApp {
             .map(|&(what, does)| (what.to_owned(), does))
             .chain(keys);
         egui::Window::new("Keys and mouse")
-            .open(&mut self.help_open)
+            .open(&mut self.dialogs.help)
             .resizable(false)
             .collapsible(false)
             .show(ctx, |ui| {
@@ -48,14 +48,14 @@ impl RayOfLightApp {
     /// unsaved edits ask first.
     pub fn run(&mut self, command: Command) {
         if command == Command::Quit
-            && let Some(saving) = &mut self.saving
+            && let Some(saving) = &mut self.dialogs.saving
         {
             saving.then = Some(Command::Quit);
             self.notify("saving: the window closes when the file is written".into());
             return;
         }
         if command.drops_edits() && self.doc.has_unsaved_edits() {
-            self.confirm = Some(Confirm::Discard(command));
+            self.dialogs.confirm = Some(Confirm::Discard(command));
             return;
         }
         self.execute(command);
@@ -64,7 +64,9 @@ impl RayOfLightApp {
     pub(super) fn execute(&mut self, command: Command) {
         match command {
             Command::Open => self.start_dialog(DialogKind::Open),
-            Command::OpenPath => self.path_prompt = Some(PathPrompt::new(DialogKind::Open, None)),
+            Command::OpenPath => {
+                self.dialogs.path_prompt = Some(PathPrompt::new(DialogKind::Open, None))
+            }
             Command::OpenFile(path) => self.open(&path),
             Command::OpenBuiltin => self.replace_document(Document::builtin()),
             Command::Reload => match self.doc.path().map(Path::to_owned) {
@@ -75,7 +77,7 @@ impl RayOfLightApp {
             Command::SaveAs => self.start_dialog(DialogKind::SaveAs),
             Command::SaveAsPath => {
                 let current = self.doc.path().map(|p| p.display().to_string());
-                self.path_prompt = Some(PathPrompt::new(DialogKind::SaveAs, current));
+                self.dialogs.path_prompt = Some(PathPrompt::new(DialogKind::SaveAs, current));
             }
             Command::SaveTo(path) => {
                 let other_file = path.exists()
@@ -84,14 +86,14 @@ impl RayOfLightApp {
                         .path()
                         .is_none_or(|current| !crate::system::files::same_file(current, &path));
                 if other_file {
-                    self.confirm = Some(Confirm::Replace(path));
+                    self.dialogs.confirm = Some(Confirm::Replace(path));
                 } else {
                     self.save_as(&path);
                 }
             }
             Command::Export => self.start_dialog(DialogKind::Export),
             Command::ExportPath => {
-                self.path_prompt = Some(PathPrompt::new(DialogKind::Export, None))
+                self.dialogs.path_prompt = Some(PathPrompt::new(DialogKind::Export, None))
             }
             Command::RevertEdits => {
                 self.doc.revert();
@@ -110,49 +112,49 @@ impl RayOfLightApp {
                 }
             }
             Command::Quit => {
-                self.allow_close = true;
+                self.ending.allow_close = true;
                 self.ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             }
-            Command::Fit => self.view = View::fit(),
-            Command::OneToOne => self.view = View::one_to_one(),
-            Command::ZoomIn => self.view.zoom_by(1.25),
-            Command::ZoomOut => self.view.zoom_by(1.0 / 1.25),
+            Command::Fit => self.screen.view = View::fit(),
+            Command::OneToOne => self.screen.view = View::one_to_one(),
+            Command::ZoomIn => self.screen.view.zoom_by(1.25),
+            Command::ZoomOut => self.screen.view.zoom_by(1.0 / 1.25),
             Command::CancelRender => {
                 // Esc puts back an object being moved, else disarms the
                 // explain click, closes the help, stops opening a file or
                 // stops the render, the first that applies.
-                if self.interaction.is_grabbing() {
+                if self.screen.interaction.is_grabbing() {
                     self.grab_end(false);
-                } else if self.interaction.is_explain_armed() {
-                    self.interaction = Interaction::Idle;
-                } else if self.help_open {
-                    self.help_open = false;
+                } else if self.screen.interaction.is_explain_armed() {
+                    self.screen.interaction = Interaction::Idle;
+                } else if self.dialogs.help {
+                    self.dialogs.help = false;
                 } else if !self.cancel_loading() {
                     self.worker.cancel();
                     self.preview.cancel();
                 }
             }
             Command::Render => self.request_render(),
-            Command::Overlays => self.overlays = !self.overlays,
+            Command::Overlays => self.overlay.shown = !self.overlay.shown,
             Command::Grab => {
                 let pointer = self.ctx.input(|i| i.pointer.hover_pos());
                 self.grab_start(pointer);
             }
             Command::CameraFromFile => self.camera_from_file(),
             // E arms the explain click, or disarms it; not during a drag.
-            Command::Explain => match self.interaction {
-                Interaction::Idle => self.interaction = Interaction::ExplainArmed,
-                Interaction::ExplainArmed => self.interaction = Interaction::Idle,
+            Command::Explain => match self.screen.interaction {
+                Interaction::Idle => self.screen.interaction = Interaction::ExplainArmed,
+                Interaction::ExplainArmed => self.screen.interaction = Interaction::Idle,
                 _ => {}
             },
             Command::ShowPass(pass) => self.show_pass(pass),
-            Command::Help => self.help_open = !self.help_open,
+            Command::Help => self.dialogs.help = !self.dialogs.help,
             Command::Study => {
                 self.study.open = true;
                 self.study.set_plan(self.doc.scene());
             }
             Command::AntiAliasing(aa) => {
-                self.aa = aa;
+                self.choice.aa = aa;
                 self.request_render();
             }
             Command::OpenInEditor => self.open_in_editor(),
@@ -162,13 +164,13 @@ impl RayOfLightApp {
     /// Edit › Open in editor: the scene file, at the selected object's
     /// element (the top of the file when none is selected).
     pub(super) fn open_in_editor(&mut self) {
-        use crate::gui::editor;
+        use crate::session::editor;
         let Some(path) = self.doc.path().map(Path::to_owned) else {
             self.notify("the built-in example has no file: save it first (File › Save as)".into());
             return;
         };
         let env = editor::Environment::current();
-        let Some(chosen) = editor::resolve(&env, self.settings.editor.as_deref()) else {
+        let Some(chosen) = editor::resolve(&env, self.kept.settings.editor.as_deref()) else {
             self.notify(editor::EditorError::NoEditor.to_string());
             return;
         };
@@ -176,7 +178,7 @@ impl RayOfLightApp {
         let position = selected.and_then(|n| self.doc.object_position(n));
         let (line, column) = position.map_or((1, 1), |p| (p.line, p.column));
         let started = editor::command_line(&chosen, &env, &path, line, column).and_then(|argv| {
-            let sender = self.editor_failed.0.clone();
+            let sender = self.editors.failed.0.clone();
             let ctx = self.ctx.clone();
             editor::start(&argv, chosen.source, move |said| {
                 let _ = sender.send(said);
@@ -204,7 +206,10 @@ impl RayOfLightApp {
 
     pub(super) fn shortcuts(&mut self, ctx: &egui::Context) {
         // A question on screen takes the keys.
-        if self.confirm.is_some() || self.doc.conflict().is_some() || self.path_prompt.is_some() {
+        if self.dialogs.confirm.is_some()
+            || self.doc.conflict().is_some()
+            || self.dialogs.path_prompt.is_some()
+        {
             return;
         }
         // Undo, redo and bare keys belong to a text field while one is
@@ -285,7 +290,7 @@ impl RayOfLightApp {
             item(ui, enabled, None, label, command);
         };
         let dirty = self.doc.has_unsaved_edits();
-        let shown_pass = self.pass;
+        let shown_pass = self.passes.pass;
         let has_file = self.doc.path().is_some();
         let undo = self.doc.undo_label().map(|l| format!("Undo {l}"));
         let redo = self.doc.redo_label().map(|l| format!("Redo {l}"));
@@ -295,7 +300,7 @@ impl RayOfLightApp {
                 pick(ui, true, Command::OpenPath);
                 pick(ui, true, Command::OpenBuiltin);
                 ui.menu_button("Recent", |ui| {
-                    let recent = self.recent.existing();
+                    let recent = self.kept.recent.existing();
                     if recent.is_empty() {
                         ui.label("(none)");
                     }
@@ -332,7 +337,13 @@ impl RayOfLightApp {
                 pick(ui, true, Command::Help);
                 pick(ui, true, Command::Explain);
                 let overlays = binding(&Command::Overlays).map_or("", |b| b.label);
-                item(ui, true, Some(self.overlays), overlays, Command::Overlays);
+                item(
+                    ui,
+                    true,
+                    Some(self.overlay.shown),
+                    overlays,
+                    Command::Overlays,
+                );
                 pick(ui, true, Command::Render);
                 ui.menu_button("Pass", |ui| {
                     for pass in crate::render::Pass::ALL {
@@ -347,7 +358,7 @@ impl RayOfLightApp {
                     item(
                         ui,
                         true,
-                        Some(self.aa == aa),
+                        Some(self.choice.aa == aa),
                         &text,
                         Command::AntiAliasing(aa),
                     );

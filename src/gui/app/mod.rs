@@ -1,11 +1,14 @@
 //! The application: window layout and the glue between the document, the
 //! file watcher, the render worker and the picture on screen.
 //!
-//! The state is owned here (`RayOfLightApp`) and the work is elsewhere: the
-//! worker renders, the watcher reads files, [`Document`] keeps the text, the
-//! edits and their undo, [`Preview`] assembles tiles. This module holds the
-//! state and the frame ([`RayOfLightApp::draw`]); its children hold the
-//! rest:
+//! The work is the model's ([`crate::session`]): the worker renders, the
+//! watcher reads files, [`Document`] keeps the text, the edits and their
+//! undo, [`Preview`] assembles tiles. `RayOfLightApp` holds the model's
+//! parts and one struct per part of the window, each defined in the
+//! module that draws it (`picture::Screen`, `overlay::Overlay`,
+//! `explain::ExplainState`, `passes::Passes`, `dialogs::Dialogs`,
+//! `status::Status`, `events::Files`, `hot_exit::Ending`); this module
+//! holds the frame ([`RayOfLightApp::draw`]); its children hold the rest:
 //! - [`command`]: the [`Command`] enum of menus and keys, and the one
 //!   binding table that gives each its label, keys and help line;
 //! - `menus`: the menu bar, the keys and the help window read from that
@@ -43,22 +46,18 @@ mod picture;
 mod status;
 
 pub use command::Command;
-use dialogs::{Confirm, DialogKind, PathPrompt};
-use picture::{View, Waiting};
+use dialogs::DialogKind;
+use picture::View;
 
-use super::document::{Document, SaveJob, SaveOutcome};
 use super::panel::{self, Selection};
-use super::preview::{Preview, RenderState};
-use super::settings::{Persisted, Recent, Settings};
 use super::study::{PreviewMethods, StudyWindow};
-use super::watcher::{FileEvent, SceneWatcher};
-use super::worker::Worker;
 use crate::render;
-use crate::scene::merge::Choice;
-use egui::Pos2;
+use crate::session::document::{Document, SaveJob, SaveOutcome};
+use crate::session::preview::{Preview, RenderState};
+use crate::session::settings::{Persisted, Recent, Settings};
+use crate::session::watcher::{FileEvent, SceneWatcher};
+use crate::session::worker::Worker;
 use std::path::{Path, PathBuf};
-use std::sync::Arc;
-use std::sync::atomic::AtomicBool;
 use std::sync::mpsc::{self, Receiver, Sender};
 use std::time::{Duration, Instant};
 
@@ -122,103 +121,58 @@ impl Interaction {
     }
 }
 
+/// The window. Each part of it owns its state (the picture, the
+/// overlay, explain, passes, dialogs, the status bar, …) in a struct of its
+/// own module; what it shows and changes is the model's
+/// ([`crate::session`]): the document, the worker, the preview.
 pub struct RayOfLightApp {
     doc: Document,
     worker: Worker,
     preview: Preview,
-    texture: crate::gui::texture::PictureTexture,
-    /// The coarse pass's picture at its own size (see [`Preview::coarse`]).
-    coarse_texture: Option<egui::TextureHandle>,
-    /// The coarse picture is on screen (until the finer one is uploaded).
-    showing_coarse: bool,
-    watcher: Option<SceneWatcher>,
-    background: Receiver<Background>,
-    background_tx: Sender<Background>,
-    path_prompt: Option<PathPrompt>,
-    view: View,
     selection: Selection,
-    /// A question waiting for an answer.
-    confirm: Option<Confirm>,
-    /// The user's choice for each conflict of the pending merge.
-    conflict_choices: Vec<Choice>,
-    /// Anti-aliasing of the preview and of exports.
-    aa: u32,
-    /// The live preview's method (auto unless chosen in the Study window)
-    /// and the one while a value is dragged.
-    methods: PreviewMethods,
-    study: StudyWindow,
-    /// A transient message for the status bar (export done, save failed).
-    notice: Option<(String, Instant)>,
-    /// What an editor the app started said when it failed (its thread
-    /// sends it), for the status bar.
-    editor_failed: (
-        std::sync::mpsc::Sender<String>,
-        std::sync::mpsc::Receiver<String>,
-    ),
-    /// The socket the editor link listens on, removed when the app ends
-    /// ([`RayOfLightApp::listen_to_editors`]).
-    editor_socket: Option<PathBuf>,
-    /// The editors connected over the link, for a click on an object to
-    /// ask them to show its element.
-    editors: crate::desktop::editor_link::Peers,
-    /// The export running in the background, if any.
-    export: Option<dialogs::Export>,
-    /// The save under way, if any.
-    saving: Option<dialogs::Saving>,
-    /// The watcher's reports that came while a save ran: handled after it,
-    /// as they came.
-    deferred_file_events: Vec<FileEvent>,
-    recent: Recent,
-    /// Window size, anti-aliasing and study runs, saved on exit.
-    settings: Settings,
-    /// Which watcher is the current one: events of an older one (for a
-    /// file no longer open) still in the channel are dropped.
-    watch_generation: u64,
-    /// The pixel under the cursor and its colour.
-    hovered: Option<(u32, u32, [u8; 3])>,
-    /// What the mouse is doing on the picture: one thing at a time.
-    interaction: Interaction,
     /// When to render, how coarse, and what is in flight.
     schedule: events::RenderSchedule,
-    /// Frames and pictures a second, for the status bar and
-    /// `RAYOFLIGHT_STATS`.
-    frame_stats: status::FrameStats,
-    /// The light markers drawn in the last frame: light and position.
-    markers: Vec<(usize, Pos2)>,
-    /// The selected object's outline, and what the newest one asked for is.
-    outline: Option<overlay::Outline>,
-    outline_wanted: Option<(u32, u64)>,
-    /// When the wheel last moved the camera, while its undo step is open.
-    wheel_at: Option<Instant>,
-    /// The keys-and-mouse window is shown.
-    help_open: bool,
-    /// Light markers, the outline and the explained path are drawn (O).
-    overlays: bool,
-    /// The explained pixel, in its window.
-    explained: Option<explain::Shown>,
-    /// The explain the worker is tracing, if any.
-    explaining: Option<explain::Explaining>,
-    /// A pick or explain waiting for the worker to prepare the scene.
-    waiting: Option<Waiting>,
-    /// The pass shown (View › Pass), and its picture once rendered.
-    pass: render::Pass,
-    pass_view: Option<passes::PassView>,
-    pass_requests: passes::PassRequests,
-    /// The window title last sent.
-    title: String,
-    /// The user chose to quit without saving.
-    allow_close: bool,
-    /// The watcher is reading a large file that changed.
-    reading: bool,
-    /// A file being opened in the background, if any.
-    loading: Option<dialogs::Loading>,
+    choice: events::RenderChoice,
+    study: StudyWindow,
+    files: events::Files,
+    background: Channel,
+    screen: picture::Screen,
+    overlay: overlay::Overlay,
+    explain: explain::ExplainState,
+    passes: passes::Passes,
+    dialogs: dialogs::Dialogs,
+    status: status::Status,
+    editors: EditorLink,
+    kept: Kept,
     /// The journal of unsaved edits, when the app keeps one.
     hot_exit: Option<hot_exit::HotExit>,
-    /// A signal asked the app to end (see [`RayOfLightApp::end_on_signals`]).
-    signalled: Arc<AtomicBool>,
-    /// When the app saw it.
-    signalled_at: Option<Instant>,
+    ending: hot_exit::Ending,
     ctx: egui::Context,
+}
+
+/// What background threads send to the UI thread, and the sender they
+/// are given.
+struct Channel {
+    rx: Receiver<Background>,
+    tx: Sender<Background>,
+}
+
+/// The link to the user's editors: what an editor the app started said
+/// when it failed (its thread sends it, for the status bar), the socket
+/// `rayoflight lsp` reaches the app by (removed when the app ends,
+/// [`RayOfLightApp::listen_to_editors`]), and the editors connected over
+/// it, for a click on an object to ask them to show its element.
+struct EditorLink {
+    failed: (Sender<String>, Receiver<String>),
+    socket: Option<PathBuf>,
+    peers: crate::desktop::editor_link::Peers,
+}
+
+/// What the app remembers between runs: the recent files, and the window
+/// size, anti-aliasing and study runs (saved on exit).
+struct Kept {
+    recent: Recent,
+    settings: Settings,
 }
 
 impl RayOfLightApp {
@@ -235,60 +189,40 @@ impl RayOfLightApp {
         let worker = Worker::spawn(Worker::default_threads(), move || {
             wake_ctx.request_repaint()
         });
-        let (background_tx, background) = mpsc::channel();
+        let (tx, rx) = mpsc::channel();
         let mut app = RayOfLightApp {
             doc,
             worker,
             preview: Preview::default(),
-            texture: Default::default(),
-            showing_coarse: false,
-            coarse_texture: None,
-            watcher: None,
-            background,
-            background_tx,
-            title: String::new(),
-            allow_close: false,
-            hot_exit: journal.map(hot_exit::HotExit::new),
-            loading: None,
-            reading: false,
-            signalled: Arc::new(AtomicBool::new(false)),
-            signalled_at: None,
-            path_prompt: None,
-            view: View::default(),
             selection: Selection::default(),
-            confirm: None,
-            conflict_choices: Vec::new(),
-            aa: settings.aa,
-            methods: PreviewMethods::default(),
-            study: StudyWindow::with_runs(settings.study_runs),
-            notice: None,
-            editor_failed: std::sync::mpsc::channel(),
-            editor_socket: None,
-            editors: crate::desktop::editor_link::Peers::default(),
-            export: None,
-            saving: None,
-            deferred_file_events: Vec::new(),
-            recent,
-            settings,
-            watch_generation: 0,
-            hovered: None,
-            interaction: Interaction::Idle,
             schedule: events::RenderSchedule::default(),
-            frame_stats: status::FrameStats::new(stats_wanted(
-                std::env::var_os("RAYOFLIGHT_STATS").as_deref(),
-            )),
-            markers: Vec::new(),
-            outline: None,
-            outline_wanted: None,
-            wheel_at: None,
-            help_open: false,
-            overlays: true,
-            explained: None,
-            explaining: None,
-            waiting: None,
-            pass: render::Pass::Final,
-            pass_view: None,
-            pass_requests: Default::default(),
+            choice: events::RenderChoice {
+                aa: settings.aa,
+                methods: PreviewMethods::default(),
+            },
+            study: StudyWindow::with_runs(settings.study_runs),
+            files: events::Files::default(),
+            background: Channel { rx, tx },
+            screen: picture::Screen::default(),
+            overlay: overlay::Overlay::default(),
+            explain: explain::ExplainState::default(),
+            passes: passes::Passes::default(),
+            dialogs: dialogs::Dialogs::default(),
+            status: status::Status {
+                notice: None,
+                frame_stats: status::FrameStats::new(stats_wanted(
+                    std::env::var_os("RAYOFLIGHT_STATS").as_deref(),
+                )),
+                title: String::new(),
+            },
+            editors: EditorLink {
+                failed: mpsc::channel(),
+                socket: None,
+                peers: crate::desktop::editor_link::Peers::default(),
+            },
+            kept: Kept { recent, settings },
+            hot_exit: journal.map(hot_exit::HotExit::new),
+            ending: hot_exit::Ending::default(),
             ctx: ctx.clone(),
         };
         app.restore_journal();
@@ -296,7 +230,7 @@ impl RayOfLightApp {
         // (after what a restored journal says, if anything).
         if !refused.is_empty() {
             let mut text = refused.join("; ");
-            if let Some((restored, _)) = app.notice.take() {
+            if let Some((restored, _)) = app.status.notice.take() {
                 text = format!("{restored}; {text}");
             }
             app.notify(text);
@@ -313,7 +247,7 @@ impl RayOfLightApp {
         // A save or export under way stops at its next write, its
         // temporary file removed, before the app ends.
         let _ = crate::system::interrupt::record_only();
-        self.signalled = hot_exit::watch_signals(&self.ctx);
+        self.ending.signalled = hot_exit::watch_signals(&self.ctx);
     }
 
     /// Listens to `rayoflight lsp` in the user's editors from now on
@@ -321,9 +255,9 @@ impl RayOfLightApp {
     /// cursor selects objects, a click asks them to show one), on threads
     /// of their own: one that accepts, one that reads a connection.
     pub fn listen_to_editors(&mut self, listener: crate::desktop::editor_link::Listener) {
-        self.editor_socket = Some(listener.path().to_owned());
-        let (tx, ctx) = (self.background_tx.clone(), self.ctx.clone());
-        let editors = self.editors.clone();
+        self.editors.socket = Some(listener.path().to_owned());
+        let (tx, ctx) = (self.background.tx.clone(), self.ctx.clone());
+        let editors = self.editors.peers.clone();
         // Without the thread the app runs, only without the link.
         let _ = std::thread::Builder::new()
             .name("editor link".into())
@@ -414,7 +348,7 @@ impl RayOfLightApp {
     fn replace_document(&mut self, doc: Document) {
         self.doc = doc;
         self.selection = Selection::default();
-        self.view = View::default();
+        self.screen.view = View::default();
         self.restore_journal();
         self.watch();
         self.request_render();
@@ -422,25 +356,25 @@ impl RayOfLightApp {
 
     /// (Re)starts watching the document's file, if it has one.
     fn watch(&mut self) {
-        self.watcher = None;
-        self.watch_generation += 1;
+        self.files.watcher = None;
+        self.files.generation += 1;
         let Some(path) = self.doc.path().map(Path::to_owned) else {
             return;
         };
-        let tx = self.background_tx.clone();
+        let tx = self.background.tx.clone();
         let ctx = self.ctx.clone();
-        let generation = self.watch_generation;
+        let generation = self.files.generation;
         match SceneWatcher::new(&path, self.doc.disk_fingerprint(), move |event| {
             let _ = tx.send(Background::File(generation, event));
             ctx.request_repaint();
         }) {
             Ok(w) => {
                 w.share(&self.doc.scene().objects);
-                self.watcher = Some(w);
+                self.files.watcher = Some(w);
             }
             Err(e) => self.notify(format!("{e}; saves from other editors will not show")),
         }
-        self.recent.push(&path);
+        self.kept.recent.push(&path);
     }
 
     /// The settings as they stand now, to save on exit.
@@ -449,9 +383,9 @@ impl RayOfLightApp {
             .ctx
             .input(|i| i.viewport().inner_rect)
             .map(|r| [r.width(), r.height()]);
-        let mut settings = self.settings.clone();
+        let mut settings = self.kept.settings.clone();
         settings.window = window.or(settings.window);
-        settings.aa = self.aa;
+        settings.aa = self.choice.aa;
         settings.study_runs = self.study.runs;
         settings.last_file = self.doc.path().map(crate::system::files::absolute);
         settings
@@ -463,12 +397,12 @@ impl RayOfLightApp {
 
     /// A file is being opened in the background.
     pub fn is_loading(&self) -> bool {
-        self.loading.is_some()
+        self.files.loading.is_some()
     }
 
     /// A save is running (on its own thread).
     pub fn is_saving(&self) -> bool {
-        self.saving.is_some()
+        self.dialogs.saving.is_some()
     }
 
     /// The object selected in the picture or the panel.
@@ -478,7 +412,7 @@ impl RayOfLightApp {
 
     /// Whether the overlays are drawn (View › Overlays, O).
     pub fn overlays_shown(&self) -> bool {
-        self.overlays
+        self.overlay.shown
     }
 
     /// The field marked in the panel (a term of an explained pixel).
@@ -497,7 +431,7 @@ impl RayOfLightApp {
 
     /// The live preview's methods (for tests).
     pub fn preview_methods(&self) -> &PreviewMethods {
-        &self.methods
+        &self.choice.methods
     }
 
     pub fn study_window(&self) -> &StudyWindow {
@@ -529,12 +463,13 @@ impl eframe::App for RayOfLightApp {
     fn ui(&mut self, ui: &mut egui::Ui, _frame: &mut eframe::Frame) {
         let start = Instant::now();
         self.draw(ui);
-        self.frame_stats.slowest_frame = self.frame_stats.slowest_frame.max(start.elapsed());
+        self.status.frame_stats.slowest_frame =
+            self.status.frame_stats.slowest_frame.max(start.elapsed());
     }
 
     fn on_exit(&mut self, _gl: Option<&eframe::glow::Context>) {
         self.settings().save();
-        if let Some(socket) = &self.editor_socket {
+        if let Some(socket) = &self.editors.socket {
             let _ = std::fs::remove_file(socket);
         }
     }
@@ -551,7 +486,7 @@ impl RayOfLightApp {
         self.shortcuts(&ctx);
         let title = format!(
             "RayOfLight — {}{}",
-            match &self.loading {
+            match &self.files.loading {
                 Some(loading) => format!("loading {}…", loading.path.display()),
                 None => self.doc.title(),
             },
@@ -561,9 +496,9 @@ impl RayOfLightApp {
                 ""
             }
         );
-        if title != self.title {
+        if title != self.status.title {
             ctx.send_viewport_cmd(egui::ViewportCommand::Title(title.clone()));
-            self.title = title;
+            self.status.title = title;
         }
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         self.error_banner(ui);
@@ -578,11 +513,11 @@ impl RayOfLightApp {
         self.refresh_outline();
         self.refresh_pass();
         if self.study.open {
-            for action in self.study.show(&ctx, &self.methods) {
+            for action in self.study.show(&ctx, &self.choice.methods) {
                 self.study_action(action);
             }
         }
-        if self.wheel_at.is_some() {
+        if self.screen.wheel_at.is_some() {
             self.end_wheel_burst();
             ctx.request_repaint_after(navigate::WHEEL_PAUSE);
         }

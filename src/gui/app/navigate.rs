@@ -68,7 +68,7 @@ impl RayOfLightApp {
     /// Starts moving the selected object; `pointer` is where the mouse is,
     /// if over the picture.
     pub(super) fn grab_start(&mut self, pointer: Option<Pos2>) {
-        if !self.interaction.is_free() {
+        if !self.screen.interaction.is_free() {
             return;
         }
         let Some(object) = self.selection.object else {
@@ -83,7 +83,7 @@ impl RayOfLightApp {
         let Some(pixel) = pixel_at(&scene.camera, centre) else {
             return self.notify("the object is behind the eye: it cannot follow the mouse".into());
         };
-        self.interaction = Interaction::Grabbing(Grab {
+        self.screen.interaction = Interaction::Grabbing(Grab {
             object,
             start: o.transform.steps().to_vec(),
             pointer,
@@ -96,7 +96,7 @@ impl RayOfLightApp {
     /// The pointer is at `pointer`: the object follows it. An image pixel
     /// is `image_per_point` screen points.
     pub(super) fn grab_move(&mut self, pointer: Pos2, image_per_point: f64) {
-        let Interaction::Grabbing(grab) = &mut self.interaction else {
+        let Interaction::Grabbing(grab) = &mut self.screen.interaction else {
             return;
         };
         let start = *grab.pointer.get_or_insert(pointer);
@@ -138,9 +138,9 @@ impl RayOfLightApp {
 
     /// Ends the move: kept, or put back as it was.
     pub(super) fn grab_end(&mut self, keep: bool) {
-        let grab = match std::mem::take(&mut self.interaction) {
+        let grab = match std::mem::take(&mut self.screen.interaction) {
             Interaction::Grabbing(grab) => grab,
-            other => return self.interaction = other,
+            other => return self.screen.interaction = other,
         };
         let moved = self
             .doc
@@ -192,7 +192,7 @@ impl RayOfLightApp {
             Ok(start) => {
                 let (pivot, distance) = self.pivot_at(&start, at);
                 let pixel = pixel_size(camera, distance);
-                self.interaction = Interaction::Navigating(Navigation {
+                self.screen.interaction = Interaction::Navigating(Navigation {
                     gesture,
                     start,
                     start_steps: camera.transform.steps().to_vec(),
@@ -207,7 +207,7 @@ impl RayOfLightApp {
     /// The drag has moved `total` screen points since it started; an image
     /// pixel is `image_per_point` of them.
     pub(super) fn navigation_drag(&mut self, total: Vec2, image_per_point: f64) {
-        let Interaction::Navigating(nav) = self.interaction.clone() else {
+        let Interaction::Navigating(nav) = self.screen.interaction.clone() else {
             return;
         };
         let (dx, dy) = (f64::from(total.x), f64::from(total.y));
@@ -228,8 +228,8 @@ impl RayOfLightApp {
     }
 
     pub(super) fn navigation_end(&mut self) {
-        if self.interaction.is_navigating() {
-            self.interaction = Interaction::Idle;
+        if self.screen.interaction.is_navigating() {
+            self.screen.interaction = Interaction::Idle;
             self.doc.end_drag();
         }
     }
@@ -252,13 +252,17 @@ impl RayOfLightApp {
             pixel_size(camera, (distance - step).abs()),
         );
         self.set_camera(&pose.dolly(direction, step), &before, pixel, true);
-        self.wheel_at = Some(Instant::now());
+        self.screen.wheel_at = Some(Instant::now());
     }
 
     /// A pause in the wheel ends its undo step.
     pub(super) fn end_wheel_burst(&mut self) {
-        if self.wheel_at.is_some_and(|t| t.elapsed() >= WHEEL_PAUSE) {
-            self.wheel_at = None;
+        if self
+            .screen
+            .wheel_at
+            .is_some_and(|t| t.elapsed() >= WHEEL_PAUSE)
+        {
+            self.screen.wheel_at = None;
             self.doc.end_drag();
         }
     }

@@ -13,6 +13,29 @@ use egui::{Color32, Pos2, Rect, Sense, TextureOptions, Vec2};
 use glam::DVec3;
 use std::sync::Arc;
 
+/// What is drawn over the picture: the light markers and the selection's
+/// outline, shown or hidden (O).
+pub(super) struct Overlay {
+    /// The light markers drawn in the last frame: light and position.
+    pub(super) markers: Vec<(usize, Pos2)>,
+    /// The selected object's outline, and what the newest one asked for is.
+    pub(super) outline: Option<Outline>,
+    pub(super) outline_wanted: Option<(u32, u64)>,
+    /// Light markers, the outline and the explained path are drawn (O).
+    pub(super) shown: bool,
+}
+
+impl Default for Overlay {
+    fn default() -> Overlay {
+        Overlay {
+            markers: Vec::new(),
+            outline: None,
+            outline_wanted: None,
+            shown: true,
+        }
+    }
+}
+
 /// Radius of a light's marker, in points.
 const MARKER: f32 = 7.0;
 
@@ -42,7 +65,7 @@ impl RayOfLightApp {
     /// The number of outline pixels drawn for the selected object, once
     /// computed (for tests).
     pub fn outline_pixels(&self) -> Option<usize> {
-        self.outline.as_ref().map(|o| o.pixels)
+        self.overlay.outline.as_ref().map(|o| o.pixels)
     }
 
     /// Starts computing the outline when the selection or the scene
@@ -50,19 +73,19 @@ impl RayOfLightApp {
     /// selected.
     pub(super) fn refresh_outline(&mut self) {
         let Some(object) = self.selection.object.and_then(|o| u32::try_from(o).ok()) else {
-            self.outline = None;
-            self.outline_wanted = None;
+            self.overlay.outline = None;
+            self.overlay.outline_wanted = None;
             return;
         };
         let key = (object, self.worker.newest());
-        if self.outline_wanted == Some(key) || self.interacting() {
+        if self.overlay.outline_wanted == Some(key) || self.interacting() {
             return;
         }
-        self.outline_wanted = Some(key);
+        self.overlay.outline_wanted = Some(key);
         let scene = Arc::new(self.doc.scene().clone());
         let longest = scene.camera.width.max(scene.camera.height);
         let scale = longest.div_ceil(OUTLINE_SIDE).max(1);
-        let tx = self.background_tx.clone();
+        let tx = self.background.tx.clone();
         let ctx = self.ctx.clone();
         self.worker.object_ids(scene, scale, move |ids| {
             let _ = tx.send(Background::Ids(key, ids));
@@ -73,7 +96,7 @@ impl RayOfLightApp {
     /// The object-id buffer for `key` arrived: its outline becomes a
     /// texture (transparent but for the outline pixels).
     pub(super) fn outline_ready(&mut self, key: (u32, u64), ids: render::ObjectIds) {
-        if self.outline_wanted != Some(key) {
+        if self.overlay.outline_wanted != Some(key) {
             return;
         }
         let (w, h) = (ids.width, ids.height);
@@ -93,7 +116,7 @@ impl RayOfLightApp {
         let texture = self
             .ctx
             .load_texture("selection-outline", image, TextureOptions::NEAREST);
-        self.outline = Some(Outline {
+        self.overlay.outline = Some(Outline {
             key,
             texture,
             pixels,
@@ -102,7 +125,7 @@ impl RayOfLightApp {
 
     /// Draws the selected object's outline over the picture at `rect`.
     pub(super) fn draw_outline(&self, painter: &egui::Painter, rect: Rect) {
-        if let Some(outline) = &self.outline
+        if let Some(outline) = &self.overlay.outline
             && self.selection.object.map(|o| o as u32) == Some(outline.key.0)
         {
             painter.image(outline.texture.id(), rect, WHOLE, Color32::WHITE);
@@ -112,7 +135,8 @@ impl RayOfLightApp {
     /// Where light `n`'s marker was drawn last, in screen points (for
     /// tests and tools driving the app).
     pub fn light_marker(&self, n: usize) -> Option<Pos2> {
-        self.markers
+        self.overlay
+            .markers
             .iter()
             .find(|(m, _)| *m == n)
             .map(|&(_, pos)| pos)
@@ -141,7 +165,7 @@ impl RayOfLightApp {
             })
             .collect();
         let painter = ui.painter_at(area);
-        self.markers = lights.iter().map(|&(n, _, pos)| (n, pos)).collect();
+        self.overlay.markers = lights.iter().map(|&(n, _, pos)| (n, pos)).collect();
         for (n, position, pos) in lights {
             let id = ui.scope_id().with(("light-marker", n));
             let hit = Rect::from_center_size(pos, Vec2::splat(MARKER * 2.5));
@@ -162,8 +186,8 @@ impl RayOfLightApp {
                 egui::FontId::proportional(12.0),
                 Color32::WHITE,
             );
-            if response.drag_started() && self.interaction.is_free() {
-                self.interaction = Interaction::DraggingLight(LightDrag {
+            if response.drag_started() && self.screen.interaction.is_free() {
+                self.screen.interaction = Interaction::DraggingLight(LightDrag {
                     light: n,
                     start: position,
                     pixel: pixel_at(&camera, position).unwrap_or(0.0),
@@ -172,7 +196,7 @@ impl RayOfLightApp {
             // The light follows the pointer across the view, at its depth
             // (through the camera's projection: any camera, sheared too).
             if response.dragged()
-                && let Interaction::DraggingLight(drag) = self.interaction
+                && let Interaction::DraggingLight(drag) = self.screen.interaction
                 && drag.light == n
                 && let Some(moved) = {
                     let total = response.total_drag_delta().unwrap_or_default();
@@ -207,8 +231,8 @@ impl RayOfLightApp {
                 }
             }
             if response.drag_stopped() {
-                if matches!(self.interaction, Interaction::DraggingLight(_)) {
-                    self.interaction = Interaction::Idle;
+                if matches!(self.screen.interaction, Interaction::DraggingLight(_)) {
+                    self.screen.interaction = Interaction::Idle;
                 }
                 self.doc.end_drag();
             }

@@ -1,7 +1,7 @@
 //! View › Pass: one render pass (a term of the formula, or the normal,
 //! depth or object of the camera ray's hit) shown in place of the
 //! picture. The pass is rendered by the worker
-//! ([`Worker::render_pass`](crate::gui::worker::Worker::render_pass): the
+//! ([`Worker::render_pass`](crate::session::worker::Worker::render_pass): the
 //! library's [`render_pass`](crate::render::render_pass), the image's tile
 //! loop) once the
 //! picture's scene and camera settle, the newest request cancelling the
@@ -12,6 +12,15 @@ use crate::render::{Cancel, Pass, PassImage};
 use egui::TextureOptions;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU64, Ordering};
+
+/// View › Pass: the pass shown, its picture once rendered, and the
+/// renders asked for.
+#[derive(Default)]
+pub(super) struct Passes {
+    pub(super) pass: Pass,
+    pub(super) view: Option<PassView>,
+    pub(super) requests: PassRequests,
+}
 
 /// A pass on screen.
 pub(super) struct PassView {
@@ -32,11 +41,11 @@ pub(super) struct PassRequests {
 impl RayOfLightApp {
     /// Shows `pass` in place of the picture (`Pass::Final`: the picture).
     pub fn show_pass(&mut self, pass: Pass) {
-        self.pass = pass;
+        self.passes.pass = pass;
         if pass == Pass::Final {
-            self.pass_view = None;
-            self.pass_requests.wanted = None;
-            self.pass_requests.newest.fetch_add(1, Ordering::Relaxed);
+            self.passes.view = None;
+            self.passes.requests.wanted = None;
+            self.passes.requests.newest.fetch_add(1, Ordering::Relaxed);
         }
     }
 
@@ -45,29 +54,30 @@ impl RayOfLightApp {
     /// moves, the picture shows instead).
     pub fn pass_shown(&self) -> (Pass, Option<&PassImage>) {
         let image = self
-            .pass_view
+            .passes
+            .view
             .as_ref()
-            .filter(|v| v.key == (self.pass, self.worker.newest()))
+            .filter(|v| v.key == (self.passes.pass, self.worker.newest()))
             .map(|v| &v.image);
-        (self.pass, image)
+        (self.passes.pass, image)
     }
 
     /// Renders the pass shown when the scene or camera changed and
     /// nothing is being dragged.
     pub(super) fn refresh_pass(&mut self) {
-        if self.pass == Pass::Final {
+        if self.passes.pass == Pass::Final {
             return;
         }
-        let key = (self.pass, self.worker.newest());
-        if self.pass_requests.wanted == Some(key) || self.interacting() {
+        let key = (self.passes.pass, self.worker.newest());
+        if self.passes.requests.wanted == Some(key) || self.interacting() {
             return;
         }
-        self.pass_requests.wanted = Some(key);
-        let generation = self.pass_requests.newest.fetch_add(1, Ordering::Relaxed) + 1;
-        let cancel = Cancel::new(Arc::clone(&self.pass_requests.newest), generation);
+        self.passes.requests.wanted = Some(key);
+        let generation = self.passes.requests.newest.fetch_add(1, Ordering::Relaxed) + 1;
+        let cancel = Cancel::new(Arc::clone(&self.passes.requests.newest), generation);
         let scene = Arc::new(self.doc.scene().clone());
-        let request = self.methods.request(false, self.aa);
-        let tx = self.background_tx.clone();
+        let request = self.choice.methods.request(false, self.choice.aa);
+        let tx = self.background.tx.clone();
         let ctx = self.ctx.clone();
         self.worker
             .render_pass(scene, request, key.0, cancel, move |image| {
@@ -78,7 +88,7 @@ impl RayOfLightApp {
 
     /// A pass arrived: on screen if it is still the one wanted.
     pub(super) fn pass_ready(&mut self, key: (Pass, u64), image: PassImage) {
-        if self.pass_requests.wanted != Some(key) {
+        if self.passes.requests.wanted != Some(key) {
             return;
         }
         let shown = image.to_rgb8();
@@ -87,7 +97,7 @@ impl RayOfLightApp {
         let texture = self
             .ctx
             .load_texture("render-pass", picture, TextureOptions::NEAREST);
-        self.pass_view = Some(PassView {
+        self.passes.view = Some(PassView {
             key,
             image,
             texture,
@@ -98,7 +108,7 @@ impl RayOfLightApp {
     /// picture's size.
     pub(super) fn pass_texture(&self, width: u32, height: u32) -> Option<egui::TextureId> {
         let image = self.pass_shown().1?;
-        let view = self.pass_view.as_ref()?;
+        let view = self.passes.view.as_ref()?;
         ((image.width, image.height) == (width, height)).then(|| view.texture.id())
     }
 

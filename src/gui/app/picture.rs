@@ -3,9 +3,28 @@
 
 use super::{RayOfLightApp, navigate};
 use crate::gui::panel::Selection;
-use crate::gui::preview::RenderState;
 use crate::gui::texture::WHOLE;
+use crate::session::preview::RenderState;
 use egui::{Color32, Pos2, Rect, Sense, TextureOptions, Vec2};
+
+/// The picture's part of the window: its textures, how it is viewed, the
+/// pixel under the cursor and what the mouse is doing on it.
+#[derive(Default)]
+pub(super) struct Screen {
+    pub(super) texture: crate::gui::texture::PictureTexture,
+    /// The coarse pass's picture at its own size (see
+    /// [`crate::session::preview::Preview::coarse`]).
+    pub(super) coarse_texture: Option<egui::TextureHandle>,
+    /// The coarse picture is on screen (until the finer one is uploaded).
+    pub(super) showing_coarse: bool,
+    pub(super) view: View,
+    /// The pixel under the cursor and its colour.
+    pub(super) hovered: Option<(u32, u32, [u8; 3])>,
+    /// What the mouse is doing on the picture: one thing at a time.
+    pub(super) interaction: super::Interaction,
+    /// When the wheel last moved the camera, while its undo step is open.
+    pub(super) wheel_at: Option<std::time::Instant>,
+}
 
 /// How the picture is placed in the central area.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -55,25 +74,25 @@ impl RayOfLightApp {
             let (cleared, dirty) = self.preview.take_dirty();
             // At the zoom of the last frame (one frame late when it
             // changes).
-            self.texture.update(
+            self.screen.texture.update(
                 ui.ctx(),
                 self.preview.image(),
                 cleared,
                 dirty,
-                self.view.zoom,
+                self.screen.view.zoom,
             );
             // A coarse pass shows at its own size, stretched, and stays on
             // screen until the finer picture is wholly uploaded.
             let coarse_dirty = self.preview.take_coarse_dirty();
             if let Some(coarse) = self.preview.coarse() {
-                if coarse_dirty || self.coarse_texture.is_none() {
+                if coarse_dirty || self.screen.coarse_texture.is_none() {
                     let (w, h) = coarse.image.dimensions();
                     let image =
                         egui::ColorImage::from_rgb([w as usize, h as usize], coarse.image.as_raw());
-                    match &mut self.coarse_texture {
+                    match &mut self.screen.coarse_texture {
                         Some(t) => t.set(image, TextureOptions::NEAREST),
                         None => {
-                            self.coarse_texture = Some(ui.ctx().load_texture(
+                            self.screen.coarse_texture = Some(ui.ctx().load_texture(
                                 "render-coarse",
                                 image,
                                 TextureOptions::NEAREST,
@@ -81,17 +100,17 @@ impl RayOfLightApp {
                         }
                     }
                 }
-                self.showing_coarse = true;
-            } else if self.texture.complete() {
-                self.showing_coarse = false;
+                self.screen.showing_coarse = true;
+            } else if self.screen.texture.complete() {
+                self.screen.showing_coarse = false;
             }
             let (w, h) = self.preview.image().dimensions();
             // A render pass (View › Pass) in place of the picture, once
             // rendered at the picture's size.
-            let (texture, uv) = match (&self.coarse_texture, self.pass_texture(w, h)) {
+            let (texture, uv) = match (&self.screen.coarse_texture, self.pass_texture(w, h)) {
                 (_, Some(pass)) => (pass, WHOLE),
-                (Some(t), None) if self.showing_coarse => (t.id(), WHOLE),
-                _ => match self.texture.shown() {
+                (Some(t), None) if self.screen.showing_coarse => (t.id(), WHOLE),
+                _ => match self.screen.texture.shown() {
                     Some(shown) => shown,
                     None => return,
                 },
@@ -100,14 +119,14 @@ impl RayOfLightApp {
             let response = ui.allocate_rect(area, Sense::click_and_drag());
             let image_size = Vec2::new(w as f32, h as f32);
             let ppp = ui.ctx().pixels_per_point();
-            if self.view.fit {
+            if self.screen.view.fit {
                 let fit = (area.width() / image_size.x).min(area.height() / image_size.y) * ppp;
                 // Whole steps when enlarging keep pixels square and crisp.
-                self.view.zoom = if fit >= 1.0 { fit.floor() } else { fit };
-                self.view.pan = Vec2::ZERO;
+                self.screen.view.zoom = if fit >= 1.0 { fit.floor() } else { fit };
+                self.screen.view.pan = Vec2::ZERO;
             }
-            let size = image_size * self.view.zoom / ppp;
-            let rect = Rect::from_center_size(area.center() + self.view.pan, size);
+            let size = image_size * self.screen.view.zoom / ppp;
+            let rect = Rect::from_center_size(area.center() + self.screen.view.pan, size);
             // Snap to physical pixels so 1:1 stays crisp.
             let rect = Rect::from_min_size(
                 Pos2::new(
@@ -123,28 +142,28 @@ impl RayOfLightApp {
             };
             let image_per_point = f64::from(image_size.x / size.x);
             // A click that places a moved object selects nothing.
-            let grabbing = self.interaction.is_grabbing();
+            let grabbing = self.screen.interaction.is_grabbing();
             self.gestures(ui, &response, to_image, image_per_point);
             let painter = ui.painter_at(area);
             painter.image(texture, rect, uv, Color32::WHITE);
-            if self.overlays {
+            if self.overlay.shown {
                 self.draw_outline(&painter, rect);
             }
             // Pixel inspector, pick and explain (E then a click, or
             // Alt+click).
-            self.hovered = None;
+            self.screen.hovered = None;
             let alt = ui.input(|i| i.modifiers.alt);
             if let Some(pos) = response.hover_pos() {
                 let rel = (pos - rect.min) / size * image_size;
                 if rel.x >= 0.0 && rel.y >= 0.0 && rel.x < image_size.x && rel.y < image_size.y {
                     let (x, y) = (rel.x as u32, rel.y as u32);
                     let rgb = self.preview.image().get_pixel(x, y).0;
-                    self.hovered = Some((x, y, rgb));
-                    if self.interaction.is_explain_armed() {
+                    self.screen.hovered = Some((x, y, rgb));
+                    if self.screen.interaction.is_explain_armed() {
                         ui.ctx().set_cursor_icon(egui::CursorIcon::Crosshair);
                     }
                     if response.clicked() && !grabbing {
-                        if self.interaction.is_explain_armed() || alt {
+                        if self.screen.interaction.is_explain_armed() || alt {
                             self.explain_pixel(x, y);
                         } else {
                             self.pick(f64::from(rel.x), f64::from(rel.y));
@@ -154,16 +173,16 @@ impl RayOfLightApp {
             }
             let to_screen =
                 |x: f64, y: f64| rect.min + Vec2::new(x as f32, y as f32) / image_size * size;
-            if self.overlays {
+            if self.overlay.shown {
                 self.draw_explained_path(&painter.with_clip_rect(rect.intersect(area)), to_screen);
             }
             // Markers belong on a picture of the camera's size (not the
             // blank one shown before the first render, nor an old size).
             let camera = &self.doc.scene().camera;
-            if self.overlays && (w, h) == (camera.width, camera.height) {
+            if self.overlay.shown && (w, h) == (camera.width, camera.height) {
                 self.light_markers(ui, area, to_screen, image_per_point);
             } else {
-                self.markers.clear();
+                self.overlay.markers.clear();
             }
         });
     }
@@ -192,7 +211,7 @@ impl RayOfLightApp {
             if modifiers.command || zoom != 1.0 {
                 let factor = zoom * (scroll / 200.0).exp();
                 if factor != 1.0 {
-                    self.view.zoom_by(factor);
+                    self.screen.view.zoom_by(factor);
                 }
             } else if scroll != 0.0
                 && let Some(pos) = response.hover_pos()
@@ -202,7 +221,7 @@ impl RayOfLightApp {
         }
         // An object being moved follows the pointer; a click places it, a
         // right click puts it back.
-        if self.interaction.is_grabbing() {
+        if self.screen.interaction.is_grabbing() {
             if let Some(pos) = response.hover_pos().or(response.interact_pointer_pos()) {
                 self.grab_move(pos, image_per_point);
             }
@@ -229,15 +248,15 @@ impl RayOfLightApp {
             }
         }
         if response.dragged() {
-            if self.interaction.is_navigating() {
+            if self.screen.interaction.is_navigating() {
                 let total = response
                     .interact_pointer_pos()
                     .zip(press)
                     .map_or(Vec2::ZERO, |(now, start)| now - start);
                 self.navigation_drag(total, image_per_point);
             } else if modifiers.command {
-                self.view.pan += response.drag_delta();
-                self.view.fit = false;
+                self.screen.view.pan += response.drag_delta();
+                self.screen.view.fit = false;
             }
         }
         if response.drag_stopped() {
@@ -259,7 +278,7 @@ impl RayOfLightApp {
                     self.show_in_editors(n);
                 }
             }
-            None => self.waiting = Some(Waiting::Pick(x, y)),
+            None => self.explain.waiting = Some(Waiting::Pick(x, y)),
         }
     }
 
@@ -271,6 +290,7 @@ impl RayOfLightApp {
             return;
         };
         self.editors
+            .peers
             .tell(&crate::desktop::editor_link::Message::Show {
                 path: path.to_owned(),
                 object,
@@ -282,25 +302,25 @@ impl RayOfLightApp {
     /// render will prepare it (the newest was cancelled or failed): then
     /// it is dropped, and a notice says why.
     pub(super) fn retry_waiting(&mut self, ctx: &egui::Context) {
-        let Some(waiting) = self.waiting.take() else {
+        let Some(waiting) = self.explain.waiting.take() else {
             return;
         };
         match waiting {
             Waiting::Pick(x, y) => self.pick(x, y),
             Waiting::Explain(x, y) => self.explain_pixel(x, y),
         }
-        if self.waiting.is_none() {
+        if self.explain.waiting.is_none() {
             return;
         }
         let why = match self.preview.state() {
             RenderState::Cancelled => "the render was cancelled (Esc); F5 renders again",
             RenderState::Failed(_) => "the render failed",
             _ => {
-                ctx.request_repaint_after(crate::gui::worker::FRAME);
+                ctx.request_repaint_after(crate::session::worker::FRAME);
                 return;
             }
         };
-        self.waiting = None;
+        self.explain.waiting = None;
         let what = match waiting {
             Waiting::Pick(..) => "nothing picked",
             Waiting::Explain(..) => "nothing explained",
@@ -311,7 +331,7 @@ impl RayOfLightApp {
     /// Whether a pick or an explain waits for the worker to prepare the
     /// scene on screen (for tests and tools driving the app).
     pub fn waits_for_the_worker(&self) -> bool {
-        self.waiting.is_some()
+        self.explain.waiting.is_some()
     }
 }
 

@@ -2,12 +2,23 @@
 //! counter (`RAYOFLIGHT_STATS`).
 
 use super::RayOfLightApp;
-use crate::gui::document::FileState;
-use crate::gui::preview::RenderState;
 use crate::render;
+use crate::session::document::FileState;
+use crate::session::preview::RenderState;
 use egui::Color32;
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
+
+/// The status bar's part: a transient notice, the frame counts, the
+/// window title last sent.
+pub(super) struct Status {
+    /// A transient message (export done, save failed) and when it came.
+    pub(super) notice: Option<(String, Instant)>,
+    /// Frames and pictures a second, for the status bar and
+    /// `RAYOFLIGHT_STATS`.
+    pub(super) frame_stats: FrameStats,
+    pub(super) title: String,
+}
 
 /// Frames and pictures a second: the status bar's figures, printed once a
 /// second with `RAYOFLIGHT_STATS`.
@@ -100,9 +111,9 @@ impl RayOfLightApp {
                     ),
                 };
                 ui.label(if self.schedule.rendered_dragging {
-                    self.methods.dragging.as_ref().map_or("", |m| m.name)
+                    self.choice.methods.dragging.as_ref().map_or("", |m| m.name)
                 } else {
-                    self.methods.preview.name
+                    self.choice.methods.preview.name
                 })
                 .on_hover_text("the live preview's method (View › Study…)");
                 if let Some((elapsed, rays)) = self.preview.last_render() {
@@ -132,7 +143,7 @@ impl RayOfLightApp {
                             "file has errors".to_owned()
                         }
                     }
-                    FileState::Watching if self.reading => {
+                    FileState::Watching if self.files.reading => {
                         "the file changed: reading it…".to_owned()
                     }
                     FileState::Watching if self.doc.has_unsaved_edits() => {
@@ -140,7 +151,7 @@ impl RayOfLightApp {
                     }
                     FileState::Watching => "watching, saved".to_owned(),
                 });
-                if let Some((x, y, rgb)) = self.hovered {
+                if let Some((x, y, rgb)) = self.screen.hovered {
                     ui.separator();
                     // The pass shown's value, else the picture's colour.
                     ui.label(match self.pass_value(x, y) {
@@ -148,34 +159,34 @@ impl RayOfLightApp {
                         None => format!("({x}, {y}) rgb({}, {}, {})", rgb[0], rgb[1], rgb[2]),
                     });
                 }
-                if self.pass != render::Pass::Final {
+                if self.passes.pass != render::Pass::Final {
                     ui.separator();
                     ui.label(match (self.pass_shown().1, self.depth_range()) {
-                        (None, _) => format!("rendering the {} pass…", self.pass.name()),
+                        (None, _) => format!("rendering the {} pass…", self.passes.pass.name()),
                         (Some(_), Some((near, far))) => format!(
                             "depth pass: t {} (light) to {} (dark)",
                             render::explain::number(near),
                             render::explain::number(far)
                         ),
-                        (Some(_), None) => format!("{} pass", self.pass.name()),
+                        (Some(_), None) => format!("{} pass", self.passes.pass.name()),
                     });
                 }
-                if self.interaction.is_explain_armed() {
+                if self.screen.interaction.is_explain_armed() {
                     ui.separator();
                     ui.label("click a pixel to explain it (Esc: cancel)");
                 }
                 ui.separator();
                 // The frames of the last second, this one included; with
                 // no other, the window is idle (and draws nothing more).
-                if self.frame_stats.frames.len() <= 1 {
+                if self.status.frame_stats.frames.len() <= 1 {
                     ui.label("idle");
                 } else {
-                    ui.label(format!("{} fps", self.frame_stats.frames.len()));
+                    ui.label(format!("{} fps", self.status.frame_stats.frames.len()));
                     // One more frame once this second is over, to say so.
                     ui.ctx().request_repaint_after(Duration::from_millis(1100));
                 }
                 self.export_progress(ui);
-                if let Some(saving) = &self.saving {
+                if let Some(saving) = &self.dialogs.saving {
                     // No spinner: it would draw every frame it can while
                     // the save runs; the seconds go up four times a second.
                     ui.separator();
@@ -195,7 +206,7 @@ impl RayOfLightApp {
                     ui.label(loading);
                     ui.ctx().request_repaint_after(Duration::from_millis(250));
                 }
-                if let Some((notice, _)) = &self.notice {
+                if let Some((notice, _)) = &self.status.notice {
                     ui.separator();
                     // Cut to the bar's width with "…"; egui shows all of it
                     // on hover (a tooltip of our own drew it twice).
@@ -208,7 +219,7 @@ impl RayOfLightApp {
     /// The export under way: its percentage, the time left once a second
     /// has passed, and a button that stops it.
     fn export_progress(&mut self, ui: &mut egui::Ui) {
-        let Some(export) = &self.export else {
+        let Some(export) = &self.dialogs.export else {
             return;
         };
         ui.separator();
@@ -240,15 +251,15 @@ impl RayOfLightApp {
         let now = Instant::now();
         // Once a second, with RAYOFLIGHT_STATS set: the figures the status
         // bar shows, on stderr, for measuring the app from outside.
-        if self.frame_stats.stats
-            && now.duration_since(self.frame_stats.last_stats) >= Duration::from_secs(1)
+        if self.status.frame_stats.stats
+            && now.duration_since(self.status.frame_stats.last_stats) >= Duration::from_secs(1)
         {
-            self.frame_stats.last_stats = now;
+            self.status.frame_stats.last_stats = now;
             eprintln!(
                 "stats: fps={} slowest_frame_ms={:.1} pictures={} state={:?} first_pass_ms={:?} last_render_ms={:?}",
-                self.frame_stats.frames.len(),
-                std::mem::take(&mut self.frame_stats.slowest_frame).as_secs_f64() * 1e3,
-                self.frame_stats.pictures.len(),
+                self.status.frame_stats.frames.len(),
+                std::mem::take(&mut self.status.frame_stats.slowest_frame).as_secs_f64() * 1e3,
+                self.status.frame_stats.pictures.len(),
                 self.preview.state(),
                 self.preview.first_pass().map(|d| d.as_secs_f64() * 1e3),
                 self.preview
@@ -257,36 +268,39 @@ impl RayOfLightApp {
             );
         }
         while self
+            .status
             .frame_stats
             .pictures
             .front()
             .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
         {
-            self.frame_stats.pictures.pop_front();
+            self.status.frame_stats.pictures.pop_front();
         }
-        self.frame_stats.frames.push_back(now);
-        self.frame_stats.frames_drawn += 1;
+        self.status.frame_stats.frames.push_back(now);
+        self.status.frame_stats.frames_drawn += 1;
         while self
+            .status
             .frame_stats
             .frames
             .front()
             .is_some_and(|t| now.duration_since(*t) > Duration::from_secs(1))
         {
-            self.frame_stats.frames.pop_front();
+            self.status.frame_stats.frames.pop_front();
         }
         if self
+            .status
             .notice
             .as_ref()
             .is_some_and(|(_, t)| t.elapsed() > Duration::from_secs(8))
         {
-            self.notice = None;
+            self.status.notice = None;
         }
-        if let Ok(said) = self.editor_failed.1.try_recv() {
+        if let Ok(said) = self.editors.failed.1.try_recv() {
             self.notify(said);
         }
     }
 
     pub(super) fn notify(&mut self, message: String) {
-        self.notice = Some((message, Instant::now()));
+        self.status.notice = Some((message, Instant::now()));
     }
 }

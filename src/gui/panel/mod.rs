@@ -18,12 +18,12 @@
 
 use std::sync::Arc;
 
-use super::document::Document;
 use crate::math::{TransformStep, Vec3};
 use crate::scene::edit::{
     Axis, Channel, Coef, Edit, Field, Item, NewElement, Owner, StepAttr, Value,
 };
 use crate::scene::{Illumination, Model};
+use crate::session::document::Document;
 use egui::{CollapsingHeader, Ui};
 
 mod form;

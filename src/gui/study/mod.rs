@@ -11,10 +11,10 @@
 
 mod plot;
 
-use super::worker::Event;
 use crate::render::request::RenderRequest;
 use crate::render::{self, Decision, Method};
 use crate::scene::Scene;
+use crate::session::worker::Event;
 use crate::study::{self, Row};
 use egui::{Color32, RichText, TextureHandle, TextureOptions};
 use image::RgbImage;

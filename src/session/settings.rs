@@ -8,7 +8,7 @@
 //! others' writes ([`Persisted::in_homes`]), and are written the same way
 //! ([`store`]: atomically, best effort); tests use them in memory only. Beside
 //! them, where the journal of unsaved edits goes (a state, not a setting:
-//! `$XDG_STATE_HOME`, [`crate::gui::journal`]).
+//! `$XDG_STATE_HOME`, [`crate::session::journal`]).
 //!
 //! `settings.txt` holds `key = value` lines. Unknown keys and bad values
 //! are ignored: a stale or hand-edited file never stops the app.
@@ -32,7 +32,7 @@ pub struct Persisted {
     pub settings: Settings,
     pub recent: Recent,
     /// The folder of the journal of unsaved edits
-    /// ([`crate::gui::journal`]); `None`: no journal.
+    /// ([`crate::session::journal`]); `None`: no journal.
     pub journal: Option<PathBuf>,
     /// Why a folder of the user's state is not used (another user's, or
     /// open to others' writes), for the app to say once.
@@ -72,7 +72,7 @@ impl Persisted {
             "settings and recent files",
         );
         let journal = usable(
-            state.map(crate::gui::journal::folder_in),
+            state.map(crate::session::journal::folder_in),
             "unsaved edits journal",
         );
         Persisted {
@@ -102,7 +102,7 @@ pub struct Settings {
     /// example); the app reopens it when started without a file.
     pub last_file: Option<PathBuf>,
     /// Edit › Open in editor's command (`editor = code -g {file}:{line}`),
-    /// when RAYOFLIGHT_EDITOR does not say ([`crate::gui::editor`]).
+    /// when RAYOFLIGHT_EDITOR does not say ([`crate::session::editor`]).
     pub editor: Option<String>,
     /// Where they are saved; `None`: nowhere.
     store: Option<PathBuf>,

@@ -1,5 +1,5 @@
 //! What the journal of unsaved edits needs of a [`Document`]
-//! ([`crate::gui::journal`]): the edits and the text they apply to, to
+//! ([`crate::session::journal`]): the edits and the text they apply to, to
 //! write, and the edits restored onto that text, merged through the usual
 //! engine with the file as it is now.
 

@@ -5,7 +5,6 @@
 //! full pass exact pixels. Events of any generation but the newest are
 //! dropped, so a stale render can never paint over a newer one.
 
-use super::texture::{Dirty, Region};
 use super::worker::Event;
 use image::RgbImage;
 use std::time::{Duration, Instant};
@@ -316,6 +315,82 @@ impl Coarse {
         if let Some(pixels) = RgbImage::from_raw(tile.width, tile.height, pixels) {
             blow_up(&mut self.image, tile.x, tile.y, 1, &pixels);
             self.dirty = true;
+        }
+    }
+}
+
+/// A rectangle of the image, in pixels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Region {
+    pub x: u32,
+    pub y: u32,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// What of the image changed since the window last took it (the window
+/// uploads only that to its texture).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum Dirty {
+    #[default]
+    Nothing,
+    /// These tiles: only they are uploaded (a 4000×4000 image is 48 MB; a
+    /// tile is 3 KB to 50 KB).
+    Regions(Vec<Region>),
+    /// Everything (a new size, or a coarse picture written at full size).
+    Whole,
+}
+
+impl Region {
+    pub fn area(&self) -> u64 {
+        u64::from(self.width) * u64::from(self.height)
+    }
+
+    /// The smallest region holding both.
+    fn union(self, other: Region) -> Region {
+        let x = self.x.min(other.x);
+        let y = self.y.min(other.y);
+        let right = (self.x + self.width).max(other.x + other.width);
+        let bottom = (self.y + self.height).max(other.y + other.height);
+        Region {
+            x,
+            y,
+            width: right - x,
+            height: bottom - y,
+        }
+    }
+}
+
+impl Dirty {
+    /// Past this many regions in one frame, a new one joins the region it
+    /// grows least (tiles come in bands: neighbours join into a band, and
+    /// a band at the top never joins one at the bottom into the whole
+    /// image).
+    const MAX_REGIONS: usize = 64;
+
+    pub fn add(&mut self, region: Region) {
+        if region.width == 0 || region.height == 0 {
+            return;
+        }
+        match self {
+            Dirty::Whole => {}
+            Dirty::Nothing => *self = Dirty::Regions(vec![region]),
+            Dirty::Regions(list) if list.len() >= Dirty::MAX_REGIONS => {
+                let growth = |r: &Region| r.union(region).area() - r.area();
+                if let Some(nearest) = list.iter_mut().min_by_key(|r| growth(r)) {
+                    *nearest = nearest.union(region);
+                }
+            }
+            Dirty::Regions(list) => list.push(region),
+        }
+    }
+
+    /// Pixels to upload.
+    pub fn area(&self, whole: u64) -> u64 {
+        match self {
+            Dirty::Nothing => 0,
+            Dirty::Regions(list) => list.iter().map(Region::area).sum(),
+            Dirty::Whole => whole,
         }
     }
 }

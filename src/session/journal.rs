@@ -46,7 +46,7 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde_json::{Value as Json, json};
 
-use crate::gui::document::{TextWriter, fingerprint_file};
+use crate::session::document::{TextWriter, fingerprint_file};
 
 /// Streams a text (a journal's base).
 pub type WriteText = dyn Fn(&mut dyn Write) -> std::io::Result<()>;
@@ -968,7 +968,7 @@ mod tests {
             saved_at: UNIX_EPOCH + Duration::from_secs(1_700_000_000),
             ..Entry::now(
                 &scene_path,
-                crate::gui::document::fingerprint_text(base),
+                crate::session::document::fingerprint_text(base),
                 edits,
             )
         };
@@ -1040,7 +1040,7 @@ mod tests {
         std::fs::write(&scene_path, text).unwrap();
         let link = dir.path().join("link.xml");
         std::os::unix::fs::symlink(&scene_path, &link).unwrap();
-        let fingerprint = crate::gui::document::fingerprint_text(text);
+        let fingerprint = crate::session::document::fingerprint_text(text);
         let write_base = |w: &mut dyn Write| w.write_all(text.as_bytes());
         // Made through the link.
         let mut window = Own::take(&folder).unwrap();

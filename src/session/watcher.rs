@@ -25,8 +25,8 @@
 //! compares what it gets with the text it last read or wrote, which the
 //! watcher cannot know.
 
-use crate::gui::document::{FileRead, OwnWrites, fingerprint_file};
 use crate::scene::{self, LoadError, Object, Objects};
+use crate::session::document::{FileRead, OwnWrites, fingerprint_file};
 use crate::system::files::through_links;
 use notify::{EventKind, RecursiveMode};
 use notify_debouncer_full::{DebounceEventResult, Debouncer, RecommendedCache, new_debouncer};
@@ -51,7 +51,7 @@ pub enum FileEvent {
     Broken(LoadError),
     /// It is gone (deleted or renamed away).
     Missing,
-    /// A large file ([`crate::gui::BACKGROUND_BYTES`]) changed and is being
+    /// A large file ([`crate::session::BACKGROUND_BYTES`]) changed and is being
     /// read: one of the others follows.
     Reading,
 }
@@ -228,7 +228,7 @@ impl SceneWatcher {
                 // A large file takes a while: say so first, and then
                 // always say how it ended.
                 let large = std::fs::metadata(&target)
-                    .is_ok_and(|m| m.len() >= crate::gui::BACKGROUND_BYTES);
+                    .is_ok_and(|m| m.len() >= crate::session::BACKGROUND_BYTES);
                 // The bytes the app's own save just wrote: the document
                 // knows them (it would find the read unchanged). Only a
                 // large file after such a save is fingerprinted first: a
@@ -328,7 +328,7 @@ impl SceneWatcher {
     }
 
     /// Where a save tells the fingerprint of what it writes
-    /// ([`SaveJob::announcing`](crate::gui::document::SaveJob::announcing)):
+    /// ([`SaveJob::announcing`](crate::session::document::SaveJob::announcing)):
     /// a large file with those bytes is not read back.
     pub fn own_writes(&self) -> OwnWrites {
         self.own.clone()
