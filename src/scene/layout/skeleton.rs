@@ -5,6 +5,9 @@
 //! names of its objects ([`super::source_object_comments`]) read it instead
 //! of unpacking the whole text.
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use quick_xml::Reader;
 use quick_xml::events::Event;
 
@@ -69,126 +72,17 @@ impl Skeleton {
         keep: &std::collections::HashSet<usize>,
         fold: bool,
     ) -> Result<Skeleton, EditError> {
-        use std::cell::RefCell;
-        use std::rc::Rc;
-
-        /// The source's bytes as read, not yet given to the skeleton or
-        /// left out; `start`: the source offset of the first.
-        #[derive(Default)]
-        struct Pending {
-            bytes: Vec<u8>,
-            start: usize,
-        }
-        /// The source's bytes to the XML reader, and into `pending`; a
-        /// byte order mark (`hide`: its length) to `pending` only, so that
-        /// the reader's positions are the text's less it.
-        struct Tee<'s> {
-            inner: crate::scene::source::SourceReader<'s>,
-            pending: Rc<RefCell<Pending>>,
-            hide: usize,
-        }
-        impl std::io::Read for Tee<'_> {
-            fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-                loop {
-                    let n = self.inner.read(buf)?;
-                    self.pending.borrow_mut().bytes.extend_from_slice(&buf[..n]);
-                    let hidden = self.hide.min(n);
-                    if hidden == 0 {
-                        return Ok(n);
-                    }
-                    buf.copy_within(hidden..n, 0);
-                    self.hide -= hidden;
-                    if n > hidden {
-                        return Ok(n - hidden);
-                    }
-                }
-            }
-        }
-        /// An object that may be folded, read whole, its fate waiting on
-        /// what comes next: folded if another such object follows, else
-        /// the last of its run, left as a stub (`<sphere></sphere>`).
-        struct Held {
-            number: usize,
-            start: usize,
-            /// Just past its start tag and at its end tag's `<` (`None`
-            /// for `<sphere/>`).
-            inside: Option<(usize, usize)>,
-            end: usize,
-        }
-
-        let bom = {
-            let mut head = [0u8; 3];
-            let read = std::io::Read::read_exact(&mut source.reader(), &mut head);
-            match read.is_ok() && head == *b"\xef\xbb\xbf" {
-                true => head.len(),
-                false => 0,
-            }
-        };
+        let bom = byte_order_mark(source);
         let pending = Rc::new(RefCell::new(Pending::default()));
-        let tee = Tee {
-            inner: source.reader(),
-            pending: Rc::clone(&pending),
-            hide: bom,
+        let mut reader = tee_reader(source, &pending, bom);
+        let mut taker = Taker {
+            pending,
+            fold,
+            crlf: false,
+            last_byte: 0,
+            line: Some(Vec::new()),
         };
-        let mut reader = Reader::from_reader(std::io::BufReader::with_capacity(1 << 16, tee));
-        let config = reader.config_mut();
-        config.check_end_names = true;
-        config.expand_empty_elements = false;
-        config.trim_text(false);
-
-        let mut crlf = false;
         let mut kept: Vec<u8> = Vec::new();
-        let mut last_byte = 0u8;
-        // The current line's bytes so far, while they are all spaces and
-        // tabs (`Doc::own_indent`).
-        let line: RefCell<Option<Vec<u8>>> = RefCell::new(Some(Vec::new()));
-        // Moves the source's bytes up to `to` from the pending ones into
-        // the skeleton, or leaves them out; returns how many.
-        let mut take = |to: usize, keep: bool, kept: &mut Vec<u8>| {
-            let mut p = pending.borrow_mut();
-            let n = to.saturating_sub(p.start).min(p.bytes.len());
-            let bytes = &p.bytes[..n];
-            if bytes.first() == Some(&b'\n') && last_byte == b'\r'
-                || bytes.windows(2).any(|w| w == b"\r\n")
-            {
-                crlf = true;
-            }
-            if let Some(&b) = bytes.last() {
-                last_byte = b;
-            }
-            // A byte order mark is not on the first line (`Doc::scan`).
-            let line_bytes = match p.start == 0 && bytes.starts_with(b"\xef\xbb\xbf") {
-                true => &bytes[3..],
-                false => bytes,
-            };
-            let blank = |bytes: &[u8]| bytes.iter().all(|&b| b == b' ' || b == b'\t');
-            let mut line = line.borrow_mut();
-            if !fold {
-            } else if let Some(nl) = line_bytes.iter().rposition(|&b| b == b'\n') {
-                let rest = &line_bytes[nl + 1..];
-                *line = blank(rest).then(|| rest.to_vec());
-            } else if let Some(l) = line.as_mut() {
-                match blank(line_bytes) {
-                    true => l.extend_from_slice(line_bytes),
-                    false => *line = None,
-                }
-            }
-            if keep {
-                kept.extend_from_slice(bytes);
-            }
-            p.bytes.drain(..n);
-            p.start += n;
-            n
-        };
-        let position = |reader: &Reader<_>| {
-            usize::try_from(reader.buffer_position())
-                .map(|p| p + bom)
-                .map_err(|_| internal("position out of range"))
-        };
-        let gap = |at: usize, out: usize| match (u32::try_from(at), u32::try_from(out)) {
-            (Ok(at), Ok(out)) => Ok((at, out)),
-            _ => Err(internal("a text over 4 GiB")),
-        };
 
         let mut gaps = Vec::new();
         let mut numbers = Vec::new();
@@ -212,12 +106,12 @@ impl Skeleton {
         let mut root_indent: Option<Option<Vec<u8>>> = None;
         let mut may_fold = false;
         loop {
-            let before = position(&reader)?;
+            let before = position(&reader, bom)?;
             buf.clear();
             let event = reader
                 .read_event_into(&mut buf)
                 .map_err(|e| internal(format!("XML: {e}")))?;
-            let after = position(&reader)?;
+            let after = position(&reader, bom)?;
             // Inside an object that may be folded: nothing is taken yet.
             if let Some((start, inside, at_depth)) = holding {
                 match event {
@@ -252,12 +146,12 @@ impl Skeleton {
                 if let Some(h) = held.take() {
                     if foldable {
                         if folding.is_none() {
-                            take(h.start, true, &mut kept);
+                            taker.take(h.start, true, &mut kept);
                             kept.extend_from_slice(&FOLD[..2]);
                             folding = Some(kept.len());
                         }
                         // It, and the bytes before it since the last one.
-                        left_out += take(h.end, false, &mut kept);
+                        left_out += taker.take(h.end, false, &mut kept);
                     } else {
                         if let Some(at) = folding.take() {
                             // The fold's own four bytes are not the text's.
@@ -269,22 +163,22 @@ impl Skeleton {
                         }
                         numbers.push(h.number);
                         if let Some((inside, end_tag)) = h.inside {
-                            take(inside, true, &mut kept);
-                            left_out += take(end_tag, false, &mut kept);
+                            taker.take(inside, true, &mut kept);
+                            left_out += taker.take(end_tag, false, &mut kept);
                             gaps.push(gap(kept.len(), left_out)?);
                         }
-                        take(h.end, true, &mut kept);
+                        taker.take(h.end, true, &mut kept);
                     }
                 }
                 // The bytes since are kept, but before an object that may
                 // be folded: they go with it.
                 if !foldable {
-                    take(before, true, &mut kept);
+                    taker.take(before, true, &mut kept);
                 }
             }
             match event {
                 Event::Start(_) if depth == 0 && root_indent.is_none() => {
-                    let line = line.borrow().clone();
+                    let line = taker.line.clone();
                     may_fold = line.is_none();
                     root_indent = Some(line);
                     depth += 1;
@@ -311,7 +205,7 @@ impl Skeleton {
                         continue;
                     }
                     if fold && !may_fold {
-                        may_fold = match (&root_indent, &*line.borrow()) {
+                        may_fold = match (&root_indent, &taker.line) {
                             (Some(Some(root)), Some(own)) => {
                                 own.len() > root.len() && own.starts_with(root)
                             }
@@ -327,7 +221,7 @@ impl Skeleton {
                     if !empty {
                         depth += 1;
                         if !keep.contains(&number) {
-                            take(after, true, &mut kept);
+                            taker.take(after, true, &mut kept);
                             leaving_out = Some(depth);
                             continue;
                         }
@@ -337,7 +231,7 @@ impl Skeleton {
                 Event::End(_) => {
                     if leaving_out == Some(depth) {
                         // The inside, up to the `<` of the end tag.
-                        left_out += take(before, false, &mut kept);
+                        left_out += taker.take(before, false, &mut kept);
                         gaps.push(gap(kept.len(), left_out)?);
                         leaving_out = None;
                     }
@@ -351,19 +245,19 @@ impl Skeleton {
                 continue;
             }
             match leaving_out {
-                Some(_) => left_out += take(after, false, &mut kept),
+                Some(_) => left_out += taker.take(after, false, &mut kept),
                 None => {
-                    take(after, true, &mut kept);
+                    taker.take(after, true, &mut kept);
                 }
             }
         }
-        take(usize::MAX, true, &mut kept);
+        taker.take(usize::MAX, true, &mut kept);
         let text = String::from_utf8(kept).map_err(|_| internal("the skeleton is not UTF-8"))?;
         let folded = fold.then_some(Folded { numbers, changed });
         Ok(Skeleton {
             text,
             gaps,
-            crlf,
+            crlf: taker.crlf,
             folded,
         })
     }
@@ -372,5 +266,155 @@ impl Skeleton {
     pub(in crate::scene) fn in_source(&self, at: usize) -> usize {
         let i = self.gaps.partition_point(|&(gap, _)| gap as usize <= at);
         at + i.checked_sub(1).map_or(0, |i| self.gaps[i].1 as usize)
+    }
+}
+
+/// The source's bytes as read, not yet given to the skeleton or left out;
+/// `start`: the source offset of the first.
+#[derive(Default)]
+struct Pending {
+    bytes: Vec<u8>,
+    start: usize,
+}
+
+/// The source's bytes to the XML reader, and into `pending`; a byte order
+/// mark (`hide`: its length) to `pending` only, so that the reader's
+/// positions are the text's less it.
+struct Tee<'s> {
+    inner: crate::scene::source::SourceReader<'s>,
+    pending: Rc<RefCell<Pending>>,
+    hide: usize,
+}
+
+impl std::io::Read for Tee<'_> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        loop {
+            let n = self.inner.read(buf)?;
+            self.pending.borrow_mut().bytes.extend_from_slice(&buf[..n]);
+            let hidden = self.hide.min(n);
+            if hidden == 0 {
+                return Ok(n);
+            }
+            buf.copy_within(hidden..n, 0);
+            self.hide -= hidden;
+            if n > hidden {
+                return Ok(n - hidden);
+            }
+        }
+    }
+}
+
+/// An object that may be folded, read whole, its fate waiting on what
+/// comes next: folded if another such object follows, else the last of
+/// its run, left as a stub (`<sphere></sphere>`).
+struct Held {
+    number: usize,
+    start: usize,
+    /// Just past its start tag and at its end tag's `<` (`None` for
+    /// `<sphere/>`).
+    inside: Option<(usize, usize)>,
+    end: usize,
+}
+
+/// The length of `source`'s byte order mark: 3, or 0 without one.
+fn byte_order_mark(source: &Source) -> usize {
+    let mut head = [0u8; 3];
+    let read = std::io::Read::read_exact(&mut source.reader(), &mut head);
+    match read.is_ok() && head == *b"\xef\xbb\xbf" {
+        true => head.len(),
+        false => 0,
+    }
+}
+
+/// An XML reader of `source` (less its byte order mark, `bom` bytes)
+/// whose every byte read also goes to `pending`.
+fn tee_reader<'s>(
+    source: &'s Source,
+    pending: &Rc<RefCell<Pending>>,
+    bom: usize,
+) -> Reader<std::io::BufReader<Tee<'s>>> {
+    let tee = Tee {
+        inner: source.reader(),
+        pending: Rc::clone(pending),
+        hide: bom,
+    };
+    let mut reader = Reader::from_reader(std::io::BufReader::with_capacity(1 << 16, tee));
+    let config = reader.config_mut();
+    config.check_end_names = true;
+    config.expand_empty_elements = false;
+    config.trim_text(false);
+    reader
+}
+
+/// The source's bytes read and not yet placed, moved into the skeleton or
+/// left out a run at a time ([`Taker::take`]), and what they tell on the
+/// way: the text's line ending, the current line's indentation.
+struct Taker {
+    pending: Rc<RefCell<Pending>>,
+    /// Objects may be folded: `line` is followed.
+    fold: bool,
+    /// A CRLF line ending was seen (maybe in a part left out).
+    crlf: bool,
+    last_byte: u8,
+    /// The current line's bytes so far, while they are all spaces and
+    /// tabs (`Doc::own_indent`).
+    line: Option<Vec<u8>>,
+}
+
+impl Taker {
+    /// Moves the source's bytes up to `to` from the pending ones into the
+    /// skeleton (`kept`, with `keep`), or leaves them out; returns how
+    /// many.
+    fn take(&mut self, to: usize, keep: bool, kept: &mut Vec<u8>) -> usize {
+        let mut p = self.pending.borrow_mut();
+        let n = to.saturating_sub(p.start).min(p.bytes.len());
+        let bytes = &p.bytes[..n];
+        if bytes.first() == Some(&b'\n') && self.last_byte == b'\r'
+            || bytes.windows(2).any(|w| w == b"\r\n")
+        {
+            self.crlf = true;
+        }
+        if let Some(&b) = bytes.last() {
+            self.last_byte = b;
+        }
+        // A byte order mark is not on the first line (`Doc::scan`).
+        let line_bytes = match p.start == 0 && bytes.starts_with(b"\xef\xbb\xbf") {
+            true => &bytes[3..],
+            false => bytes,
+        };
+        let blank = |bytes: &[u8]| bytes.iter().all(|&b| b == b' ' || b == b'\t');
+        let line = &mut self.line;
+        if !self.fold {
+        } else if let Some(nl) = line_bytes.iter().rposition(|&b| b == b'\n') {
+            let rest = &line_bytes[nl + 1..];
+            *line = blank(rest).then(|| rest.to_vec());
+        } else if let Some(l) = line.as_mut() {
+            match blank(line_bytes) {
+                true => l.extend_from_slice(line_bytes),
+                false => *line = None,
+            }
+        }
+        if keep {
+            kept.extend_from_slice(bytes);
+        }
+        p.bytes.drain(..n);
+        p.start += n;
+        n
+    }
+}
+
+/// The reader's position in the source (`bom`: the byte order mark it
+/// does not see).
+fn position<R>(reader: &Reader<R>, bom: usize) -> Result<usize, EditError> {
+    usize::try_from(reader.buffer_position())
+        .map(|p| p + bom)
+        .map_err(|_| internal("position out of range"))
+}
+
+/// A gap at skeleton offset `at`, `out` bytes left out up to there.
+fn gap(at: usize, out: usize) -> Result<(u32, u32), EditError> {
+    match (u32::try_from(at), u32::try_from(out)) {
+        (Ok(at), Ok(out)) => Ok((at, out)),
+        _ => Err(internal("a text over 4 GiB")),
     }
 }
