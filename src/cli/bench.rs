@@ -3,8 +3,13 @@
 //! memory, encoding, and what splitting a 16000×16000 render into 64
 //! regions and assembling them costs. Prints a table on stdout and
 //! optionally writes a CSV.
+//!
+//! Its flags, as clap reads them, are here too ([`BenchFlags`]), resolved
+//! into the [`BenchArgs`] it runs with.
 
+use super::args::values::{runs, threads};
 use super::progress::Steps;
+use clap::Args;
 use rayoflight::cluster::part::Part;
 use rayoflight::cluster::{assemble, split};
 use rayoflight::render::measure::{Csv, Difference, RenderPool, Timed, median_of, render_timed};
@@ -1111,4 +1116,95 @@ fn peak_memory(
     let extra = peak.extra_mb().unwrap_or(0.0);
     drop(image);
     Ok(Some((extra - image_mb, image_mb)))
+}
+
+// ----- the command line -----
+
+// `rayoflight bench`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct BenchFlags {
+    /// Render threads [default: one per core]
+    #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
+    threads: Option<usize>,
+    /// Runs per measurement; the median is reported.
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs, allow_negative_numbers = true)]
+    runs: usize,
+    /// Also write the results as CSV to FILE (also --out).
+    #[arg(long, short = 'o', visible_alias = "out", value_name = "FILE")]
+    csv: Option<PathBuf>,
+    /// Do not render with POV-Ray, even where it is installed.
+    #[arg(long)]
+    no_pov: bool,
+    /// No progress bar on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+    /// The side of the image split into 64 regions and assembled, in
+    /// pixels (0: skip that section).
+    #[arg(
+        long,
+        value_name = "PIXELS",
+        default_value_t = 16000,
+        value_parser = split_size,
+        allow_negative_numbers = true
+    )]
+    split_size: u32,
+    /// Spheres in the big scene loaded, checked and prepared against
+    /// xmllint's streaming parse of the same file (0: skip that section).
+    #[arg(
+        long,
+        value_name = "N",
+        default_value_t = 1_000_000,
+        value_parser = big_spheres,
+        allow_negative_numbers = true
+    )]
+    big_spheres: usize,
+    /// The big section's own child: the app without its window on FILE,
+    /// printing its peak memory after each stage.
+    #[arg(long, value_name = "FILE", hide = true)]
+    app_document: Option<PathBuf>,
+}
+
+impl BenchFlags {
+    pub(super) fn resolve(self) -> super::args::Command {
+        super::args::Command::Bench(BenchArgs {
+            threads: self.threads.unwrap_or_else(rayoflight::render::all_cores),
+            runs: self.runs,
+            csv: self.csv,
+            pov: !self.no_pov,
+            quiet: self.quiet,
+            split_size: self.split_size,
+            big_spheres: self.big_spheres,
+            app_document: self.app_document,
+        })
+    }
+}
+
+/// The bench's split section: 0 (skipped), or a square image of at least
+/// a pixel per task and at most the render's limit of pixels.
+fn split_size(text: &str) -> Result<u32, String> {
+    let tasks = SPLIT_TASKS as u64;
+    let (min, max) = (
+        tasks.isqrt() + u64::from(tasks.isqrt().pow(2) < tasks),
+        rayoflight::scene::MAX_PIXELS.isqrt(),
+    );
+    text.parse::<u64>()
+        .ok()
+        .filter(|&n| n == 0 || (min..=max).contains(&n))
+        .and_then(|n| u32::try_from(n).ok())
+        .ok_or_else(|| format!("expects 0 (skip the section) or a side from {min} to {max} pixels"))
+}
+
+/// The bench's big scene: 0 (skipped), or up to four million spheres
+/// (about 930 MB of XML, under the 1 GiB a scene file may take).
+fn big_spheres(text: &str) -> Result<usize, String> {
+    text.parse::<usize>()
+        .ok()
+        .filter(|&n| n <= MAX_BIG_SPHERES)
+        .ok_or_else(|| {
+            format!(
+                "expects 0 (skip the section) or a count up to {}",
+                MAX_BIG_SPHERES
+            )
+        })
 }

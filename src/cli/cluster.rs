@@ -3,12 +3,20 @@
 //! `rayoflight sheet` (a sweep's renders side by side). The work is the
 //! library's ([`rayoflight::cluster::split`], [`rayoflight::cluster::assemble`],
 //! [`rayoflight::cluster::sheet`]); this edge reads files and words failures.
+//!
+//! The three subcommands' flags, as clap reads them, are here too
+//! ([`SplitFlags`], [`AssembleFlags`], [`SheetFlags`]), each resolved into
+//! the [`Command`] it asks for.
 
-use super::args::SplitArgs;
+use super::args::Command;
 use super::args::UsageError;
+use super::args::render::RenderOf;
+use super::edit::EditArg;
 use super::{Failure, edit, fail, print_line, refused, usage};
+use clap::Args;
 use image::ImageFormat;
 use rayoflight::cluster::{assemble, sheet, split};
+use rayoflight::render::request::RenderRequest;
 use rayoflight::scene::edit::Edited;
 use rayoflight::system::{files, resources};
 use rayoflight::{output, scene};
@@ -193,4 +201,112 @@ impl<'a> SheetImage<'a> {
             .map_err(|e| Failure::Error(format!("{}: {e}", path.display())))?;
         Ok(picture.into_rgb8())
     }
+}
+
+// ----- the command line -----
+
+/// `rayoflight split`: which render to split, into how many regions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SplitArgs {
+    pub scene: PathBuf,
+    pub tasks: usize,
+    /// The render's method and anti-aliasing (they change the cost).
+    pub request: RenderRequest,
+    /// `--set`: values changed in memory first, in order.
+    pub edits: Vec<EditArg>,
+}
+
+// `rayoflight split`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct SplitFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// How many regions (tasks), at least 1.
+    #[arg(
+        long,
+        short = 'n',
+        value_name = "N",
+        value_parser = tasks,
+        required = true,
+        allow_hyphen_values = true
+    )]
+    tasks: usize,
+    #[command(flatten)]
+    render: RenderOf,
+}
+
+impl SplitFlags {
+    /// The split asked for, its edits read against the scene's path.
+    pub(super) fn resolve(self) -> Result<Command, UsageError> {
+        let (request, edits) = self.render.resolve(&self.scene)?;
+        Ok(Command::Split(SplitArgs {
+            scene: self.scene,
+            tasks: self.tasks,
+            request,
+            edits,
+        }))
+    }
+}
+
+// `rayoflight assemble`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct AssembleFlags {
+    /// The image to write (PNG).
+    #[arg(short, long, value_name = "FILE", required = true)]
+    out: PathBuf,
+    /// The parts, in any order.
+    #[arg(value_name = "PART", required = true)]
+    parts: Vec<PathBuf>,
+}
+
+impl AssembleFlags {
+    pub(super) fn resolve(self) -> Command {
+        Command::Assemble {
+            out: self.out,
+            parts: self.parts,
+        }
+    }
+}
+
+// `rayoflight sheet`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct SheetFlags {
+    /// The sheet to write; its extension picks the format.
+    #[arg(short, long, value_name = "FILE", required = true)]
+    out: PathBuf,
+    /// Pictures a row [default: as square a grid as the count allows]
+    #[arg(long, value_name = "N", value_parser = columns, allow_hyphen_values = true)]
+    columns: Option<usize>,
+    /// The images, in the order to show them.
+    #[arg(value_name = "IMAGE", required = true)]
+    images: Vec<PathBuf>,
+}
+
+impl SheetFlags {
+    pub(super) fn resolve(self) -> Command {
+        Command::Sheet {
+            out: self.out,
+            columns: self.columns,
+            images: self.images,
+        }
+    }
+}
+
+fn tasks(text: &str) -> Result<usize, String> {
+    text.trim()
+        .parse()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| "expects a whole number of tasks, at least 1".to_owned())
+}
+
+fn columns(text: &str) -> Result<usize, String> {
+    text.trim()
+        .parse()
+        .ok()
+        .filter(|&n| n >= 1)
+        .ok_or_else(|| "expects a whole number, at least 1".to_owned())
 }

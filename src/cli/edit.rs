@@ -3,9 +3,18 @@
 //! arguments are parsed (its path and value checked), and turned into the
 //! library's [`Edit`] only when it is applied, against the scene as the
 //! edits before it left it: an added element's index depends on them.
+//!
+//! `rayoflight edit`'s flags, as clap reads them ([`EditFlags`]), are here
+//! too, and how any command's edit flags are put back in the order given
+//! ([`in_order`]) and read ([`edit_args`]): the render's, `explain`'s and
+//! `split`'s `--set` go through them as well.
 
+use super::args::values::{Named, path_value};
+use super::args::{Command, UsageError};
+use clap::{ArgMatches, Args};
 use rayoflight::scene::Scene;
 use rayoflight::scene::edit::{Edit, EditError, Edited, Field, Item, NewElement, Value};
+use std::path::{Path, PathBuf};
 
 /// The paths `--set` and `--remove` take, for `rayoflight edit --help`
 /// (the engine's errors list them too).
@@ -73,6 +82,122 @@ pub fn apply(edited: &mut Edited, edits: &[EditArg]) -> Result<Vec<Edit>, EditEr
         applied.push(edit);
     }
     Ok(applied)
+}
+
+// ----- the command line -----
+
+/// `rayoflight edit`: what to change in a scene file, and where to write it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EditArgs {
+    pub scene: PathBuf,
+    /// Where the edited scene goes; `None`: the scene file itself.
+    pub out: Option<PathBuf>,
+    /// The `--set`, `--remove` and `--add`, in the order given; never empty.
+    pub edits: Vec<EditArg>,
+}
+
+// `rayoflight edit`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct EditFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// Set a value: object[2].material.ka=0.5, model.type=phong.
+    #[arg(long, value_name = "PATH=VALUE", value_parser = path_value)]
+    set: Vec<(String, String)>,
+    /// Remove an element: object[2], light[1], object[1].transformation[2].
+    #[arg(long, value_name = "PATH")]
+    remove: Vec<String>,
+    /// Add an element with default values, after the last of its kind:
+    /// sphere, plane or light.
+    #[arg(long, value_name = "KIND", value_parser = Named::new(kind, kind_names))]
+    add: Vec<String>,
+    /// Write the edited scene to FILE instead of the scene file.
+    #[arg(short, long, value_name = "FILE")]
+    out: Option<PathBuf>,
+}
+
+impl EditFlags {
+    /// The edits asked for, in the order given (`matches`: the
+    /// subcommand's, which alone know that order), read against the
+    /// scene's path; none is a usage error of `subcommand`.
+    pub(super) fn resolve(
+        self,
+        matches: &ArgMatches,
+        subcommand: Option<&'static str>,
+    ) -> Result<Command, UsageError> {
+        let given = in_order(matches, self.set, self.remove, self.add);
+        if given.is_empty() {
+            return Err(UsageError::Invalid {
+                message: "nothing to do: give at least one --set, --remove or --add".to_owned(),
+                command: subcommand,
+            });
+        }
+        Ok(Command::Edit(EditArgs {
+            edits: edit_args(given, &self.scene)?,
+            scene: self.scene,
+            out: self.out,
+        }))
+    }
+}
+
+/// `--add`'s kind, read (and refused, naming the scene) with the edits.
+fn kind(text: &str) -> Result<String, String> {
+    Ok(text.to_owned())
+}
+
+fn kind_names() -> Vec<&'static str> {
+    NewElement::ALL.iter().map(|k| k.name()).collect()
+}
+
+/// An edit flag as given, before its path is read.
+pub(super) enum Given {
+    Set(String, String),
+    Remove(String),
+    Add(String),
+}
+
+/// The `--set`, `--remove` and `--add` of `matches`, in the order given on
+/// the command line: clap collects each flag's values apart, and their
+/// indices put them back in order.
+fn in_order(
+    matches: &ArgMatches,
+    set: Vec<(String, String)>,
+    remove: Vec<String>,
+    add: Vec<String>,
+) -> Vec<Given> {
+    let indices = |id: &str| matches.indices_of(id).into_iter().flatten();
+    let mut given: Vec<(usize, Given)> = Vec::new();
+    given.extend(
+        indices("set")
+            .zip(set)
+            .map(|(i, (p, v))| (i, Given::Set(p, v))),
+    );
+    given.extend(
+        indices("remove")
+            .zip(remove)
+            .map(|(i, p)| (i, Given::Remove(p))),
+    );
+    given.extend(indices("add").zip(add).map(|(i, k)| (i, Given::Add(k))));
+    given.sort_by_key(|(i, _)| *i);
+    given.into_iter().map(|(_, g)| g).collect()
+}
+
+/// The edits read: their paths, values and kinds checked (not yet against
+/// the scene).
+pub(super) fn edit_args(given: Vec<Given>, scene: &Path) -> Result<Vec<EditArg>, UsageError> {
+    given
+        .into_iter()
+        .map(|g| match g {
+            Given::Set(path, value) => EditArg::set(&path, &value),
+            Given::Remove(path) => EditArg::remove(&path),
+            Given::Add(kind) => EditArg::add(&kind),
+        })
+        .collect::<Result<_, _>>()
+        .map_err(|error| UsageError::Edit {
+            scene: scene.to_owned(),
+            error,
+        })
 }
 
 #[cfg(test)]

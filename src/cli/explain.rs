@@ -4,14 +4,21 @@
 //! words it, written out as the rays are traced: one ray's tree in memory
 //! at a time, whatever the output's length (256 rays of 10 000 bounces
 //! write 1.5 GB of JSON).
+//!
+//! Its flags, as clap reads them, are here too ([`ExplainFlags`]),
+//! resolved into the [`ExplainArgs`] it runs with.
 
-use super::args::ExplainArgs;
+use super::args::render::RenderOf;
+use super::args::{Command, UsageError};
+use super::edit::EditArg;
 use super::{Failure, edit, fail, refused};
+use clap::Args;
 use glam::DVec3;
 use rayoflight::geometry::Ray;
 use rayoflight::render::explain::{
     Bounce, Ended, PixelValue, Sample, describe_ray, draft_note, number as n, vector as v,
 };
+use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{Prepared, prepare};
 use rayoflight::scene::edit::Edited;
 use rayoflight::scene::{self, Scene, names};
@@ -19,6 +26,7 @@ use rayoflight::system::escape::visible as shown;
 use serde_json::{Value, json};
 use std::io::{self, Write};
 use std::ops::ControlFlow;
+use std::path::PathBuf;
 
 pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
     let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
@@ -342,4 +350,60 @@ fn sample_words(out: &mut String, s: &Sample, names: &Names) {
         *out += &format!("\n{ray}\n  hits nothing: black\n");
     }
     *out += &format!("chain ended: {}\n", s.ended.describe());
+}
+
+// ----- the command line -----
+
+/// `rayoflight explain`: which pixel of which render.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExplainArgs {
+    pub scene: PathBuf,
+    pub x: u32,
+    pub y: u32,
+    pub json: bool,
+    /// The render's method and anti-aliasing (threads do not matter).
+    pub request: RenderRequest,
+    /// `--set`: values changed in memory first, in order.
+    pub edits: Vec<EditArg>,
+}
+
+// `rayoflight explain`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct ExplainFlags {
+    /// The scene file.
+    scene: PathBuf,
+    /// The pixel's column, 0 at the left.
+    #[arg(value_name = "X", value_parser = pixel, allow_negative_numbers = true)]
+    x: u32,
+    /// The pixel's row, 0 at the top.
+    #[arg(value_name = "Y", value_parser = pixel, allow_negative_numbers = true)]
+    y: u32,
+    /// Print one JSON object: "rgb8", "rgb", "hits" (each with "object",
+    /// 1-based or null for a miss, "t", "point", "normal", "terms").
+    #[arg(long)]
+    json: bool,
+    #[command(flatten)]
+    render: RenderOf,
+}
+
+impl ExplainFlags {
+    /// The pixel asked about, the render's edits read against the scene's
+    /// path.
+    pub(super) fn resolve(self) -> Result<Command, UsageError> {
+        let (request, edits) = self.render.resolve(&self.scene)?;
+        Ok(Command::Explain(ExplainArgs {
+            scene: self.scene,
+            x: self.x,
+            y: self.y,
+            json: self.json,
+            request,
+            edits,
+        }))
+    }
+}
+
+fn pixel(text: &str) -> Result<u32, String> {
+    text.parse()
+        .map_err(|_| "expects a pixel number: 0, 1, 2, … from the image's top left".to_owned())
 }

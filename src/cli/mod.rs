@@ -14,7 +14,8 @@ mod progress;
 mod stdout;
 mod study;
 
-use args::{Command, EditArgs, RenderArgs, USAGE, UsageError};
+use args::{Command, RenderArgs, USAGE, UsageError};
+use edit::EditArgs;
 use rayoflight::cluster::part::Part;
 use rayoflight::render::measure;
 use rayoflight::scene::edit::{EditError, Edited};

@@ -3,8 +3,13 @@
 //! are given), a table on stdout, DIR/study.csv, the chart DIR/study.png
 //! and, for each failing case, DIR/fail-<scene>-<method>.png (method |
 //! reference | difference ×8).
+//!
+//! Its flags, as clap reads them, are here too ([`StudyFlags`]), resolved
+//! into the [`StudyArgs`] it runs with.
 
+use super::args::values::{runs, threads};
 use super::progress::Steps;
+use clap::Args;
 use rayoflight::study::chart;
 use rayoflight::system::escape::visible;
 use rayoflight::system::files;
@@ -127,4 +132,39 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         failed.len(),
         start.elapsed().as_secs_f64()
     ))
+}
+
+// ----- the command line -----
+
+// `rayoflight study`'s flags, as clap reads them (a plain comment:
+// a doc comment here would be clap's help text).
+#[derive(Args, Debug)]
+pub(super) struct StudyFlags {
+    /// Where study.csv, study.png and the failure pictures go (created).
+    #[arg(short, long, value_name = "DIR", default_value = "study")]
+    out: PathBuf,
+    /// Runs per measurement; the median is reported.
+    #[arg(long, value_name = "K", default_value_t = 3, value_parser = runs, allow_negative_numbers = true)]
+    runs: usize,
+    /// Render threads [default: one per core]
+    #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
+    threads: Option<usize>,
+    /// Scene files to study [default: the built-in study scenes]
+    #[arg(value_name = "SCENE")]
+    scenes: Vec<PathBuf>,
+    /// No progress bar on stderr.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+impl StudyFlags {
+    pub(super) fn resolve(self) -> super::args::Command {
+        super::args::Command::Study(StudyArgs {
+            out: self.out,
+            runs: self.runs,
+            threads: self.threads,
+            scenes: self.scenes,
+            quiet: self.quiet,
+        })
+    }
 }

@@ -14,7 +14,7 @@
 
 use super::grammar::{self, Value};
 use super::xml::is_name_char;
-use super::{LoadError, Position, Shape, names, splice};
+use super::{LoadError, Position, Shape, layout, names};
 use std::ops::Range;
 use std::path::Path;
 
@@ -703,7 +703,7 @@ pub enum SymbolKind {
 pub fn symbols(text: &str) -> Vec<Symbol> {
     let labels = names::object_labels(text);
     let (mut objects, mut lights) = (0, 0);
-    splice::top_level(text)
+    layout::top_level(text)
         .into_iter()
         .map(|(name, range, selection)| {
             let (name, kind) = match name {
@@ -735,7 +735,7 @@ pub fn symbols(text: &str) -> Vec<Symbol> {
 /// the loader numbers them), each with its start tag's bytes; none when it
 /// is not well-formed XML.
 fn objects(text: &str) -> impl Iterator<Item = (Range<usize>, Range<usize>)> + '_ {
-    splice::top_level(text)
+    layout::top_level(text)
         .into_iter()
         .filter(|(name, ..)| Shape::from_name(name).is_some())
         .map(|(_, range, selection)| (range, selection))

@@ -10,7 +10,9 @@
 //!
 //! [`edit`] is the one way a scene changes (the app's panel and undo, the
 //! command line's `edit` and `--set`); [`splice`] writes those changes back
-//! into the file's text, keeping every byte that was not edited; [`merge`]
+//! into the file's text, keeping every byte that was not edited, by the
+//! places [`layout`] finds in it; [`fresh`] writes a new file for a scene
+//! that has no text yet; [`merge`]
 //! replays unsaved edits onto a version of the file another program saved;
 //! [`names`] names objects for people (`#2 RED sphere`). [`grammar`] is the
 //! format's elements and attributes as data, which the loader reads with
@@ -21,10 +23,12 @@
 
 pub mod edit;
 mod error;
+pub mod fresh;
 pub mod generated;
 pub mod grammar;
 pub mod identity;
 pub mod language;
+pub mod layout;
 mod load;
 pub mod merge;
 pub mod names;

@@ -3,8 +3,8 @@
 //! from 1 in file order (as paths do); the words are the first ones of the
 //! comment directly above the object in the file ([`object_labels`]).
 
+use super::layout;
 use super::source::Source;
-use super::splice;
 
 /// The first words of the comment directly above each object (spheres and
 /// planes in file order), for naming it in the panel: up to three, before
@@ -29,13 +29,13 @@ impl Labels {
 
 /// The [`Labels`] of `text`'s objects.
 pub fn object_labels(text: &str) -> Labels {
-    labels_of(splice::object_comments(text))
+    labels_of(layout::object_comments(text))
 }
 
 /// The [`Labels`] of the objects of a text held as a [`Source`] (a packed
 /// one is read a block at a time).
 pub fn source_labels(source: &Source) -> Labels {
-    let comments = splice::source_object_comments(source);
+    let comments = layout::source_object_comments(source);
     labels_of(comments.iter().map(|(k, c)| (*k, c.as_str())))
 }
 

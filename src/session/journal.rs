@@ -52,7 +52,7 @@ use crate::session::document::{TextWriter, fingerprint_file};
 pub type WriteText = dyn Fn(&mut dyn Write) -> std::io::Result<()>;
 use crate::math::{Transform, TransformStep};
 use crate::scene::edit::{Edit, Element, Field, Item, Owner};
-use crate::scene::{self, Scene, splice};
+use crate::scene::{self, Scene, fresh};
 
 /// How long after an edit it is in the journal, at the most.
 pub const DELAY: Duration = Duration::from_millis(300);
@@ -703,7 +703,7 @@ fn steps_xml(steps: &[TransformStep]) -> Result<String, String> {
         material: scene::Material::default(),
         transform,
     }));
-    Ok(splice::to_xml(&s))
+    Ok(fresh::to_xml(&s))
 }
 
 fn edit_to_json(edit: &Edit) -> Json {
@@ -722,7 +722,7 @@ fn edit_to_json(edit: &Edit) -> Json {
                     });
                 }
             }
-            json!({"insert": item.to_string(), "xml": splice::to_xml(&s)})
+            json!({"insert": item.to_string(), "xml": fresh::to_xml(&s)})
         }
         Edit::Transform(owner, steps) => json!({
             "transform": owner.to_string(),

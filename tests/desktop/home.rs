@@ -15,24 +15,28 @@ use std::process::Command;
 const BIN: &str = env!("CARGO_BIN_EXE_rayoflight");
 const ROOT: &str = env!("CARGO_MANIFEST_DIR");
 
-/// Every subcommand, as the man pages and completions name them.
-const SUBCOMMANDS: &[&str] = &[
-    "split",
-    "assemble",
-    "sheet",
-    "export-pov",
-    "plan",
-    "explain",
-    "bench",
-    "edit",
-    "study",
-    "new",
-    "schema",
-    "completions",
-    "man",
-    "install-desktop",
-    "lsp",
-];
+/// Every subcommand, as the man pages and completions name them: those
+/// `rayoflight --help` lists under "Commands:" (a name, two spaces in),
+/// read from the binary rather than kept as a copy of its list.
+fn subcommands() -> Vec<String> {
+    let help = run_ok(&["--help"]);
+    let names: Vec<String> = help
+        .lines()
+        .skip_while(|l| l.trim_end() != "Commands:")
+        .skip(1)
+        .take_while(|l| !l.trim().is_empty())
+        .filter(|l| l.starts_with("  ") && !l[2..].starts_with(' '))
+        .filter_map(|l| l.split_whitespace().next())
+        .map(str::to_owned)
+        .collect();
+    for known in ["split", "edit", "man", "install-desktop", "lsp"] {
+        assert!(
+            names.iter().any(|n| n == known),
+            "{known} not in {names:?}: {help}"
+        );
+    }
+    names
+}
 
 fn run_ok(args: &[&str]) -> String {
     let o = rayoflight(Path::new(ROOT), args);
@@ -217,13 +221,14 @@ fn man_renders_every_page_without_a_warning() {
     }
     let dir = tempfile::tempdir().unwrap();
     let top = run_ok(&["man"]);
-    for sub in SUBCOMMANDS {
+    let subcommands = subcommands();
+    for sub in &subcommands {
         assert!(
             top.contains(&format!("rayoflight\\-{}(1)", sub.replace('-', "\\-"))),
             "rayoflight(1) does not name rayoflight-{sub}(1)"
         );
     }
-    let pages = std::iter::once(None).chain(SUBCOMMANDS.iter().map(|s| Some(*s)));
+    let pages = std::iter::once(None).chain(subcommands.iter().map(|s| Some(s.as_str())));
     for sub in pages {
         let page = match sub {
             Some(sub) => run_ok(&["man", sub]),
@@ -259,7 +264,7 @@ fn man_renders_every_page_without_a_warning() {
     let o = rayoflight(Path::new(ROOT), &["man", "--dir", all.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(stdout(&o), "");
-    let mut expected: Vec<String> = SUBCOMMANDS
+    let mut expected: Vec<String> = subcommands
         .iter()
         .map(|s| format!("rayoflight-{s}.1"))
         .chain(["rayoflight.1".to_owned()])
@@ -278,7 +283,8 @@ fn man_renders_every_page_without_a_warning() {
 #[test]
 fn help_man_pages_and_completions_name_the_same_flags() {
     let bash = run_ok(&["completions", "bash"]);
-    for sub in std::iter::once(None).chain(SUBCOMMANDS.iter().map(|s| Some(*s))) {
+    let subcommands = subcommands();
+    for sub in std::iter::once(None).chain(subcommands.iter().map(|s| Some(s.as_str()))) {
         let (help, page) = match sub {
             Some(sub) => (run_ok(&[sub, "--help"]), run_ok(&["man", sub])),
             None => (run_ok(&["--help"]), run_ok(&["man"])),

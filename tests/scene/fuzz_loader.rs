@@ -173,7 +173,7 @@ fn exercise(data: &[u8]) {
             with(render::auto(&s).options) == plain,
             "auto differs from the plain path"
         );
-        let _ = scene::splice::to_xml(&s);
+        let _ = scene::fresh::to_xml(&s);
     }
 }
 

@@ -1,6 +1,6 @@
 //! Properties that must hold for every input, checked on generated cases
 //! (proptest shrinks a failure to a minimal one):
-//! - a scene written out by `scene::splice::to_xml` loads back equal;
+//! - a scene written out by `scene::fresh::to_xml` loads back equal;
 //! - a transform composed with its inverse is the identity;
 //! - rendering never panics on any valid scene, extremes included
 //!   (coordinates near 1e308, radii near 1e-300, 1×N and N×1 images);
@@ -110,7 +110,7 @@ proptest! {
             // Extremes can make a transformation singular: refused by design.
             return Ok(());
         };
-        let written = scene::splice::to_xml(&original);
+        let written = scene::fresh::to_xml(&original);
         let back = scene::parse(&written, Path::new("written.xml")).unwrap();
         prop_assert_eq!(back, original);
     }

@@ -7,7 +7,8 @@ use crate::common::Rng;
 
 use rayoflight::math::{Transform, TransformStep, Vec3};
 use rayoflight::scene::edit::EditError;
-use rayoflight::scene::splice::{rewrite_by_index as rewrite, to_xml};
+use rayoflight::scene::fresh::to_xml;
+use rayoflight::scene::splice::rewrite_by_index as rewrite;
 use rayoflight::scene::{self, Camera, Illumination, Light, Material, Model, Object, Scene, Shape};
 
 const EXAMPLE: &str = rayoflight::EXAMPLE_SCENE;

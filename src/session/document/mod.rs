@@ -383,7 +383,7 @@ impl Document {
         let version = self.on_screen();
         let origin = version.edited.object_origin(n)?;
         // (A packed text is unpacked for it: asked for by a menu, once.)
-        scene::splice::object_position(&version.source.text(), origin)
+        scene::layout::object_position(&version.source.text(), origin)
     }
 
     /// Object `n`'s number among the spheres and planes of the text on
