@@ -405,11 +405,11 @@ impl Prepared {
     }
 
     /// Why pixel (i, j) has its colour: each of its rays' trees, recorded
-    /// from the render's trace ([`super::explain`]); `None` outside the
-    /// image. All the trees at once: [`Prepared::explain_each`] hands them
-    /// on one at a time. A draft's pixel is explained by the rays the draft
-    /// traced for it: those of its 2×2 block's top-left pixel
-    /// ([`Explanation::traced`]).
+    /// from the render's trace ([`crate::render::explain`]); `None`
+    /// outside the image. All the trees at once: [`Prepared::explain_each`]
+    /// hands them on one at a time. A draft's pixel is explained by the
+    /// rays the draft traced for it: those of its 2×2 block's top-left
+    /// pixel ([`Explanation::traced`]).
     pub fn explain(&self, i: u32, j: u32) -> Option<Explanation> {
         let mut samples = Vec::new();
         let pixel = self.explain_each(i, j, |sample| {
