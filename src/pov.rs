@@ -33,7 +33,7 @@ use std::path::Path;
 
 use glam::{DAffine3, DVec3};
 
-use crate::scene::{Illumination, Object, Scene, Shape};
+use crate::scene::{Illumination, Object, Scene};
 
 /// The largest `max_trace_level` POV-Ray accepts.
 pub const POV_MAX_TRACE_LEVEL: u32 = 256;
@@ -219,11 +219,7 @@ fn write_scene(out: &mut String, scene: &Scene, header: Option<Header>) -> std::
 }
 
 fn write_object(out: &mut String, object: &Object, model: Illumination) -> std::fmt::Result {
-    let head = match object.shape {
-        Shape::Sphere => "sphere { 0, 1",
-        Shape::Plane => "plane { z, 0",
-    };
-    writeln!(out, "{head}")?;
+    writeln!(out, "{}", object.shape.pov())?;
     writeln!(out, "  {}", pov_matrix(&object.transform.to_world()))?;
     writeln!(out, "  pigment {{ rgb 1 }}")?;
     let mat = object.material;
@@ -305,7 +301,7 @@ fn pov_matrix(m: &DAffine3) -> String {
 mod tests {
     use super::*;
     use crate::math::{Transform, TransformStep};
-    use crate::scene::{Camera, Light, Material, Model};
+    use crate::scene::{Camera, Light, Material, Model, Shape};
     use glam::DMat3;
 
     /// Applies POV-Ray's row-vector matrix to a point, as POV-Ray does.

@@ -132,6 +132,44 @@ impl Primitive {
         }
     }
 
+    /// The unit geometric normals (not yet turned to face the rays) at the
+    /// hits `m = rays.at(t)` of a packet of rays: lane i's on the
+    /// primitive `hit(i)`, zero where it is `None`. A ball's from its
+    /// centre, computed in the lanes; a plane's given; an ellipsoid's
+    /// through its matrix, one lane at a time. The packet's form of
+    /// [`Primitive::normal_at`]: the trace asks, geometry answers.
+    #[inline(always)]
+    pub fn normals<'p, L: Lanes>(
+        rays: &Ray<L::Vector>,
+        t: L,
+        m: L::Vector,
+        hit: impl Fn(usize) -> Option<&'p Primitive>,
+    ) -> L::Vector {
+        use super::{Mask, Vector};
+        let mut centers = [DVec3::ZERO; MAX_LANES];
+        let mut given = [DVec3::ZERO; MAX_LANES];
+        let mut ball = [false; MAX_LANES];
+        for i in 0..L::WIDTH {
+            let Some(primitive) = hit(i) else {
+                continue;
+            };
+            match primitive {
+                Primitive::Ball { center, .. } => (centers[i], ball[i]) = (*center, true),
+                Primitive::Plane(plane) => given[i] = plane.normal,
+                Primitive::Ellipsoid(_) => {
+                    let ray = Ray::new(L::vector_lane(rays.origin, i), L::vector_lane(rays.dir, i));
+                    given[i] = primitive.normal_at(&ray, t.lane(i));
+                }
+            }
+        }
+        let from_center = (m - L::vector_from_fn(|i| centers[i])).normalize();
+        L::Vector::select(
+            L::Mask::from_fn(|i| ball[i]),
+            from_center,
+            L::vector_from_fn(|i| given[i]),
+        )
+    }
+
     /// World bounding box; `None` for the unbounded plane.
     pub fn bounds(&self) -> Option<Aabb> {
         match self {

@@ -4,7 +4,8 @@
 //! This is the one list of them: [`Shape::ALL`], each with the element
 //! name the scene format gives it ([`Shape::name`]), what the format's
 //! documentation says of it ([`Shape::doc`]: editors show it, the schema
-//! holds it) and whether it has bounds. The loader, the schema and the
+//! holds it), how POV-Ray spells it ([`Shape::pov`]) and whether it has
+//! bounds. The loader, the schema and the
 //! completion of `rayoflight lsp`, the save-back, `--add` and the panel's
 //! buttons all read this list: a shape is named nowhere else. Geometry
 //! flattens a shape into a [`Primitive`](super::Primitive) that answers
@@ -13,7 +14,7 @@
 /// Declares the shapes, each once: the enum and the list of all of
 /// them, with their element names and documentation.
 macro_rules! shapes {
-    ($($(#[doc = $what:literal])* $shape:ident = $name:literal, bounded: $bounded:literal, $doc:literal;)*) => {
+    ($($(#[doc = $what:literal])* $shape:ident = $name:literal, bounded: $bounded:literal, pov: $pov:literal, $doc:literal;)*) => {
         /// What an object is in its own space.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         pub enum Shape {
@@ -43,6 +44,14 @@ macro_rules! shapes {
                 }
             }
 
+            /// How POV-Ray 3.7 spells the same shape in its own space, up
+            /// to its transformation and texture (`rayoflight export-pov`).
+            pub const fn pov(self) -> &'static str {
+                match self {
+                    $(Shape::$shape => $pov,)*
+                }
+            }
+
             /// Whether it fits in a box (a bounding volume hierarchy holds
             /// it); an unbounded one is tested against every ray apart.
             pub const fn is_bounded(self) -> bool {
@@ -56,10 +65,10 @@ macro_rules! shapes {
 
 shapes! {
     /// The unit sphere centred on the origin.
-    Sphere = "sphere", bounded: true,
+    Sphere = "sphere", bounded: true, pov: "sphere { 0, 1",
         "The unit sphere centred on the origin of its own space, placed by its transformation.";
     /// The plane z = 0, infinite and two-sided.
-    Plane = "plane", bounded: false,
+    Plane = "plane", bounded: false, pov: "plane { z, 0",
         "The plane z = 0 of its own space (infinite, two-sided), placed by its transformation.";
 }
 

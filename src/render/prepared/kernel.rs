@@ -12,11 +12,10 @@ use super::{Candidates, Hit, Prepared, PrimitiveRef};
 #[cfg(target_arch = "x86_64")]
 use crate::geometry::{Avx2, Avx4, Avx8, Avx512, Vectorized};
 use crate::geometry::{
-    F64x4, Found, Lanes, MAX_LANES, Mask, Primitive, Primitive32, Ray, Ray32, Real, Search, Vector,
+    F64x4, Found, Lanes, Mask, Primitive, Primitive32, Ray, Ray32, Real, Search, Vector,
 };
 use crate::render::{Offset, Precision, SphereTest};
 use crate::shading::SurfacePoint;
-use glam::DVec3;
 use std::marker::PhantomData;
 
 /// The nearest hit found so far by each lane of a packet of rays.
@@ -247,36 +246,13 @@ impl<const TEXTBOOK: bool, L: Lanes> Kernel for Exact<TEXTBOOK, L> {
         alive: L::Mask,
     ) -> SurfacePoint<L::Vector> {
         let m = rays.at(hits.t);
-        // The geometric normal: from the centre for a ball (computed in
-        // the lanes), given for a plane, through the matrix for an
-        // ellipsoid (one lane at a time).
-        let mut centers = [DVec3::ZERO; MAX_LANES];
-        let mut given = [DVec3::ZERO; MAX_LANES];
-        let mut ball = [false; MAX_LANES];
-        for i in 0..L::WIDTH {
-            if !alive.lane(i) {
-                continue;
-            }
-            let hit = hits.lane(i);
-            let primitive = match hit.primitive {
+        // The geometric normal, geometry's answer for each lane's hit.
+        let n = Primitive::normals::<L>(rays, hits.t, m, |i| {
+            alive.lane(i).then(|| match hits.lane(i).primitive {
                 PrimitiveRef::Bounded(k) => &p.world.shapes.bounded[k],
                 PrimitiveRef::Plane(k) => &p.world.shapes.planes[k],
-            };
-            match primitive {
-                Primitive::Ball { center, .. } => (centers[i], ball[i]) = (*center, true),
-                Primitive::Plane(plane) => given[i] = plane.normal,
-                Primitive::Ellipsoid(_) => {
-                    let ray = Ray::new(L::vector_lane(rays.origin, i), L::vector_lane(rays.dir, i));
-                    given[i] = primitive.normal_at(&ray, hit.t);
-                }
-            }
-        }
-        let from_center = (m - L::vector_from_fn(|i| centers[i])).normalize();
-        let n = L::Vector::select(
-            L::Mask::from_fn(|i| ball[i]),
-            from_center,
-            L::vector_from_fn(|i| given[i]),
-        );
+            })
+        });
         // Shading normal N: the geometric normal turned to face the ray.
         let n = L::Vector::select(n.dot(rays.dir).gt(L::ZERO), -n, n);
         SurfacePoint { m, n, v: -rays.dir }
