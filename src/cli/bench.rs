@@ -1166,8 +1166,8 @@ pub(super) struct BenchFlags {
 }
 
 impl BenchFlags {
-    pub(super) fn resolve(self) -> super::args::Command {
-        super::args::Command::Bench(BenchArgs {
+    pub(super) fn resolve(self) -> BenchArgs {
+        BenchArgs {
             threads: self.threads.unwrap_or_else(rayoflight::render::all_cores),
             runs: self.runs,
             csv: self.csv,
@@ -1176,7 +1176,7 @@ impl BenchFlags {
             split_size: self.split_size,
             big_spheres: self.big_spheres,
             app_document: self.app_document,
-        })
+        }
     }
 }
 

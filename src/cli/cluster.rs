@@ -8,8 +8,7 @@
 //! ([`SplitFlags`], [`AssembleFlags`], [`SheetFlags`]), each resolved into
 //! the [`Command`] it asks for.
 
-use super::args::Command;
-use super::args::UsageError;
+use super::args::error::UsageError;
 use super::args::render::RenderOf;
 use super::edit::EditArg;
 use super::{Failure, edit, fail, print_line, refused, usage};
@@ -238,14 +237,14 @@ pub(super) struct SplitFlags {
 
 impl SplitFlags {
     /// The split asked for, its edits read against the scene's path.
-    pub(super) fn resolve(self) -> Result<Command, UsageError> {
+    pub(super) fn resolve(self) -> Result<SplitArgs, UsageError> {
         let (request, edits) = self.render.resolve(&self.scene)?;
-        Ok(Command::Split(SplitArgs {
+        Ok(SplitArgs {
             scene: self.scene,
             tasks: self.tasks,
             request,
             edits,
-        }))
+        })
     }
 }
 
@@ -262,11 +261,9 @@ pub(super) struct AssembleFlags {
 }
 
 impl AssembleFlags {
-    pub(super) fn resolve(self) -> Command {
-        Command::Assemble {
-            out: self.out,
-            parts: self.parts,
-        }
+    /// The image to write and the parts, in the order given.
+    pub(super) fn resolve(self) -> (PathBuf, Vec<PathBuf>) {
+        (self.out, self.parts)
     }
 }
 
@@ -286,12 +283,9 @@ pub(super) struct SheetFlags {
 }
 
 impl SheetFlags {
-    pub(super) fn resolve(self) -> Command {
-        Command::Sheet {
-            out: self.out,
-            columns: self.columns,
-            images: self.images,
-        }
+    /// The sheet to write, its columns, the images in the order given.
+    pub(super) fn resolve(self) -> (PathBuf, Option<usize>, Vec<PathBuf>) {
+        (self.out, self.columns, self.images)
     }
 }
 

@@ -9,8 +9,8 @@
 //! ([`in_order`]) and read ([`edit_args`]): the render's, `explain`'s and
 //! `split`'s `--set` go through them as well.
 
+use super::args::error::UsageError;
 use super::args::values::{Named, path_value};
-use super::args::{Command, UsageError};
 use clap::{ArgMatches, Args};
 use rayoflight::scene::Scene;
 use rayoflight::scene::edit::{Edit, EditError, Edited, Field, Item, NewElement, Value};
@@ -125,7 +125,7 @@ impl EditFlags {
         self,
         matches: &ArgMatches,
         subcommand: Option<&'static str>,
-    ) -> Result<Command, UsageError> {
+    ) -> Result<EditArgs, UsageError> {
         let given = in_order(matches, self.set, self.remove, self.add);
         if given.is_empty() {
             return Err(UsageError::Invalid {
@@ -133,11 +133,11 @@ impl EditFlags {
                 command: subcommand,
             });
         }
-        Ok(Command::Edit(EditArgs {
+        Ok(EditArgs {
             edits: edit_args(given, &self.scene)?,
             scene: self.scene,
             out: self.out,
-        }))
+        })
     }
 }
 

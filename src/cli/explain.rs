@@ -8,8 +8,8 @@
 //! Its flags, as clap reads them, are here too ([`ExplainFlags`]),
 //! resolved into the [`ExplainArgs`] it runs with.
 
+use super::args::error::UsageError;
 use super::args::render::RenderOf;
-use super::args::{Command, UsageError};
 use super::edit::EditArg;
 use super::{Failure, edit, fail, refused};
 use clap::Args;
@@ -390,16 +390,16 @@ pub(super) struct ExplainFlags {
 impl ExplainFlags {
     /// The pixel asked about, the render's edits read against the scene's
     /// path.
-    pub(super) fn resolve(self) -> Result<Command, UsageError> {
+    pub(super) fn resolve(self) -> Result<ExplainArgs, UsageError> {
         let (request, edits) = self.render.resolve(&self.scene)?;
-        Ok(Command::Explain(ExplainArgs {
+        Ok(ExplainArgs {
             scene: self.scene,
             x: self.x,
             y: self.y,
             json: self.json,
             request,
             edits,
-        }))
+        })
     }
 }
 

@@ -158,13 +158,13 @@ pub(super) struct StudyFlags {
 }
 
 impl StudyFlags {
-    pub(super) fn resolve(self) -> super::args::Command {
-        super::args::Command::Study(StudyArgs {
+    pub(super) fn resolve(self) -> StudyArgs {
+        StudyArgs {
             out: self.out,
             runs: self.runs,
             threads: self.threads,
             scenes: self.scenes,
             quiet: self.quiet,
-        })
+        }
     }
 }

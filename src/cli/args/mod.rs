@@ -14,10 +14,12 @@
 //! so that their range check says what is allowed.
 //!
 //! Here: the top-level parser ([`Cli`], its list of subcommands [`Sub`]),
-//! [`parse`] and what it returns ([`Command`], [`UsageError`]). Each
-//! subcommand's flags, as clap reads them, and their resolving live in
-//! the subcommand's own module (`cluster`, `explain`, `edit`, `bench`,
-//! `study`); the render's own flags in [`render`]; the value parsers that
+//! [`parse`] and what it returns ([`Command`], or a [`UsageError`], which
+//! lives in [`error`]). Each subcommand's flags, as clap reads them, and
+//! their resolving into the subcommand's own arguments live in the
+//! subcommand's own module (`cluster`, `explain`, `edit`, `bench`,
+//! `study`), which imports nothing of this file: [`parse`] wraps what they
+//! give in a [`Command`]. The render's own flags are in [`render`]; the value parsers that
 //! several commands share in [`values`]; the single-dash spellings and
 //! clap's errors in one line in [`spelling`]. The list of subcommand names
 //! is clap's own ([`SUBCOMMANDS`]).
@@ -25,14 +27,16 @@
 use super::{bench, cluster, edit, explain, study};
 use clap::error::ErrorKind;
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand, ValueHint};
-use rayoflight::scene::edit::EditError;
 use std::ffi::OsString;
 use std::path::PathBuf;
 use std::sync::LazyLock;
 
+pub(super) mod error;
 pub(super) mod render;
 mod spelling;
 pub(super) mod values;
+
+pub use error::UsageError;
 
 pub use render::RenderArgs;
 use render::{RenderFlags, render_args};
@@ -142,23 +146,6 @@ impl Command {
             | Command::Edit(_) => false,
         }
     }
-}
-
-/// A command line that does not parse, or an edit the scene refuses: exit
-/// status 2.
-#[derive(Debug, Clone, PartialEq)]
-pub enum UsageError {
-    /// No scene where the command needs one: the usage is printed.
-    NoScene,
-    /// Arguments that do not fit the command. `command` is the subcommand
-    /// whose `--help` to point to (`None`: the top-level one).
-    Invalid {
-        message: String,
-        command: Option<&'static str>,
-    },
-    /// A `--set`, `--remove` or `--add` whose path or value the edit engine
-    /// refuses, for this scene (`object[5]: the scene has 3 objects`).
-    Edit { scene: PathBuf, error: EditError },
 }
 
 // ----- what clap reads -----
@@ -404,19 +391,29 @@ pub fn parse(args: impl IntoIterator<Item = OsString>) -> Result<Command, UsageE
     Ok(match cli.command {
         None => Command::Render(render_args(cli.render)?),
         Some(Sub::ExportPov { scene, out }) => Command::ExportPov { scene, out },
-        Some(Sub::Split(f)) => f.resolve()?,
-        Some(Sub::Assemble(f)) => f.resolve(),
-        Some(Sub::Sheet(f)) => f.resolve(),
+        Some(Sub::Split(f)) => Command::Split(f.resolve()?),
+        Some(Sub::Assemble(f)) => {
+            let (out, parts) = f.resolve();
+            Command::Assemble { out, parts }
+        }
+        Some(Sub::Sheet(f)) => {
+            let (out, columns, images) = f.resolve();
+            Command::Sheet {
+                out,
+                columns,
+                images,
+            }
+        }
         Some(Sub::Plan { scene }) => Command::Plan { scene },
-        Some(Sub::Explain(f)) => f.resolve()?,
+        Some(Sub::Explain(f)) => Command::Explain(f.resolve()?),
         Some(Sub::Edit(f)) => {
             let matches = matches
                 .subcommand_matches("edit")
                 .expect("clap matched the edit subcommand");
-            f.resolve(matches, subcommand)?
+            Command::Edit(f.resolve(matches, subcommand)?)
         }
-        Some(Sub::Bench(f)) => f.resolve(),
-        Some(Sub::Study(f)) => f.resolve(),
+        Some(Sub::Bench(f)) => Command::Bench(f.resolve()),
+        Some(Sub::Study(f)) => Command::Study(f.resolve()),
         Some(Sub::New { scene }) => Command::New { scene },
         Some(Sub::Schema) => Command::Schema,
         Some(Sub::Completions { shell }) => Command::Completions(shell),

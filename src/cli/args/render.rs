@@ -4,7 +4,7 @@
 //! name a render in the subcommands that speak of one (`explain`,
 //! `split`).
 
-use super::UsageError;
+use super::error::UsageError;
 use super::values::{
     Named, aa, method, method_names, pass, pass_names, path_value, region, threads,
 };
