@@ -56,24 +56,7 @@ const SIGNALS: [i32; 3] = [
 /// Installs the handlers (once; later calls do nothing). Until a guard is
 /// taken the signals keep their default action.
 pub fn install() -> std::io::Result<()> {
-    if HANDLERS.get().is_some() {
-        return Ok(());
-    }
-    let handlers = Handlers {
-        caught: Arc::new(AtomicUsize::new(0)),
-        requested: Arc::new(AtomicBool::new(false)),
-        unguarded: Arc::new(AtomicBool::new(true)),
-    };
-    #[cfg(unix)]
-    for signal in SIGNALS {
-        // Registration order is the order the actions run in: record the
-        // signal, then end the process if no work can stop cleanly.
-        signal_hook::flag::register_usize(signal, Arc::clone(&handlers.caught), signal as usize)?;
-        signal_hook::flag::register(signal, Arc::clone(&handlers.requested))?;
-        signal_hook::flag::register_conditional_default(signal, Arc::clone(&handlers.unguarded))?;
-    }
-    let _ = HANDLERS.set(handlers);
-    Ok(())
+    register(true)
 }
 
 /// Records SIGINT, SIGTERM and SIGHUP for the writers to see
@@ -81,20 +64,43 @@ pub fn install() -> std::io::Result<()> {
 /// on them (the app; once [`install`] or this ran, later calls do
 /// nothing).
 pub fn record_only() -> std::io::Result<()> {
+    register(false)
+}
+
+/// The handlers of [`install`] (`ends`: a signal with no work to stop
+/// cleanly ends the process, its number kept for the exit status) or of
+/// [`record_only`] (it is only recorded).
+fn register(ends: bool) -> std::io::Result<()> {
     if HANDLERS.get().is_some() {
         return Ok(());
     }
     let handlers = Handlers {
         caught: Arc::new(AtomicUsize::new(0)),
         requested: Arc::new(AtomicBool::new(false)),
-        // Read by no handler: none ends the process.
-        unguarded: Arc::new(AtomicBool::new(false)),
+        // Read by no handler when nothing ends the process.
+        unguarded: Arc::new(AtomicBool::new(ends)),
     };
-    // Not `caught`: a process that ends itself on a signal chooses its
-    // own exit status (the app's is 0: its edits are in its journal).
     #[cfg(unix)]
     for signal in SIGNALS {
+        // Registration order is the order the actions run in: record the
+        // signal, then end the process if no work can stop cleanly. A
+        // process that ends itself on a signal chooses its own exit
+        // status (the app's is 0: its edits are in its journal), so
+        // `caught` is not kept for it.
+        if ends {
+            signal_hook::flag::register_usize(
+                signal,
+                Arc::clone(&handlers.caught),
+                signal as usize,
+            )?;
+        }
         signal_hook::flag::register(signal, Arc::clone(&handlers.requested))?;
+        if ends {
+            signal_hook::flag::register_conditional_default(
+                signal,
+                Arc::clone(&handlers.unguarded),
+            )?;
+        }
     }
     let _ = HANDLERS.set(handlers);
     Ok(())

@@ -56,16 +56,13 @@ impl Document {
         base: impl FnOnce() -> Result<String, String>,
         edits: &[Edit],
     ) -> Result<Reload, String> {
-        let label = match edits.len() {
-            1 => "restore 1 unsaved edit".to_owned(),
-            n => format!("restore {n} unsaved edits"),
-        };
+        let label = restore_label(edits.len(), "");
         let path = self.path.clone().ok_or("the scene has no file")?;
         if self.placeholder || self.state == FileState::Missing {
             // The file does not load now, or is gone: the edits stay on
             // their base, and saving refuses until the file loads again.
             let base = base()?;
-            let base_scene = scene::parse(&base, &path).map_err(|e| format!("its base: {e}"))?;
+            let base_scene = parse_base(&base, &path)?;
             let mut doc = Document::from_text(Some(path), base, base_scene, FileState::Watching);
             doc.apply_labelled(edits.to_vec(), label)
                 .map_err(|e| format!("an edit does not apply: {e}"))?;
@@ -101,10 +98,7 @@ impl Document {
         base: impl FnOnce() -> Result<String, String>,
         edits: &[Edit],
     ) -> Result<Reload, String> {
-        let label = match edits.len() {
-            1 => "restore 1 unsaved edit of another window".to_owned(),
-            n => format!("restore {n} unsaved edits of another window"),
-        };
+        let label = restore_label(edits.len(), " of another window");
         self.replay_restored(base_fingerprint, base, edits, label, false)
     }
 
@@ -124,7 +118,7 @@ impl Document {
         let base_scene = if !self.placeholder && self.disk == Some(base_fingerprint) {
             self.file_scene().clone()
         } else {
-            scene::parse(&base()?, &path).map_err(|e| format!("its base: {e}"))?
+            parse_base(&base()?, &path)?
         };
         // Each edit must apply to its base: a merge leaves out an edit
         // that does not, and a journal is applied whole or not at all.
@@ -142,6 +136,20 @@ impl Document {
             from_file,
         ))
     }
+}
+
+/// The undo step's label of `n` restored edits (`whose`: of another
+/// window, or nothing).
+fn restore_label(n: usize, whose: &str) -> String {
+    match n {
+        1 => format!("restore 1 unsaved edit{whose}"),
+        n => format!("restore {n} unsaved edits{whose}"),
+    }
+}
+
+/// The scene of a journal's base text, or why it is damaged.
+fn parse_base(text: &str, path: &std::path::Path) -> Result<scene::Scene, String> {
+    scene::parse(text, path).map_err(|e| format!("its base: {e}"))
 }
 
 /// Feeds written bytes to a [`Fingerprint`].
