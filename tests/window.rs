@@ -69,6 +69,25 @@ impl Drop for Killed {
     }
 }
 
+impl Killed {
+    /// Sends SIGTERM (a logout, `systemctl stop`) and waits for the
+    /// process to end, at most `within` or the test fails: its exit status
+    /// and how long it took.
+    fn terminate(&mut self, within: Duration) -> (std::process::ExitStatus, Duration) {
+        let pid = self.0.id().to_string();
+        let sent = Instant::now();
+        let killed = Command::new("kill").args(["-TERM", &pid]).status().unwrap();
+        assert!(killed.success());
+        loop {
+            if let Some(status) = self.0.try_wait().unwrap() {
+                return (status, sent.elapsed());
+            }
+            assert!(sent.elapsed() < within, "the app ends on SIGTERM");
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
 /// One window test at a time: two starting together could pick the same
 /// free display number, and both apps would share one screen.
 static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
@@ -653,26 +672,8 @@ fn unsaved_edits_survive_kill_9_and_sigterm_and_come_back_on_screen() {
     orbit(&xdotool, middle, 4);
     std::thread::sleep(Duration::from_millis(1000));
     let second = spread(&screenshot(&display, &shots.join("hot-5-orbited.png")));
-    let pid = opened.app.0.id().to_string();
-    let sent = Instant::now();
-    assert!(
-        Command::new("kill")
-            .args(["-TERM", &pid])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let status = loop {
-        if let Some(status) = opened.app.0.try_wait().unwrap() {
-            break status;
-        }
-        assert!(
-            sent.elapsed() < Duration::from_secs(6),
-            "the app ends on SIGTERM"
-        );
-        std::thread::sleep(Duration::from_millis(20));
-    };
-    eprintln!("SIGTERM to exit: {:?}", sent.elapsed());
+    let (status, took) = opened.app.terminate(Duration::from_secs(6));
+    eprintln!("SIGTERM to exit: {took:?}");
     assert!(status.success(), "a clean exit: {status:?}");
     assert_eq!(journal_entries(&home).len(), 1);
     assert_eq!(
@@ -1061,26 +1062,8 @@ fn a_save_cut_short_by_sigterm_or_kill_leaves_no_temporary_file() {
 
     edit_then_save("cut-0.png");
     until_writing(&home);
-    let pid = opened.app.0.id().to_string();
-    let sent = Instant::now();
-    assert!(
-        Command::new("kill")
-            .args(["-TERM", &pid])
-            .status()
-            .unwrap()
-            .success()
-    );
-    let status = loop {
-        if let Some(status) = opened.app.0.try_wait().unwrap() {
-            break status;
-        }
-        assert!(
-            sent.elapsed() < Duration::from_secs(10),
-            "the app ends on SIGTERM"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    };
-    eprintln!("SIGTERM during a save to exit: {:?}", sent.elapsed());
+    let (status, took) = opened.app.terminate(Duration::from_secs(10));
+    eprintln!("SIGTERM during a save to exit: {took:?}");
     assert!(status.success(), "a clean exit: {status:?}");
     assert_eq!(temporaries(&home), [], "the save's temporary file is gone");
     assert_eq!(

@@ -8,9 +8,13 @@
 //! objects compare directly, and the visible hit is the nearest in world
 //! distance.
 //!
-//! [`Shape`] is what an object is in its own space; [`Primitive`] flattens what the transform allows (a sphere under a
-//! similarity is a world centre and radius; a plane a world point and
-//! normal); [`Bvh`] finds the nearest of many bounded primitives.
+//! [`Shape`] is what an object is in its own space; [`Primitive`] flattens
+//! what the transform allows (a sphere under a similarity is a world
+//! centre and radius; a plane a world point and normal): each kind is a
+//! type of its shape's file answering [`Surface`], listed once where the
+//! kinds are dispatched. [`Bvh`] finds the nearest of many bounded
+//! primitives. A new shape is its file (its kinds and their formulas), a
+//! row in the shapes' table and one in the primitives'.
 //!
 //! Each intersection formula is written once, generic over the precision
 //! and width ([`Vector`]: f64, f32 for the study's [`Primitive32`], or four
@@ -36,13 +40,14 @@ mod unchanged;
 #[cfg(target_arch = "x86_64")]
 pub use avx::{Avx2, Avx4, Avx8, Avx8Mask, Avx512, AvxMask, Vectorized};
 pub use bvh::{Aabb, Bvh, Search};
-pub use plane::{intersect_plane_world, plane_hit};
+pub use plane::{Plane32, WorldPlane, intersect_plane_world, plane_hit};
 pub use precision::{DVec3x4, F64x4, Lanes, MAX_LANES, Mask, Mask4, Real, Vec3x4, Vector};
-pub use primitive::{Ellipsoid, Primitive};
+pub use primitive::{LaneNormal, Primitive, Primitive32, Surface, Surface32};
 pub use ray::Ray;
 pub use shape::Shape;
-pub use single::{Primitive32, Ray32};
+pub use single::Ray32;
 pub use sphere::{
-    Found, Leading, Receding, UnitDirection, intersect_ball, intersect_ball_textbook,
-    intersect_sphere, intersect_sphere_textbook, stable_roots, textbook_roots,
+    Ball, Ball32, Ellipsoid, Ellipsoid32, Found, Leading, Receding, UnitDirection, intersect_ball,
+    intersect_ball_textbook, intersect_sphere, intersect_sphere_textbook, stable_roots,
+    textbook_roots,
 };

@@ -1,30 +1,175 @@
 //! A scene object reduced to what intersection needs, in world space where
-//! its transform allows.
+//! its transform allows, and the one place the kinds of primitive are
+//! dispatched (the `primitives!` table below): each kind is a type of its
+//! shape's file that answers [`Surface`] (and [`Surface32`] for its f32
+//! form), and a row of that table. Today's kinds:
 //!
-//! - A sphere whose matrix is a similarity (rotation or mirror, uniform
-//!   scale, translation) is a [`Primitive::Ball`]: a world centre and
-//!   radius, intersected without any matrix work.
-//! - Any other sphere is an [`Primitive::Ellipsoid`], intersected in its own
-//!   space through the cached inverse matrix.
-//! - A plane stays a plane under every affine map: a world point and unit
-//!   normal.
+//! - a sphere whose matrix is a similarity (rotation or mirror, uniform
+//!   scale, translation) is a [`Ball`]: a world centre and radius,
+//!   intersected without any matrix work;
+//! - any other sphere is an [`Ellipsoid`], intersected in its own space
+//!   through the cached inverse matrix;
+//! - a plane stays a plane under every affine map: a [`WorldPlane`], a
+//!   world point and unit normal.
+//!
+//! Which kind an object becomes is its shape's to say
+//! ([`Shape::primitive`]).
 
-use super::Shape;
-use super::{
-    Aabb, Found, Lanes, MAX_LANES, Ray, intersect_ball, intersect_ball_textbook,
-    intersect_plane_world, intersect_sphere, intersect_sphere_textbook,
-};
+use super::single::Ray32;
+use super::sphere::{Ball, Ellipsoid};
+use super::{Aabb, Found, Lanes, MAX_LANES, Ray, Shape, WorldPlane};
 use crate::math::Transform;
-use glam::{DAffine3, DMat3, DVec3};
+use glam::{DVec3, Vec3};
 
-#[derive(Debug, Clone, PartialEq)]
-pub enum Primitive {
-    Ball {
-        center: DVec3,
-        radius: f64,
-    },
-    /// Boxed: it is rare and eight times the size of a ball, and the
-    /// primitives are scanned in a row.
+/// What every kind of primitive answers, in world space: where a packet of
+/// rays meets it, its normal at a point, its bounds, and its form in
+/// single precision.
+pub trait Surface {
+    /// The same primitive rounded to f32 (the study's "f32 everywhere").
+    type Single: Surface32 + std::fmt::Debug + Clone + PartialEq;
+
+    /// The nearest t > 0 at which each lane's ray (unit direction) meets
+    /// the surface. `TEXTBOOK` picks the textbook quadratic where there is
+    /// one (the study's method).
+    fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L>;
+
+    /// The unit geometric normal at `ray.at(t)` (not yet turned to face
+    /// the ray).
+    fn normal_at(&self, ray: &Ray, t: f64) -> DVec3;
+
+    /// How a packet finds the normal at `ray.at(t)`: given here, or from a
+    /// centre, computed in the lanes from the lanes' own hit points.
+    #[inline(always)]
+    fn lane_normal(&self, ray: &Ray, t: f64) -> LaneNormal {
+        LaneNormal::Given(self.normal_at(ray, t))
+    }
+
+    /// The world bounding box; `None` for an unbounded one (tested apart
+    /// from the hierarchy).
+    fn bounds(&self) -> Option<Aabb>;
+
+    /// Its form in single precision.
+    fn single(&self) -> Self::Single;
+}
+
+/// [`Surface`] in single precision.
+pub trait Surface32 {
+    /// The nearest t > 0, in f32, by the same formulas.
+    fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32>;
+    /// The unit geometric normal at `ray.at(t)`, in f32.
+    fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3;
+}
+
+/// A lane's normal, as [`Surface::lane_normal`] gives it.
+pub enum LaneNormal {
+    Given(DVec3),
+    FromCenter(DVec3),
+}
+
+/// A boxed primitive is the primitive (the rare big ones are boxed, so
+/// that the common ones stay small in a row of a million).
+impl<S: Surface> Surface for Box<S> {
+    type Single = S::Single;
+    #[inline(always)]
+    fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
+        (**self).intersect::<TEXTBOOK, L>(ray)
+    }
+    #[inline(always)]
+    fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
+        (**self).normal_at(ray, t)
+    }
+    #[inline(always)]
+    fn lane_normal(&self, ray: &Ray, t: f64) -> LaneNormal {
+        (**self).lane_normal(ray, t)
+    }
+    fn bounds(&self) -> Option<Aabb> {
+        (**self).bounds()
+    }
+    fn single(&self) -> S::Single {
+        (**self).single()
+    }
+}
+
+/// Declares the kinds of primitive, each once: the enum in f64 and in
+/// f32 and every dispatch over them.
+macro_rules! primitives {
+    ($($(#[doc = $what:literal])* $kind:ident($ty:ty),)*) => {
+        /// An object as intersection sees it: one of the kinds.
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Primitive {
+            $($(#[doc = $what])* $kind($ty),)*
+        }
+
+        /// A [`Primitive`] rounded to f32.
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Primitive32 {
+            $($kind(<$ty as Surface>::Single),)*
+        }
+
+        impl Primitive {
+            /// See [`Surface::intersect`].
+            #[inline(always)]
+            pub fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
+                match self {
+                    $(Primitive::$kind(p) => p.intersect::<TEXTBOOK, L>(ray),)*
+                }
+            }
+
+            /// See [`Surface::normal_at`].
+            #[inline(always)]
+            pub fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
+                match self {
+                    $(Primitive::$kind(p) => p.normal_at(ray, t),)*
+                }
+            }
+
+            #[inline(always)]
+            fn lane_normal(&self, ray: &Ray, t: f64) -> LaneNormal {
+                match self {
+                    $(Primitive::$kind(p) => p.lane_normal(ray, t),)*
+                }
+            }
+
+            /// See [`Surface::bounds`].
+            pub fn bounds(&self) -> Option<Aabb> {
+                match self {
+                    $(Primitive::$kind(p) => p.bounds(),)*
+                }
+            }
+        }
+
+        impl Primitive32 {
+            pub fn new(p: &Primitive) -> Primitive32 {
+                match p {
+                    $(Primitive::$kind(p) => Primitive32::$kind(p.single()),)*
+                }
+            }
+
+            /// The nearest t > 0, in f32: the same formulas as
+            /// [`Primitive::intersect`]; `TEXTBOOK` picks the root formula.
+            #[inline]
+            pub fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32> {
+                match self {
+                    $(Primitive32::$kind(p) => p.intersect::<TEXTBOOK>(ray),)*
+                }
+            }
+
+            /// The unit geometric normal at `ray.at(t)`, in f32.
+            #[inline]
+            pub fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3 {
+                match self {
+                    $(Primitive32::$kind(p) => p.normal_at(ray, t),)*
+                }
+            }
+        }
+    };
+}
+
+primitives! {
+    /// A sphere under a similarity: a world centre and radius.
+    Ball(Ball),
+    /// Any other sphere. Boxed: it is rare and eight times the size of a
+    /// ball, and the primitives are scanned in a row.
     Ellipsoid(Box<Ellipsoid>),
     /// Boxed too: planes are few and tested apart, and one in place would
     /// make every primitive 56 bytes instead of 40 (a million spheres: 16
@@ -32,111 +177,18 @@ pub enum Primitive {
     Plane(Box<WorldPlane>),
 }
 
-/// A plane in world space.
-#[derive(Debug, Clone, PartialEq)]
-pub struct WorldPlane {
-    pub point: DVec3,
-    /// Unit normal.
-    pub normal: DVec3,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-pub struct Ellipsoid {
-    /// World to object space.
-    pub to_object: DAffine3,
-    /// Object-space normals to world space: (M⁻¹)ᵀ.
-    pub normal: DMat3,
-    /// Object to world, for the bounding box.
-    pub to_world: DAffine3,
-}
-
-/// Relative tolerance for "the linear part is a scaled orthogonal matrix".
-const SIMILARITY_TOLERANCE: f64 = 1e-12;
-
 impl Primitive {
+    /// What an object of `shape` placed by `transform` is to intersection:
+    /// its shape says ([`Shape::primitive`]).
     pub fn new(shape: Shape, transform: &Transform) -> Primitive {
-        let m = transform.to_world();
-        match shape {
-            Shape::Plane => Primitive::Plane(Box::new(WorldPlane {
-                point: m.translation,
-                normal: (transform.normal_matrix() * DVec3::Z).normalize(),
-            })),
-            Shape::Sphere => match similarity_scale(&m.matrix3) {
-                Some(radius) => Primitive::Ball {
-                    center: m.translation,
-                    radius,
-                },
-                None => {
-                    let matrices = transform.matrices();
-                    Primitive::Ellipsoid(Box::new(Ellipsoid {
-                        to_object: matrices.to_object,
-                        normal: matrices.normal,
-                        to_world: matrices.to_world,
-                    }))
-                }
-            },
-        }
-    }
-
-    /// The nearest t > 0 at which `ray` (unit direction) meets the
-    /// surface, per lane. `TEXTBOOK` picks the textbook quadratic for
-    /// spheres (the study's method; planes are unchanged).
-    #[inline(always)]
-    pub fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
-        match self {
-            Primitive::Ball { center, radius } => {
-                let (center, r2) = (L::splat_vector(*center), L::splat(radius * radius));
-                if TEXTBOOK {
-                    intersect_ball_textbook(ray, center, r2)
-                } else {
-                    intersect_ball(ray, center, r2)
-                }
-            }
-            Primitive::Ellipsoid(e) => {
-                // Each lane's ray mapped to object space on its own.
-                let (mut origins, mut dirs) = ([DVec3::ZERO; MAX_LANES], [DVec3::ZERO; MAX_LANES]);
-                for i in 0..L::WIDTH {
-                    origins[i] = e.to_object.transform_point3(L::vector_lane(ray.origin, i));
-                    dirs[i] = e.to_object.transform_vector3(L::vector_lane(ray.dir, i));
-                }
-                let local = Ray::new(
-                    L::vector_from_fn(|i| origins[i]),
-                    L::vector_from_fn(|i| dirs[i]),
-                );
-                if TEXTBOOK {
-                    intersect_sphere_textbook(&local)
-                } else {
-                    intersect_sphere(&local)
-                }
-            }
-            Primitive::Plane(plane) => intersect_plane_world(
-                ray,
-                L::splat_vector(plane.point),
-                L::splat_vector(plane.normal),
-            ),
-        }
-    }
-
-    /// The unit geometric normal at the point `ray.at(t)` (not yet turned
-    /// to face the ray).
-    #[inline(always)]
-    pub fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
-        match self {
-            Primitive::Ball { center, .. } => (ray.at(t) - *center).normalize(),
-            Primitive::Ellipsoid(e) => {
-                let local = e.to_object.transform_point3(ray.origin)
-                    + t * e.to_object.transform_vector3(ray.dir);
-                (e.normal * local).normalize()
-            }
-            Primitive::Plane(plane) => plane.normal,
-        }
+        shape.primitive(transform)
     }
 
     /// The unit geometric normals (not yet turned to face the rays) at the
     /// hits `m = rays.at(t)` of a packet of rays: lane i's on the
-    /// primitive `hit(i)`, zero where it is `None`. A ball's from its
-    /// centre, computed in the lanes; a plane's given; an ellipsoid's
-    /// through its matrix, one lane at a time. The packet's form of
+    /// primitive `hit(i)`, zero where it is `None`. Each kind says how
+    /// ([`Surface::lane_normal`]): a ball's from its centre, computed in
+    /// the lanes; the others given for the lane. The packet's form of
     /// [`Primitive::normal_at`]: the trace asks, geometry answers.
     #[inline(always)]
     pub fn normals<'p, L: Lanes>(
@@ -148,59 +200,24 @@ impl Primitive {
         use super::{Mask, Vector};
         let mut centers = [DVec3::ZERO; MAX_LANES];
         let mut given = [DVec3::ZERO; MAX_LANES];
-        let mut ball = [false; MAX_LANES];
+        let mut from_center = [false; MAX_LANES];
         for i in 0..L::WIDTH {
             let Some(primitive) = hit(i) else {
                 continue;
             };
-            match primitive {
-                Primitive::Ball { center, .. } => (centers[i], ball[i]) = (*center, true),
-                Primitive::Plane(plane) => given[i] = plane.normal,
-                Primitive::Ellipsoid(_) => {
-                    let ray = Ray::new(L::vector_lane(rays.origin, i), L::vector_lane(rays.dir, i));
-                    given[i] = primitive.normal_at(&ray, t.lane(i));
-                }
+            let ray = Ray::new(L::vector_lane(rays.origin, i), L::vector_lane(rays.dir, i));
+            match primitive.lane_normal(&ray, t.lane(i)) {
+                LaneNormal::FromCenter(center) => (centers[i], from_center[i]) = (center, true),
+                LaneNormal::Given(normal) => given[i] = normal,
             }
         }
-        let from_center = (m - L::vector_from_fn(|i| centers[i])).normalize();
+        let radial = (m - L::vector_from_fn(|i| centers[i])).normalize();
         L::Vector::select(
-            L::Mask::from_fn(|i| ball[i]),
-            from_center,
+            L::Mask::from_fn(|i| from_center[i]),
+            radial,
             L::vector_from_fn(|i| given[i]),
         )
     }
-
-    /// World bounding box; `None` for the unbounded plane.
-    pub fn bounds(&self) -> Option<Aabb> {
-        match self {
-            Primitive::Ball { center, radius } => Some(Aabb {
-                min: *center - DVec3::splat(*radius),
-                max: *center + DVec3::splat(*radius),
-            }),
-            Primitive::Ellipsoid(e) => {
-                // Half-extent along world axis i: the norm of row i of the
-                // linear part (the support of the unit sphere).
-                let to_world = &e.to_world;
-                let m = to_world.matrix3.transpose();
-                let half = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
-                Some(Aabb {
-                    min: to_world.translation - half,
-                    max: to_world.translation + half,
-                })
-            }
-            Primitive::Plane(_) => None,
-        }
-    }
-}
-
-/// `Some(s)` when the linear part is s·Q with Q orthogonal (s > 0).
-fn similarity_scale(m: &DMat3) -> Option<f64> {
-    let gram = m.transpose() * *m;
-    let s2 = gram.x_axis.x;
-    let expected = DMat3::from_diagonal(DVec3::splat(s2));
-    let off = (gram - expected).to_cols_array();
-    let ok = s2 > 0.0 && off.iter().all(|v| v.abs() <= SIMILARITY_TOLERANCE * s2);
-    ok.then(|| s2.sqrt())
 }
 
 #[cfg(test)]
@@ -227,7 +244,7 @@ mod tests {
             TransformStep::Translate(DVec3::new(1.0, 2.0, 3.0)),
         ]);
         match Primitive::new(Shape::Sphere, &t) {
-            Primitive::Ball { center, radius } => {
+            Primitive::Ball(Ball { center, radius }) => {
                 assert!((radius - 2.0).abs() < 1e-14);
                 assert!((center - DVec3::new(1.0, 2.0, 3.0)).length() < 1e-14);
             }

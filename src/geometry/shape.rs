@@ -7,14 +7,15 @@
 //! holds it), how POV-Ray spells it ([`Shape::pov`]) and whether it has
 //! bounds. The loader, the schema and the
 //! completion of `rayoflight lsp`, the save-back, `--add` and the panel's
-//! buttons all read this list: a shape is named nowhere else. Geometry
-//! flattens a shape into a [`Primitive`](super::Primitive) that answers
-//! where a ray hits it and its normal there.
+//! buttons all read this list: a shape is named nowhere else. Its row also
+//! says which function of its file makes the [`Primitive`](super::Primitive)
+//! an object of it becomes ([`Shape::primitive`]): that answers where a
+//! ray hits it and its normal there.
 
 /// Declares the shapes, each once: the enum and the list of all of
 /// them, with their element names and documentation.
 macro_rules! shapes {
-    ($($(#[doc = $what:literal])* $shape:ident = $name:literal, bounded: $bounded:literal, pov: $pov:literal, $doc:literal;)*) => {
+    ($($(#[doc = $what:literal])* $shape:ident = $name:literal, bounded: $bounded:literal, pov: $pov:literal, primitive: $primitive:path, $doc:literal;)*) => {
         /// What an object is in its own space.
         #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
         pub enum Shape {
@@ -52,6 +53,15 @@ macro_rules! shapes {
                 }
             }
 
+            /// What an object of this shape placed by `transform` is to
+            /// intersection (its file says: a sphere under a similarity is
+            /// a ball, any other an ellipsoid).
+            pub fn primitive(self, transform: &crate::math::Transform) -> super::Primitive {
+                match self {
+                    $(Shape::$shape => $primitive(transform),)*
+                }
+            }
+
             /// Whether it fits in a box (a bounding volume hierarchy holds
             /// it); an unbounded one is tested against every ray apart.
             pub const fn is_bounded(self) -> bool {
@@ -65,10 +75,10 @@ macro_rules! shapes {
 
 shapes! {
     /// The unit sphere centred on the origin.
-    Sphere = "sphere", bounded: true, pov: "sphere { 0, 1",
+    Sphere = "sphere", bounded: true, pov: "sphere { 0, 1", primitive: super::sphere::primitive,
         "The unit sphere centred on the origin of its own space, placed by its transformation.";
     /// The plane z = 0, infinite and two-sided.
-    Plane = "plane", bounded: false, pov: "plane { z, 0",
+    Plane = "plane", bounded: false, pov: "plane { z, 0", primitive: super::plane::primitive,
         "The plane z = 0 of its own space (infinite, two-sided), placed by its transformation.";
 }
 

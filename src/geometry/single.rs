@@ -1,12 +1,10 @@
-//! The same primitives in single precision (f32), for the study's "f32
-//! everywhere" method: the ray, the intersection, the hit point and the
-//! normal are all evaluated in f32, so the method fails where f32 fails
-//! (far from the origin, thin offsets).
+//! Rays in single precision (f32), for the study's "f32 everywhere"
+//! method: the ray, the intersection, the hit point and the normal are all
+//! evaluated in f32, so the method fails where f32 fails (far from the
+//! origin, thin offsets). Each primitive's f32 form is its shape's
+//! ([`super::Surface32`]), dispatched by [`super::Primitive32`].
 
-use super::Primitive;
-use super::plane::plane_hit;
-use super::sphere::{Receding, stable_roots, textbook_roots};
-use glam::{Affine3A, Mat3, Vec3};
+use glam::Vec3;
 
 /// A ray in f32: `origin + t · dir`, unit `dir` in world space.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -35,80 +33,6 @@ impl Ray32 {
     }
 }
 
-/// A [`Primitive`] rounded to f32.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Primitive32 {
-    Ball { center: Vec3, radius: f32 },
-    Ellipsoid { to_object: Affine3A, normal: Mat3 },
-    Plane { point: Vec3, normal: Vec3 },
-}
-
-impl Primitive32 {
-    pub fn new(p: &Primitive) -> Primitive32 {
-        match p {
-            Primitive::Ball { center, radius } => Primitive32::Ball {
-                center: center.as_vec3(),
-                radius: *radius as f32,
-            },
-            Primitive::Ellipsoid(e) => Primitive32::Ellipsoid {
-                to_object: e.to_object.as_affine3a(),
-                normal: e.normal.as_mat3(),
-            },
-            Primitive::Plane(plane) => Primitive32::Plane {
-                point: plane.point.as_vec3(),
-                normal: plane.normal.as_vec3(),
-            },
-        }
-    }
-
-    /// The nearest t > 0, in f32: the same formulas as [`Primitive::intersect`]
-    /// (the direction's a = |d|² computed for balls too); `TEXTBOOK` picks
-    /// the root formula.
-    #[inline]
-    pub fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32> {
-        match self {
-            Primitive32::Ball { center, radius } => {
-                let f = ray.origin - *center;
-                sphere::<TEXTBOOK>(f, ray.dir, *radius * *radius)
-            }
-            Primitive32::Ellipsoid { to_object, .. } => sphere::<TEXTBOOK>(
-                to_object.transform_point3(ray.origin),
-                to_object.transform_vector3(ray.dir),
-                1.0,
-            ),
-            Primitive32::Plane { point, normal } => {
-                plane_hit(ray.origin, ray.dir, *point, *normal).get()
-            }
-        }
-    }
-
-    /// The unit geometric normal at `ray.at(t)`, in f32.
-    #[inline]
-    pub fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3 {
-        match self {
-            Primitive32::Ball { center, .. } => (ray.at(t) - *center).normalize(),
-            Primitive32::Ellipsoid { to_object, normal } => {
-                let local = to_object.transform_point3(ray.origin)
-                    + t * to_object.transform_vector3(ray.dir);
-                (*normal * local).normalize()
-            }
-            Primitive32::Plane { normal, .. } => *normal,
-        }
-    }
-}
-
-/// Nearest root t > 0 of |f + t d|² = r², in f32, with a = |d|² computed
-/// and no early out: the stable form or the textbook formula.
-#[inline]
-fn sphere<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
-    let a = d.length_squared();
-    if TEXTBOOK {
-        textbook_roots(f, d, a, r2).get()
-    } else {
-        stable_roots(f, d, a, r2, Receding::Solve).get()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -116,13 +40,13 @@ mod tests {
 
     #[test]
     fn agrees_with_f64_near_the_origin() {
-        let ball = Primitive::Ball {
+        let ball = super::super::Primitive::Ball(super::super::Ball {
             center: DVec3::new(0.5, 0.0, 5.0),
             radius: 1.5,
-        };
+        });
         let ray = super::super::Ray::new(DVec3::ZERO, DVec3::new(0.1, 0.05, 1.0).normalize());
         let t64 = ball.intersect::<false, f64>(&ray).get().unwrap();
-        let p = Primitive32::new(&ball);
+        let p = super::super::Primitive32::new(&ball);
         let r = Ray32::from_f64(&ray);
         for t in [p.intersect::<false>(&r), p.intersect::<true>(&r)] {
             assert!((f64::from(t.unwrap()) - t64).abs() < 1e-5);

@@ -12,9 +12,18 @@
 //! Each takes the leading coefficient a as a [`Leading`]: the computed
 //! |d|² (object space, where the direction is scaled), or [`UnitDirection`]
 //! (world space, where a = 1 and is never applied).
+//!
+//! The sphere as a primitive is here too: a [`Ball`] (a sphere under a
+//! similarity, in world space) or an [`Ellipsoid`] (any other, in its own
+//! space), each answering [`Surface`] in f64 and f32; which one an object
+//! becomes, [`primitive`].
 
-use super::Ray;
-use super::precision::{Mask, Real, Vector};
+use super::precision::{Lanes, MAX_LANES, Mask, Real, Vector};
+use super::primitive::{LaneNormal, Primitive, Surface, Surface32};
+use super::single::Ray32;
+use super::{Aabb, Ray};
+use crate::math::Transform;
+use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3, Vec3};
 
 /// The leading coefficient a = |d|² of the quadratic, as the formulas
 /// apply it.
@@ -249,6 +258,211 @@ pub(super) fn nearest_positive<R: Real>(t0: R, t1: R) -> Found<R> {
     Found {
         t: R::select(near_ahead, near, far),
         found: near_ahead | far.gt(zero),
+    }
+}
+
+// ----- the sphere as a primitive -----
+
+/// A sphere under a similarity, in world space: no matrix work to
+/// intersect it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ball {
+    pub center: DVec3,
+    pub radius: f64,
+}
+
+/// Any other sphere: intersected in its own space.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ellipsoid {
+    /// World to object space.
+    pub to_object: DAffine3,
+    /// Object-space normals to world space: (M⁻¹)ᵀ.
+    pub normal: DMat3,
+    /// Object to world, for the bounding box.
+    pub to_world: DAffine3,
+}
+
+/// A [`Ball`] in f32.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ball32 {
+    pub center: Vec3,
+    pub radius: f32,
+}
+
+/// An [`Ellipsoid`] in f32.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ellipsoid32 {
+    pub to_object: Affine3A,
+    pub normal: Mat3,
+}
+
+/// A sphere placed by `transform`: a [`Ball`] under a similarity, else an
+/// [`Ellipsoid`].
+pub(super) fn primitive(transform: &Transform) -> Primitive {
+    let m = transform.to_world();
+    match similarity_scale(&m.matrix3) {
+        Some(radius) => Primitive::Ball(Ball {
+            center: m.translation,
+            radius,
+        }),
+        None => {
+            let matrices = transform.matrices();
+            Primitive::Ellipsoid(Box::new(Ellipsoid {
+                to_object: matrices.to_object,
+                normal: matrices.normal,
+                to_world: matrices.to_world,
+            }))
+        }
+    }
+}
+
+/// Relative tolerance for "the linear part is a scaled orthogonal matrix".
+const SIMILARITY_TOLERANCE: f64 = 1e-12;
+
+/// `Some(s)` when the linear part is s·Q with Q orthogonal (s > 0).
+fn similarity_scale(m: &DMat3) -> Option<f64> {
+    let gram = m.transpose() * *m;
+    let s2 = gram.x_axis.x;
+    let expected = DMat3::from_diagonal(DVec3::splat(s2));
+    let off = (gram - expected).to_cols_array();
+    let ok = s2 > 0.0 && off.iter().all(|v| v.abs() <= SIMILARITY_TOLERANCE * s2);
+    ok.then(|| s2.sqrt())
+}
+
+impl Surface for Ball {
+    type Single = Ball32;
+
+    #[inline(always)]
+    fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
+        let (center, r2) = (
+            L::splat_vector(self.center),
+            L::splat(self.radius * self.radius),
+        );
+        if TEXTBOOK {
+            intersect_ball_textbook(ray, center, r2)
+        } else {
+            intersect_ball(ray, center, r2)
+        }
+    }
+
+    #[inline(always)]
+    fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
+        (ray.at(t) - self.center).normalize()
+    }
+
+    /// From the centre, in the lanes: as exact as the lanes' hit points.
+    #[inline(always)]
+    fn lane_normal(&self, _: &Ray, _: f64) -> LaneNormal {
+        LaneNormal::FromCenter(self.center)
+    }
+
+    fn bounds(&self) -> Option<Aabb> {
+        Some(Aabb {
+            min: self.center - DVec3::splat(self.radius),
+            max: self.center + DVec3::splat(self.radius),
+        })
+    }
+
+    fn single(&self) -> Ball32 {
+        Ball32 {
+            center: self.center.as_vec3(),
+            radius: self.radius as f32,
+        }
+    }
+}
+
+impl Surface for Ellipsoid {
+    type Single = Ellipsoid32;
+
+    #[inline(always)]
+    fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
+        // Each lane's ray mapped to object space on its own.
+        let (mut origins, mut dirs) = ([DVec3::ZERO; MAX_LANES], [DVec3::ZERO; MAX_LANES]);
+        for i in 0..L::WIDTH {
+            origins[i] = self
+                .to_object
+                .transform_point3(L::vector_lane(ray.origin, i));
+            dirs[i] = self.to_object.transform_vector3(L::vector_lane(ray.dir, i));
+        }
+        let local = Ray::new(
+            L::vector_from_fn(|i| origins[i]),
+            L::vector_from_fn(|i| dirs[i]),
+        );
+        if TEXTBOOK {
+            intersect_sphere_textbook(&local)
+        } else {
+            intersect_sphere(&local)
+        }
+    }
+
+    #[inline(always)]
+    fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
+        let local = self.to_object.transform_point3(ray.origin)
+            + t * self.to_object.transform_vector3(ray.dir);
+        (self.normal * local).normalize()
+    }
+
+    fn bounds(&self) -> Option<Aabb> {
+        // Half-extent along world axis i: the norm of row i of the linear
+        // part (the support of the unit sphere).
+        let to_world = &self.to_world;
+        let m = to_world.matrix3.transpose();
+        let half = DVec3::new(m.x_axis.length(), m.y_axis.length(), m.z_axis.length());
+        Some(Aabb {
+            min: to_world.translation - half,
+            max: to_world.translation + half,
+        })
+    }
+
+    fn single(&self) -> Ellipsoid32 {
+        Ellipsoid32 {
+            to_object: self.to_object.as_affine3a(),
+            normal: self.normal.as_mat3(),
+        }
+    }
+}
+
+impl Surface32 for Ball32 {
+    #[inline]
+    fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32> {
+        let f = ray.origin - self.center;
+        sphere32::<TEXTBOOK>(f, ray.dir, self.radius * self.radius)
+    }
+
+    #[inline]
+    fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3 {
+        (ray.at(t) - self.center).normalize()
+    }
+}
+
+impl Surface32 for Ellipsoid32 {
+    #[inline]
+    fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32> {
+        sphere32::<TEXTBOOK>(
+            self.to_object.transform_point3(ray.origin),
+            self.to_object.transform_vector3(ray.dir),
+            1.0,
+        )
+    }
+
+    #[inline]
+    fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3 {
+        let local = self.to_object.transform_point3(ray.origin)
+            + t * self.to_object.transform_vector3(ray.dir);
+        (self.normal * local).normalize()
+    }
+}
+
+/// Nearest root t > 0 of |f + t d|² = r², in f32, with a = |d|² computed
+/// and no early out (the direction's a = |d|² computed for balls too): the
+/// stable form or the textbook formula.
+#[inline]
+fn sphere32<const TEXTBOOK: bool>(f: Vec3, d: Vec3, r2: f32) -> Option<f32> {
+    let a = d.length_squared();
+    if TEXTBOOK {
+        textbook_roots(f, d, a, r2).get()
+    } else {
+        stable_roots(f, d, a, r2, Receding::Solve).get()
     }
 }
 

@@ -3,8 +3,9 @@
 //! bit for bit, on a few thousand random rays: a changed operation or a
 //! changed order fails here, before it can move a pixel.
 
+use super::Primitive32;
 use super::precision::{F64x4, Lanes, Mask};
-use super::single::{Primitive32, Ray32};
+use super::single::Ray32;
 use super::sphere::stable_roots;
 use super::{
     Ray, Receding, intersect_ball, intersect_ball_textbook, intersect_plane_world,
@@ -304,12 +305,12 @@ fn f32_formulas_match_the_replaced_code_bit_for_bit() {
         let to_object =
             glam::Affine3A::from_cols_array(&std::array::from_fn(|_| random.unit() as f32 * 3.0));
         let (point, normal) = (random.vector().as_vec3(), random.direction().as_vec3());
-        let ball = Primitive32::Ball { center, radius };
-        let ellipsoid = Primitive32::Ellipsoid {
+        let ball = Primitive32::Ball(super::Ball32 { center, radius });
+        let ellipsoid = Primitive32::Ellipsoid(super::Ellipsoid32 {
             to_object,
             normal: glam::Mat3::IDENTITY,
-        };
-        let plane = Primitive32::Plane { point, normal };
+        });
+        let plane = Primitive32::Plane(super::Plane32 { point, normal });
         let (f, r2) = (ray.origin - center, radius * radius);
         let (o, d) = (
             to_object.transform_point3(ray.origin),
