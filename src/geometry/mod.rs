@@ -34,6 +34,7 @@ mod ray;
 mod shape;
 mod single;
 mod sphere;
+mod surface;
 #[cfg(test)]
 mod unchanged;
 
@@ -42,12 +43,13 @@ pub use avx::{Avx2, Avx4, Avx8, Avx8Mask, Avx512, AvxMask, Vectorized};
 pub use bvh::{Aabb, Bvh, Search};
 pub use plane::{Plane32, WorldPlane, intersect_plane_world, plane_hit};
 pub use precision::{DVec3x4, F64x4, Lanes, MAX_LANES, Mask, Mask4, Real, Vec3x4, Vector};
-pub use primitive::{LaneNormal, Primitive, Primitive32, Surface, Surface32};
+pub use primitive::{Primitive, Primitive32};
 pub use ray::Ray;
 pub use shape::Shape;
 pub use single::Ray32;
 pub use sphere::{
-    Ball, Ball32, Ellipsoid, Ellipsoid32, Found, Leading, Receding, UnitDirection, intersect_ball,
+    Ball, Ball32, Ellipsoid, Ellipsoid32, Leading, Receding, UnitDirection, intersect_ball,
     intersect_ball_textbook, intersect_sphere, intersect_sphere_textbook, stable_roots,
     textbook_roots,
 };
+pub use surface::{Found, LaneNormal, Surface, Surface32};

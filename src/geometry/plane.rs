@@ -3,9 +3,8 @@
 //! ([`WorldPlane`], answering [`Surface`] in f64 and f32).
 
 use super::precision::{Lanes, Mask, Real, Vector};
-use super::primitive::{Primitive, Surface, Surface32};
 use super::single::Ray32;
-use super::sphere::Found;
+use super::surface::{Found, Surface, Surface32};
 use super::{Aabb, Ray};
 use crate::math::Transform;
 use glam::{DVec3, Vec3};
@@ -57,8 +56,8 @@ pub struct Plane32 {
 
 /// The plane z = 0 placed by `transform`: a plane stays a plane under
 /// every affine map.
-pub(super) fn primitive(transform: &Transform) -> Primitive {
-    Primitive::Plane(Box::new(WorldPlane {
+pub(super) fn primitive<P: From<Box<WorldPlane>>>(transform: &Transform) -> P {
+    P::from(Box::new(WorldPlane {
         point: transform.to_world().translation,
         normal: (transform.normal_matrix() * DVec3::Z).normalize(),
     }))

@@ -17,78 +17,10 @@
 
 use super::single::Ray32;
 use super::sphere::{Ball, Ellipsoid};
+use super::surface::{LaneNormal, Surface, Surface32};
 use super::{Aabb, Found, Lanes, MAX_LANES, Ray, Shape, WorldPlane};
 use crate::math::Transform;
 use glam::{DVec3, Vec3};
-
-/// What every kind of primitive answers, in world space: where a packet of
-/// rays meets it, its normal at a point, its bounds, and its form in
-/// single precision.
-pub trait Surface {
-    /// The same primitive rounded to f32 (the study's "f32 everywhere").
-    type Single: Surface32 + std::fmt::Debug + Clone + PartialEq;
-
-    /// The nearest t > 0 at which each lane's ray (unit direction) meets
-    /// the surface. `TEXTBOOK` picks the textbook quadratic where there is
-    /// one (the study's method).
-    fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L>;
-
-    /// The unit geometric normal at `ray.at(t)` (not yet turned to face
-    /// the ray).
-    fn normal_at(&self, ray: &Ray, t: f64) -> DVec3;
-
-    /// How a packet finds the normal at `ray.at(t)`: given here, or from a
-    /// centre, computed in the lanes from the lanes' own hit points.
-    #[inline(always)]
-    fn lane_normal(&self, ray: &Ray, t: f64) -> LaneNormal {
-        LaneNormal::Given(self.normal_at(ray, t))
-    }
-
-    /// The world bounding box; `None` for an unbounded one (tested apart
-    /// from the hierarchy).
-    fn bounds(&self) -> Option<Aabb>;
-
-    /// Its form in single precision.
-    fn single(&self) -> Self::Single;
-}
-
-/// [`Surface`] in single precision.
-pub trait Surface32 {
-    /// The nearest t > 0, in f32, by the same formulas.
-    fn intersect<const TEXTBOOK: bool>(&self, ray: &Ray32) -> Option<f32>;
-    /// The unit geometric normal at `ray.at(t)`, in f32.
-    fn normal_at(&self, ray: &Ray32, t: f32) -> Vec3;
-}
-
-/// A lane's normal, as [`Surface::lane_normal`] gives it.
-pub enum LaneNormal {
-    Given(DVec3),
-    FromCenter(DVec3),
-}
-
-/// A boxed primitive is the primitive (the rare big ones are boxed, so
-/// that the common ones stay small in a row of a million).
-impl<S: Surface> Surface for Box<S> {
-    type Single = S::Single;
-    #[inline(always)]
-    fn intersect<const TEXTBOOK: bool, L: Lanes>(&self, ray: &Ray<L::Vector>) -> Found<L> {
-        (**self).intersect::<TEXTBOOK, L>(ray)
-    }
-    #[inline(always)]
-    fn normal_at(&self, ray: &Ray, t: f64) -> DVec3 {
-        (**self).normal_at(ray, t)
-    }
-    #[inline(always)]
-    fn lane_normal(&self, ray: &Ray, t: f64) -> LaneNormal {
-        (**self).lane_normal(ray, t)
-    }
-    fn bounds(&self) -> Option<Aabb> {
-        (**self).bounds()
-    }
-    fn single(&self) -> S::Single {
-        (**self).single()
-    }
-}
 
 /// Declares the kinds of primitive, each once: the enum in f64 and in
 /// f32 and every dispatch over them.
@@ -105,6 +37,12 @@ macro_rules! primitives {
         pub enum Primitive32 {
             $($kind(<$ty as Surface>::Single),)*
         }
+
+        $(impl From<$ty> for Primitive {
+            fn from(p: $ty) -> Primitive {
+                Primitive::$kind(p)
+            }
+        })*
 
         impl Primitive {
             /// See [`Surface::intersect`].

@@ -19,8 +19,8 @@
 //! becomes, [`primitive`].
 
 use super::precision::{Lanes, MAX_LANES, Mask, Real, Vector};
-use super::primitive::{LaneNormal, Primitive, Surface, Surface32};
 use super::single::Ray32;
+use super::surface::{Found, LaneNormal, Surface, Surface32};
 use super::{Aabb, Ray};
 use crate::math::Transform;
 use glam::{Affine3A, DAffine3, DMat3, DVec3, Mat3, Vec3};
@@ -81,44 +81,6 @@ pub enum Receding {
     Dismiss,
     /// Solved like any other ray.
     Solve,
-}
-
-/// A root per lane and whether that lane found one: what the formulas
-/// return, for one value or for lanes alike.
-#[derive(Debug, Clone, Copy)]
-pub struct Found<R: Real> {
-    pub t: R,
-    pub found: R::Mask,
-}
-
-impl<R: Real> Found<R> {
-    /// No lane found anything.
-    #[inline(always)]
-    pub fn none() -> Found<R> {
-        Found {
-            t: R::ZERO,
-            found: !R::Mask::ALL,
-        }
-    }
-}
-
-impl<R: Real> Found<R> {
-    /// Only what `lanes` found.
-    #[inline(always)]
-    pub fn of(self, lanes: R::Mask) -> Found<R> {
-        Found {
-            t: self.t,
-            found: self.found & lanes,
-        }
-    }
-}
-
-impl<R: Real<Mask = bool>> Found<R> {
-    /// The root of a single ray, if any.
-    #[inline(always)]
-    pub fn get(self) -> Option<R> {
-        self.found.then_some(self.t)
-    }
 }
 
 /// Nearest root t > 0 of |f + t d|² = r²: the numerically stable form.
@@ -297,17 +259,17 @@ pub struct Ellipsoid32 {
 }
 
 /// A sphere placed by `transform`: a [`Ball`] under a similarity, else an
-/// [`Ellipsoid`].
-pub(super) fn primitive(transform: &Transform) -> Primitive {
+/// [`Ellipsoid`] (as the table of kinds, [`super::Primitive`], holds them).
+pub(super) fn primitive<P: From<Ball> + From<Box<Ellipsoid>>>(transform: &Transform) -> P {
     let m = transform.to_world();
     match similarity_scale(&m.matrix3) {
-        Some(radius) => Primitive::Ball(Ball {
+        Some(radius) => P::from(Ball {
             center: m.translation,
             radius,
         }),
         None => {
             let matrices = transform.matrices();
-            Primitive::Ellipsoid(Box::new(Ellipsoid {
+            P::from(Box::new(Ellipsoid {
                 to_object: matrices.to_object,
                 normal: matrices.normal,
                 to_world: matrices.to_world,
