@@ -7,8 +7,11 @@
 //! Its flags, as clap reads them, are here too ([`BenchFlags`]), resolved
 //! into the [`BenchArgs`] it runs with.
 
-use super::args::values::{runs, threads};
-use super::progress::Steps;
+use super::failure::Failure;
+use super::progress::{self, Steps};
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
+use super::values::{runs, threads};
 use clap::Args;
 use rayoflight::cluster::part::Part;
 use rayoflight::cluster::{assemble, split};
@@ -75,7 +78,7 @@ struct PovRun {
 
 /// Runs the whole bench; the report goes to stdout as it comes, a progress
 /// bar (`steps`) to stderr.
-pub fn run(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
+fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     if let Some(path) = &args.app_document {
         return app_document(path, args.threads);
     }
@@ -1120,9 +1123,14 @@ fn peak_memory(
 
 // ----- the command line -----
 
-// `rayoflight bench`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
+/// Time the bench scenes, against POV-Ray when it is installed.
+///
+/// Also thread scaling, cost against object count and peak memory.
 #[derive(Args, Debug)]
+#[command(
+    override_usage = "rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] \
+                      [--split-size PIXELS]\n                        [--big-spheres N] [--quiet]"
+)]
 pub(super) struct BenchFlags {
     /// Render threads [default: one per core]
     #[arg(long, value_name = "N", value_parser = threads, allow_negative_numbers = true)]
@@ -1165,9 +1173,11 @@ pub(super) struct BenchFlags {
     app_document: Option<PathBuf>,
 }
 
-impl BenchFlags {
-    pub(super) fn resolve(self) -> BenchArgs {
-        BenchArgs {
+impl Subcommand for BenchFlags {
+    type Args = BenchArgs;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<BenchArgs, UsageError> {
+        Ok(BenchArgs {
             threads: self.threads.unwrap_or_else(rayoflight::render::all_cores),
             runs: self.runs,
             csv: self.csv,
@@ -1176,7 +1186,16 @@ impl BenchFlags {
             split_size: self.split_size,
             big_spheres: self.big_spheres,
             app_document: self.app_document,
-        }
+        })
+    }
+
+    fn prints(_: &BenchArgs) -> bool {
+        true
+    }
+
+    fn run(args: BenchArgs, _: fn() -> clap::Command) -> Result<(), Failure> {
+        let steps = Steps::new(progress::wanted(args.quiet));
+        run_bench(&args, &steps).map_err(Failure::Error)
     }
 }
 

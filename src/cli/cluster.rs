@@ -5,13 +5,15 @@
 //! [`rayoflight::cluster::sheet`]); this edge reads files and words failures.
 //!
 //! The three subcommands' flags, as clap reads them, are here too
-//! ([`SplitFlags`], [`AssembleFlags`], [`SheetFlags`]), each resolved into
-//! the [`Command`] it asks for.
+//! ([`SplitFlags`], [`AssembleFlags`], [`SheetFlags`]), each a
+//! [`Subcommand`].
 
-use super::args::error::UsageError;
-use super::args::render::RenderOf;
-use super::edit::EditArg;
-use super::{Failure, edit, fail, print_line, refused, usage};
+use super::edit::{self, EditArg};
+use super::failure::{Failure, fail, refused, usage};
+use super::render::RenderOf;
+use super::stdout;
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
 use clap::Args;
 use image::ImageFormat;
 use rayoflight::cluster::{assemble, sheet, split};
@@ -22,7 +24,7 @@ use rayoflight::{output, scene};
 use std::path::{Path, PathBuf};
 
 /// `split scene.xml --tasks N`: the regions on stdout, one a line.
-pub fn split(args: &SplitArgs) -> Result<(), Failure> {
+fn split(args: &SplitArgs) -> Result<(), Failure> {
     let mut edited = Edited::new(scene::load(&args.scene).map_err(fail)?);
     edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
     let scene = edited.scene();
@@ -34,11 +36,11 @@ pub fn split(args: &SplitArgs) -> Result<(), Failure> {
         })
     })?;
     let lines: Vec<String> = regions.iter().map(ToString::to_string).collect();
-    print_line(&lines.join("\n"))
+    stdout::line(&lines.join("\n"))
 }
 
 /// `assemble -out image.png PART…`.
-pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
+fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
     if output::format_for(out).ok() != Some(ImageFormat::Png) {
         return Err(usage(format!(
             "{}: assemble writes a PNG (streamed a row at a time): -out must end in .png",
@@ -58,7 +60,7 @@ pub fn assemble(out: &Path, parts: &[PathBuf]) -> Result<(), Failure> {
 /// ([`scene::MAX_PIXELS`]); the sheet's size and the memory it needs are
 /// checked before anything is decoded; then the images are decoded one at
 /// a time, each dropped once placed.
-pub fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
+fn sheet(out: &Path, columns: Option<usize>, images: &[PathBuf]) -> Result<(), Failure> {
     // A signal stops it between two images (or in the write), saying so,
     // as every other command: the default action ended it silently.
     let _cleanly = rayoflight::system::interrupt::cleanly();
@@ -215,9 +217,21 @@ pub struct SplitArgs {
     pub edits: Vec<EditArg>,
 }
 
-// `rayoflight split`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
+/// N regions of the image, one a line, of even estimated cost.
+///
+/// Each line is X0,Y0,X1,Y1 (pixels, X1 and Y1 excluded): give it to
+/// `rayoflight scene.xml --region X0,Y0,X1,Y1 -out part-I.png`, one
+/// task a line (a Slurm array, xargs -P, GNU parallel), then put the
+/// parts together with `rayoflight assemble`. The regions are balanced
+/// by cost, not area: a coarse pre-pass traces a few rays in each cell
+/// of a grid over the image and counts the rays each costs, reflections
+/// included; cuts follow the render's 32-pixel tiles where they can.
+/// Give the render's --set, --aa and --method: they change the cost.
 #[derive(Args, Debug)]
+#[command(
+    override_usage = "rayoflight split scene.xml --tasks N [--set PATH=VALUE]… [--aa N] \
+                      [--method NAME]"
+)]
 pub(super) struct SplitFlags {
     /// The scene file.
     scene: PathBuf,
@@ -235,9 +249,11 @@ pub(super) struct SplitFlags {
     render: RenderOf,
 }
 
-impl SplitFlags {
+impl Subcommand for SplitFlags {
+    type Args = SplitArgs;
+
     /// The split asked for, its edits read against the scene's path.
-    pub(super) fn resolve(self) -> Result<SplitArgs, UsageError> {
+    fn resolve(self, _: &clap::ArgMatches) -> Result<SplitArgs, UsageError> {
         let (request, edits) = self.render.resolve(&self.scene)?;
         Ok(SplitArgs {
             scene: self.scene,
@@ -246,46 +262,85 @@ impl SplitFlags {
             edits,
         })
     }
-}
 
-// `rayoflight assemble`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
-#[derive(Args, Debug)]
-pub(super) struct AssembleFlags {
-    /// The image to write (PNG).
-    #[arg(short, long, value_name = "FILE", required = true)]
-    out: PathBuf,
-    /// The parts, in any order.
-    #[arg(value_name = "PART", required = true)]
-    parts: Vec<PathBuf>,
-}
+    fn prints(_: &SplitArgs) -> bool {
+        true
+    }
 
-impl AssembleFlags {
-    /// The image to write and the parts, in the order given.
-    pub(super) fn resolve(self) -> (PathBuf, Vec<PathBuf>) {
-        (self.out, self.parts)
+    fn run(args: SplitArgs, _: fn() -> clap::Command) -> Result<(), Failure> {
+        split(&args)
     }
 }
 
-// `rayoflight sheet`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
-#[derive(Args, Debug)]
+/// Put the parts `--region` wrote together into the full image.
+///
+/// The image is the same file a render of the whole writes, byte for
+/// byte. Every part's PNG records where it belongs, the full image's
+/// size and a fingerprint of the scene and render options: assemble
+/// refuses, naming the culprit, a file that is not a part, parts of
+/// other scenes, options or versions, overlapping parts, pixels no
+/// part holds (a missing part), a region outside the image. Rows are
+/// streamed: only the parts crossing a row are open, so memory holds a
+/// few rows, never the image.
+#[derive(Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight assemble -out image.png PART.png…")]
+pub(super) struct AssembleFlags {
+    /// The image to write (PNG).
+    #[arg(short, long, value_name = "FILE", required = true)]
+    pub(super) out: PathBuf,
+    /// The parts, in any order.
+    #[arg(value_name = "PART", required = true)]
+    pub(super) parts: Vec<PathBuf>,
+}
+
+impl Subcommand for AssembleFlags {
+    type Args = AssembleFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<AssembleFlags, UsageError> {
+        Ok(self)
+    }
+
+    fn prints(_: &AssembleFlags) -> bool {
+        false
+    }
+
+    fn run(args: AssembleFlags, _: fn() -> clap::Command) -> Result<(), Failure> {
+        assemble(&args.out, &args.parts)
+    }
+}
+
+/// A contact sheet: the images side by side in a grid, each named.
+///
+/// Each picture sits in a cell as large as the largest, its file name
+/// (its end, when too long) under it: the renders of a --set sweep at
+/// a glance.
+#[derive(Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight sheet -out sheet.png [--columns N] IMAGE…")]
 pub(super) struct SheetFlags {
     /// The sheet to write; its extension picks the format.
     #[arg(short, long, value_name = "FILE", required = true)]
-    out: PathBuf,
+    pub(super) out: PathBuf,
     /// Pictures a row [default: as square a grid as the count allows]
     #[arg(long, value_name = "N", value_parser = columns, allow_hyphen_values = true)]
-    columns: Option<usize>,
+    pub(super) columns: Option<usize>,
     /// The images, in the order to show them.
     #[arg(value_name = "IMAGE", required = true)]
-    images: Vec<PathBuf>,
+    pub(super) images: Vec<PathBuf>,
 }
 
-impl SheetFlags {
-    /// The sheet to write, its columns, the images in the order given.
-    pub(super) fn resolve(self) -> (PathBuf, Option<usize>, Vec<PathBuf>) {
-        (self.out, self.columns, self.images)
+impl Subcommand for SheetFlags {
+    type Args = SheetFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<SheetFlags, UsageError> {
+        Ok(self)
+    }
+
+    fn prints(_: &SheetFlags) -> bool {
+        false
+    }
+
+    fn run(args: SheetFlags, _: fn() -> clap::Command) -> Result<(), Failure> {
+        sheet(&args.out, args.columns, &args.images)
     }
 }
 

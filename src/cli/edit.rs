@@ -4,16 +4,21 @@
 //! library's [`Edit`] only when it is applied, against the scene as the
 //! edits before it left it: an added element's index depends on them.
 //!
-//! `rayoflight edit`'s flags, as clap reads them ([`EditFlags`]), are here
-//! too, and how any command's edit flags are put back in the order given
+//! How any command's edit flags are put back in the order given
 //! ([`in_order`]) and read ([`edit_args`]): the render's, `explain`'s and
-//! `split`'s `--set` go through them as well.
+//! `split`'s `--set` go through them as well. And the `edit` subcommand
+//! itself: its flags ([`EditFlags`]) and its run, which writes the scene
+//! back with only what the edits change changed.
 
-use super::args::error::UsageError;
-use super::args::values::{Named, path_value};
+use super::failure::{Failure, fail, refused};
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
+use super::values::{Named, path_value};
 use clap::{ArgMatches, Args};
 use rayoflight::scene::Scene;
 use rayoflight::scene::edit::{Edit, EditError, Edited, Field, Item, NewElement, Value};
+use rayoflight::scene::{self, merge, splice};
+use rayoflight::system::{files, interrupt};
 use std::path::{Path, PathBuf};
 
 /// The paths `--set` and `--remove` take, for `rayoflight edit --help`
@@ -96,9 +101,19 @@ pub struct EditArgs {
     pub edits: Vec<EditArg>,
 }
 
-// `rayoflight edit`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
+/// Change values of a scene file, add or remove elements, and write it.
+///
+/// The edits apply in the order given, and the file keeps every byte
+/// they do not change: comments, formatting, the spelling of other
+/// numbers. It is rewritten in place (atomically, keeping its mode;
+/// through a symbolic link, the file it points to), or written to
+/// -out FILE. An edit that changes nothing leaves the file untouched.
 #[derive(Args, Debug)]
+#[command(
+    override_usage = "rayoflight edit scene.xml [--set PATH=VALUE]… [--remove PATH]… \
+                      [--add KIND]… [-out FILE]",
+    after_help = PATHS
+)]
 pub(super) struct EditFlags {
     /// The scene file.
     scene: PathBuf,
@@ -117,20 +132,18 @@ pub(super) struct EditFlags {
     out: Option<PathBuf>,
 }
 
-impl EditFlags {
+impl Subcommand for EditFlags {
+    type Args = EditArgs;
+
     /// The edits asked for, in the order given (`matches`: the
     /// subcommand's, which alone know that order), read against the
-    /// scene's path; none is a usage error of `subcommand`.
-    pub(super) fn resolve(
-        self,
-        matches: &ArgMatches,
-        subcommand: Option<&'static str>,
-    ) -> Result<EditArgs, UsageError> {
+    /// scene's path; none is a usage error.
+    fn resolve(self, matches: &ArgMatches) -> Result<EditArgs, UsageError> {
         let given = in_order(matches, self.set, self.remove, self.add);
         if given.is_empty() {
             return Err(UsageError::Invalid {
                 message: "nothing to do: give at least one --set, --remove or --add".to_owned(),
-                command: subcommand,
+                command: Some("edit"),
             });
         }
         Ok(EditArgs {
@@ -138,6 +151,14 @@ impl EditFlags {
             scene: self.scene,
             out: self.out,
         })
+    }
+
+    fn prints(_: &EditArgs) -> bool {
+        false
+    }
+
+    fn run(args: EditArgs, _: fn() -> clap::Command) -> Result<(), Failure> {
+        edit_scene(&args)
     }
 }
 
@@ -198,6 +219,111 @@ pub(super) fn edit_args(given: Vec<Given>, scene: &Path) -> Result<Vec<EditArg>,
             scene: scene.to_owned(),
             error,
         })
+}
+
+/// `rayoflight edit`: applies the edits and writes the scene's text back
+/// with only what they change changed, in place or to `-out`.
+///
+/// In place, the scene is locked ([`files::lock_for_update`]) from the
+/// read to the rename, so that concurrent `edit`s and the app's saves take
+/// turns and none loses another's changes. A program that takes no lock
+/// (an editor) is caught by reading the file again just before the rename:
+/// the edits are then merged onto its text by the app's engine
+/// ([`merge`]) and written again; a conflict writes nothing.
+fn edit_scene(args: &EditArgs) -> Result<(), Failure> {
+    if let Some(out) = &args.out {
+        files::check_file_target(out).map_err(fail)?;
+    }
+    let out = args.out.as_deref().unwrap_or(&args.scene);
+    let in_place = files::same_file(&args.scene, out);
+    // Waiting for the lock, a signal still ends the process at once.
+    let _lock = match in_place {
+        true => files::lock_for_update(&args.scene).map_err(|e| {
+            Failure::Error(format!("{}: cannot lock it: {e}", args.scene.display()))
+        })?,
+        false => None,
+    };
+    let _cleanly = interrupt::cleanly();
+    let (mut text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
+    let base = loaded.clone();
+    let mut edited = Edited::new(loaded);
+    let edits = apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
+    for _ in 0..MAX_REREADS {
+        let new_text = splice::save(&text, &args.scene, &edited)
+            .map_err(|e| Failure::Error(format!("{}: {e}", args.scene.display())))?;
+        // Edits that change nothing (a value set to the one it has) leave
+        // the scene file untouched, its modification time included.
+        if new_text == text && in_place {
+            return Ok(());
+        }
+        let written = files::write_atomic_with(
+            out,
+            |w| w.write_all(new_text.as_bytes()),
+            |_| {
+                if !in_place {
+                    return Ok(());
+                }
+                // A file that cannot be read again (no descriptor left) is
+                // not one another program changed: say why, write nothing.
+                match std::fs::read(&args.scene) {
+                    Ok(now) if now == text.as_bytes() => Ok(()),
+                    Ok(_) => Err(Rewrite::Changed),
+                    Err(e) => Err(Rewrite::Unreadable(e)),
+                }
+            },
+        );
+        match written {
+            Ok(()) => return Ok(()),
+            // Another file put at the name meanwhile: read it and merge.
+            Err(Rewrite::Write(files::WriteError::Moved { .. })) => {}
+            Err(Rewrite::Write(e)) => return Err(fail(e)),
+            Err(Rewrite::Unreadable(e)) => {
+                return Err(Failure::Error(format!(
+                    "{}: cannot read the file again before writing it: {e}; nothing was written",
+                    args.scene.display()
+                )));
+            }
+            Err(Rewrite::Changed) => {}
+        }
+        // Another program wrote the file since it was read: replay the
+        // edits onto its version.
+        let (their_text, theirs) = scene::load_with_text(&args.scene).map_err(fail)?;
+        let merged = merge::merge(&base, &theirs, &edits, &Default::default());
+        if let Some(c) = merged.conflicts.first() {
+            return Err(Failure::Error(format!(
+                "{}: another program changed the file meanwhile: {}: yours {}, the file's {}; nothing was written",
+                args.scene.display(),
+                c.path,
+                c.yours,
+                c.theirs
+            )));
+        }
+        text = their_text;
+        edited = merged.edited;
+    }
+    Err(Failure::Error(format!(
+        "{}: another program keeps changing the file ({MAX_REREADS} times while it was edited); nothing was written",
+        args.scene.display()
+    )))
+}
+
+/// How many times `edit` merges onto a file that another program keeps
+/// writing before it gives up.
+const MAX_REREADS: usize = 8;
+
+/// Why `edit`'s write did not happen.
+enum Rewrite {
+    Write(files::WriteError),
+    /// The scene is not the text that was read any more.
+    Changed,
+    /// The scene could not be read again to find out.
+    Unreadable(std::io::Error),
+}
+
+impl From<files::WriteError> for Rewrite {
+    fn from(e: files::WriteError) -> Rewrite {
+        Rewrite::Write(e)
+    }
 }
 
 #[cfg(test)]

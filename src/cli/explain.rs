@@ -8,10 +8,11 @@
 //! Its flags, as clap reads them, are here too ([`ExplainFlags`]),
 //! resolved into the [`ExplainArgs`] it runs with.
 
-use super::args::error::UsageError;
-use super::args::render::RenderOf;
-use super::edit::EditArg;
-use super::{Failure, edit, fail, refused};
+use super::edit::{self, EditArg};
+use super::failure::{Failure, fail, refused};
+use super::render::RenderOf;
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
 use clap::Args;
 use glam::DVec3;
 use rayoflight::geometry::Ray;
@@ -28,14 +29,15 @@ use std::io::{self, Write};
 use std::ops::ControlFlow;
 use std::path::PathBuf;
 
-pub fn run(args: &ExplainArgs) -> Result<(), Failure> {
+/// Traces the pixel and writes its trees out, in words or as JSON.
+fn explain(args: &ExplainArgs) -> Result<(), Failure> {
     let (text, loaded) = scene::load_with_text(&args.scene).map_err(fail)?;
     let mut edited = Edited::new(loaded);
     edit::apply(&mut edited, &args.edits).map_err(refused(&args.scene))?;
     let scene = edited.scene();
     let (width, height) = (scene.camera.width, scene.camera.height);
     if args.x >= width || args.y >= height {
-        return Err(Failure::Usage(super::UsageError::Invalid {
+        return Err(Failure::Usage(UsageError::Invalid {
             message: format!(
                 "pixel ({}, {}) is outside the {width}×{height} image of {} \
                  (X from 0 to {}, Y from 0 to {})",
@@ -367,9 +369,20 @@ pub struct ExplainArgs {
     pub edits: Vec<EditArg>,
 }
 
-// `rayoflight explain`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
+/// Why a pixel has its colour: its ray tree, term by term.
+///
+/// For each bounce: the ray, the object hit (its number as in the
+/// app's panel), t, the hit point M and normal N, for each light
+/// cos θ and cos α, and the terms ka·C, Σ I·kd·cos θ, Σ I·ks·cos^m α
+/// and ks·Ir; then where the chain ended (a miss, the depth, ks = 0,
+/// or the early stop and its bound), the unclamped sum and the 8-bit
+/// value, which is the pixel of `rayoflight scene.xml` with the same
+/// --set, --aa and --method.
 #[derive(Args, Debug)]
+#[command(
+    override_usage = "rayoflight explain scene.xml X Y [--json] [--set PATH=VALUE]… \
+                      [--aa N] [--method NAME]"
+)]
 pub(super) struct ExplainFlags {
     /// The scene file.
     scene: PathBuf,
@@ -387,10 +400,12 @@ pub(super) struct ExplainFlags {
     render: RenderOf,
 }
 
-impl ExplainFlags {
+impl Subcommand for ExplainFlags {
+    type Args = ExplainArgs;
+
     /// The pixel asked about, the render's edits read against the scene's
     /// path.
-    pub(super) fn resolve(self) -> Result<ExplainArgs, UsageError> {
+    fn resolve(self, _: &clap::ArgMatches) -> Result<ExplainArgs, UsageError> {
         let (request, edits) = self.render.resolve(&self.scene)?;
         Ok(ExplainArgs {
             scene: self.scene,
@@ -400,6 +415,14 @@ impl ExplainFlags {
             request,
             edits,
         })
+    }
+
+    fn prints(_: &ExplainArgs) -> bool {
+        true
+    }
+
+    fn run(args: ExplainArgs, _: fn() -> clap::Command) -> Result<(), Failure> {
+        explain(&args)
     }
 }
 

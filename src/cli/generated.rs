@@ -1,7 +1,10 @@
-//! What is generated from the command line's one definition
-//! ([`super::args::definition`]): the shell completion scripts
-//! (clap_complete) and the man pages (clap_mangen). The help, the pages and
-//! the completions cannot disagree: they are the same clap `Command`.
+//! What is generated: the shell completion scripts (clap_complete) and the
+//! man pages (clap_mangen), from the command line's one definition
+//! ([`super::args::definition`], which their subcommands are given when
+//! they run), and the scene format's XML Schema, from the loader's tables.
+//! The help, the pages and the completions cannot disagree: they are the
+//! same clap `Command`. The subcommands `completions`, `man` and `schema`
+//! live here.
 //!
 //! Bash gets one addition to clap_complete's script. Its script offers only
 //! flags and subcommand names where a positional argument goes, and files
@@ -10,18 +13,127 @@
 //! images) and nothing after a flag whose value is a number, a region or a
 //! PATH=VALUE.
 
-use super::args::definition;
+use super::failure::{Failure, fail, usage};
+use super::stdout;
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
 use clap::ValueHint;
 use clap_complete::Shell;
+use rayoflight::system::files;
+use std::path::PathBuf;
+
+/// The command line's definition ([`super::args::definition`]).
+type Definition = fn() -> clap::Command;
+
+/// Print the XML Schema (XSD 1.0) of the scene format.
+///
+/// Generated from the loader's own tables: every element and
+/// attribute, which are required, the ranges and the numbers the
+/// loader reads, each documented (what editors show on hover). Save
+/// it as rayoflight.xsd and point the editor at it; see the README.
+#[derive(clap::Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight schema")]
+pub(super) struct SchemaFlags {}
+
+impl Subcommand for SchemaFlags {
+    type Args = SchemaFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<SchemaFlags, UsageError> {
+        Ok(self)
+    }
+
+    fn prints(_: &SchemaFlags) -> bool {
+        true
+    }
+
+    fn run(_: SchemaFlags, _: Definition) -> Result<(), Failure> {
+        stdout::line(rayoflight::scene::schema::xsd().trim_end())
+    }
+}
+
+/// Print the shell completion script for SHELL.
+///
+/// Completes subcommands, flags, file names where a file goes and the
+/// names --method, --pass and --add take. For bash:
+/// rayoflight completions bash > ~/.local/share/bash-completion/completions/rayoflight
+#[derive(clap::Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight completions SHELL")]
+pub(super) struct CompletionsFlags {
+    /// The shell.
+    #[arg(value_name = "SHELL")]
+    pub shell: Shell,
+}
+
+impl Subcommand for CompletionsFlags {
+    type Args = CompletionsFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<CompletionsFlags, UsageError> {
+        Ok(self)
+    }
+
+    fn prints(_: &CompletionsFlags) -> bool {
+        true
+    }
+
+    fn run(args: CompletionsFlags, definition: Definition) -> Result<(), Failure> {
+        stdout::write(&completions(args.shell, definition)).map_err(Failure::Error)
+    }
+}
+
+/// Print a man page: rayoflight(1), or one subcommand's.
+///
+/// For example: rayoflight man | man -l -, rayoflight man edit, or
+/// rayoflight man --dir ~/.local/share/man/man1 for every page.
+#[derive(clap::Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight man [SUBCOMMAND] | --dir DIR")]
+pub(super) struct ManFlags {
+    /// The subcommand whose page to print [default: rayoflight(1)]
+    // Its names are the definition's: `args::definition` gives them to
+    // the argument (by its id, `MAN_SUBCOMMAND`).
+    #[arg(id = MAN_SUBCOMMAND, value_name = "SUBCOMMAND")]
+    pub subcommand: Option<String>,
+    /// Write every page into DIR (made if missing) instead:
+    /// rayoflight.1 and rayoflight-SUBCOMMAND.1.
+    #[arg(long, value_name = "DIR", value_hint = ValueHint::DirPath, conflicts_with = MAN_SUBCOMMAND)]
+    pub dir: Option<PathBuf>,
+}
+
+/// The id of `man`'s argument, which names a subcommand.
+pub(super) const MAN_SUBCOMMAND: &str = "subcommand";
+
+impl Subcommand for ManFlags {
+    type Args = ManFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<ManFlags, UsageError> {
+        Ok(self)
+    }
+
+    /// The page on stdout; `--dir` writes files.
+    fn prints(args: &ManFlags) -> bool {
+        args.dir.is_none()
+    }
+
+    fn run(args: ManFlags, definition: Definition) -> Result<(), Failure> {
+        let Some(dir) = args.dir else {
+            let page = man_page(args.subcommand.as_deref(), definition).map_err(usage)?;
+            return stdout::write(&page).map_err(Failure::Error);
+        };
+        files::make_folders(&dir).map_err(|e| Failure::Error(format!("{}: {e}", dir.display())))?;
+        for (name, page) in man_pages(definition).map_err(Failure::Error)? {
+            files::write_atomic(&dir.join(name), page.as_bytes()).map_err(fail)?;
+        }
+        Ok(())
+    }
+}
 
 /// The completion script for `shell`.
-pub fn completions(shell: Shell) -> String {
+fn completions(shell: Shell, definition: Definition) -> String {
     let mut command = definition();
     let mut script = Vec::new();
     clap_complete::generate(shell, &mut command, "rayoflight", &mut script);
     let mut script = String::from_utf8_lossy(&script).into_owned();
     if shell == Shell::Bash {
-        script.push_str(&bash_paths());
+        script.push_str(&bash_paths(definition));
     }
     script
 }
@@ -45,7 +157,7 @@ fn takes_free_value(arg: &clap::Arg) -> bool {
 }
 
 /// The bash wrapper around clap_complete's `_rayoflight`.
-fn bash_paths() -> String {
+fn bash_paths(definition: Definition) -> String {
     let mut root = definition();
     root.build();
     let valued = |command: &clap::Command, free: bool| -> Vec<String> {
@@ -118,20 +230,23 @@ complete -F _rayoflight_files -o nosort -o bashdefault -o default rayoflight
 
 /// Every man page, with its file name: `rayoflight.1`, then
 /// `rayoflight-SUBCOMMAND.1` for each subcommand.
-pub fn man_pages() -> Result<Vec<(String, String)>, String> {
+fn man_pages(definition: Definition) -> Result<Vec<(String, String)>, String> {
     let names: Vec<String> = definition()
         .get_subcommands()
         .map(|s| s.get_name().to_owned())
         .collect();
-    let mut pages = vec![("rayoflight.1".to_owned(), man_page(None)?)];
+    let mut pages = vec![("rayoflight.1".to_owned(), man_page(None, definition)?)];
     for name in names {
-        pages.push((format!("rayoflight-{name}.1"), man_page(Some(&name))?));
+        pages.push((
+            format!("rayoflight-{name}.1"),
+            man_page(Some(&name), definition)?,
+        ));
     }
     Ok(pages)
 }
 
 /// The man page of `subcommand` (`None`: rayoflight(1)), in roff.
-pub fn man_page(subcommand: Option<&str>) -> Result<String, String> {
+fn man_page(subcommand: Option<&str>, definition: Definition) -> Result<String, String> {
     let mut root = definition();
     root.build();
     let page = match subcommand {

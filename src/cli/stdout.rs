@@ -13,6 +13,7 @@
 //! descriptor 1 was open is recorded before the runtime starts (Linux: a
 //! function in `.init_array`, which the C runtime calls before `main`).
 
+use super::failure::Failure;
 use std::io::Write;
 
 /// The message for a stdout closed from the start.
@@ -32,6 +33,12 @@ pub fn write(text: &str) -> Result<(), String> {
         }
         _ => Ok(()),
     }
+}
+
+/// Writes `text` and a newline to stdout ([`write`]): a failure to print
+/// is the command's.
+pub(super) fn line(text: &str) -> Result<(), Failure> {
+    write(&format!("{text}\n")).map_err(Failure::Error)
 }
 
 /// Whether descriptor 1 was closed when the process started (always

@@ -7,8 +7,11 @@
 //! Its flags, as clap reads them, are here too ([`StudyFlags`]), resolved
 //! into the [`StudyArgs`] it runs with.
 
-use super::args::values::{runs, threads};
-use super::progress::Steps;
+use super::failure::Failure;
+use super::progress::{self, Steps};
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
+use super::values::{runs, threads};
 use clap::Args;
 use rayoflight::study::chart;
 use rayoflight::system::escape::visible;
@@ -32,7 +35,7 @@ pub struct StudyArgs {
 
 /// Runs the study; the report goes to stdout as it comes, a progress bar
 /// (`steps`: one step per scene and method) to stderr.
-pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
+fn run_study(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
     let out = |text: &str| steps.print(text);
     let scenes = if args.scenes.is_empty() {
         study::builtin_scenes()
@@ -136,9 +139,17 @@ pub fn run(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
 
 // ----- the command line -----
 
-// `rayoflight study`'s flags, as clap reads them (a plain comment:
-// a doc comment here would be clap's help text).
+/// Speed against accuracy: every render method on the study scenes.
+///
+/// Measures each method (f32, textbook quadratic, offsets,
+/// anti-aliasing, depth cut, early stop, draft, auto) against the
+/// default image, on the built-in study scenes or on the scene files
+/// given. Prints a table on stdout and writes DIR/study.csv, the chart
+/// DIR/study.png and a picture of each failure. See docs/study.md.
 #[derive(Args, Debug)]
+#[command(
+    override_usage = "rayoflight study [--out DIR] [--runs K] [--threads N] [--quiet] [scene.xml…]"
+)]
 pub(super) struct StudyFlags {
     /// Where study.csv, study.png and the failure pictures go (created).
     #[arg(short, long, value_name = "DIR", default_value = "study")]
@@ -157,14 +168,25 @@ pub(super) struct StudyFlags {
     quiet: bool,
 }
 
-impl StudyFlags {
-    pub(super) fn resolve(self) -> StudyArgs {
-        StudyArgs {
+impl Subcommand for StudyFlags {
+    type Args = StudyArgs;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<StudyArgs, UsageError> {
+        Ok(StudyArgs {
             out: self.out,
             runs: self.runs,
             threads: self.threads,
             scenes: self.scenes,
             quiet: self.quiet,
-        }
+        })
+    }
+
+    fn prints(_: &StudyArgs) -> bool {
+        true
+    }
+
+    fn run(args: StudyArgs, _: fn() -> clap::Command) -> Result<(), Failure> {
+        let steps = Steps::new(progress::wanted(args.quiet));
+        run_study(&args, &steps).map_err(Failure::Error)
     }
 }

@@ -4,8 +4,7 @@
 //! ([`unknown_single_dash_word`], with the flag it is a slip for), and
 //! clap's errors said in one line ([`clap_message`]).
 
-use super::Cli;
-use clap::CommandFactory;
+use super::definition;
 use clap::error::{ContextKind, ContextValue, ErrorKind};
 use std::ffi::OsString;
 
@@ -43,7 +42,7 @@ pub(super) fn unknown_single_dash_word(
     args: &[OsString],
     subcommand: Option<&str>,
 ) -> Option<String> {
-    let mut root = Cli::command();
+    let mut root = definition();
     root.build();
     let command = match subcommand {
         Some(name) => root.find_subcommand(name)?.clone(),

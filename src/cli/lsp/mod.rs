@@ -27,6 +27,9 @@
 
 mod transport;
 
+use super::failure::Failure;
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
 use lsp_server::{Message, Notification, Request, RequestId, Response};
 use lsp_types::notification::{
     DidChangeTextDocument, DidCloseTextDocument, DidOpenTextDocument, DidSaveTextDocument, Exit,
@@ -112,10 +115,37 @@ const DIAGNOSE_EVERY: Duration = Duration::from_millis(100);
 /// How often the runtime folder is looked at for apps started since.
 const LOOK_FOR_APPS_EVERY: Duration = Duration::from_secs(1);
 
+/// A language server for scene files, on stdin and stdout (LSP).
+///
+/// Errors as you type, at their line and column; completion of
+/// elements, attributes and the model's types; what a name means on
+/// hover; the objects, lights and camera as the document's symbols.
+/// Start it from the editor's LSP client; see the README.
+#[derive(clap::Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight lsp")]
+pub(super) struct LspFlags {}
+
+impl Subcommand for LspFlags {
+    type Args = LspFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<LspFlags, UsageError> {
+        Ok(self)
+    }
+
+    /// The protocol's messages are its own, not lines to check.
+    fn prints(_: &LspFlags) -> bool {
+        false
+    }
+
+    fn run(_: LspFlags, _: fn() -> clap::Command) -> Result<(), Failure> {
+        serve().map_err(Failure::Error)
+    }
+}
+
 /// Runs the server until the client says exit or goes (its end of stdin
 /// closed); an error is the protocol's, or an end without a shutdown
 /// (status 1, as the protocol asks).
-pub fn run() -> Result<(), String> {
+fn serve() -> Result<(), String> {
     let (connection, io_threads) = transport::stdio();
     let capabilities = ServerCapabilities {
         position_encoding: Some(PositionEncodingKind::UTF16),

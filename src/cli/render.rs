@@ -1,18 +1,29 @@
-//! The render's own flags, those of `rayoflight [-time] scene.xml [-out
-//! image.png] …` with no subcommand ([`RenderFlags`]), resolved into the
-//! [`RenderArgs`] the render runs with; and [`RenderOf`], the flags that
-//! name a render in the subcommands that speak of one (`explain`,
-//! `split`).
+//! The render, `rayoflight [-time] scene.xml [-out image.png] …` with no
+//! subcommand: its flags ([`RenderFlags`]), resolved into the
+//! [`RenderArgs`] it runs with, and its run ([`run`]): every check that
+//! can be made before work, the render timed as the bench times it, and
+//! the image, part or pass written. In the GUI build, a scene alone opens
+//! the app instead ([`opens_app`]). Also [`RenderOf`], the flags that name
+//! a render in the subcommands that speak of one (`explain`, `split`).
 
-use super::error::UsageError;
+use super::edit;
+use super::edit::{EditArg, Given, edit_args};
+use super::failure::{Failure, fail, interrupted, refuse_same_file, refused, usage};
+use super::progress;
+use super::stdout;
+use super::usage::UsageError;
 use super::values::{
     Named, aa, method, method_names, pass, pass_names, path_value, region, threads,
 };
-use crate::cli::edit::{EditArg, Given, edit_args};
 use clap::Args;
+use rayoflight::cluster::part::Part;
+use rayoflight::render::measure;
 use rayoflight::render::region::Region;
 use rayoflight::render::request::RenderRequest;
 use rayoflight::render::{Method, Pass};
+use rayoflight::scene::edit::Edited;
+use rayoflight::system::{interrupt, resources};
+use rayoflight::{output, render, scene};
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -192,4 +203,129 @@ pub(super) fn render_args(r: RenderFlags) -> Result<RenderArgs, UsageError> {
         quiet: r.quiet,
         pass: r.pass.unwrap_or_default(),
     })
+}
+
+/// Whether `r` opens the desktop app rather than rendering here.
+pub(super) fn opens_app(r: &RenderArgs) -> bool {
+    #[cfg(feature = "gui")]
+    return !r.headless();
+    #[cfg(not(feature = "gui"))]
+    {
+        let _ = r;
+        false
+    }
+}
+
+/// Renders the scene as `r` asks, or opens the app on it.
+pub(super) fn run(r: RenderArgs) -> Result<(), Failure> {
+    if opens_app(&r) {
+        #[cfg(feature = "gui")]
+        return open_app(r.scene.as_deref());
+    }
+    // No scene: the headless CLI prints its usage.
+    let Some(scene_path) = r.scene.clone() else {
+        return Err(Failure::Usage(UsageError::NoScene));
+    };
+    let out = r
+        .out
+        .clone()
+        .unwrap_or_else(|| scene_path.with_extension("png"));
+    // Everything that can be checked before work is checked first.
+    refuse_same_file(&scene_path, &out)?;
+    output::format_for(&out).map_err(fail)?;
+
+    let loaded = scene::load(&scene_path).map_err(fail)?;
+    // --set: in memory only, the scene file is never written. The edit
+    // engine's record of where each element came from is made only for
+    // them (a million objects' origins are 80 MB).
+    let edited;
+    let scene = if r.edits.is_empty() {
+        &loaded
+    } else {
+        let mut engine = Edited::new(loaded);
+        edit::apply(&mut engine, &r.edits).map_err(refused(&scene_path))?;
+        edited = engine;
+        edited.scene()
+    };
+    let request = &r.request;
+    let (width, height) = match request.region {
+        Some(region) => {
+            let region = region
+                .check_in(scene.camera.width, scene.camera.height)
+                .map_err(|e| usage(format!("{}: --region {e}", scene_path.display())))?;
+            (region.width(), region.height())
+        }
+        None => (scene.camera.width, scene.camera.height),
+    };
+    // The output can take this image: a folder that exists and is
+    // writable, a format that holds its size, no special file in the way.
+    let format = output::check_target(&out, width, height).map_err(fail)?;
+    let pass = output::takes_pass(r.pass, &out).then_some(r.pass);
+    // The memory the render and its file take, asked for before the
+    // first ray: a one-line refusal, not an abort after minutes of work.
+    let needed = output::bytes_to_render(format, pass, width, height);
+    resources::check_memory(needed).map_err(|e| {
+        let what = match pass {
+            Some(pass) => format!("the {} pass", pass.name()),
+            None => "the image".to_owned(),
+        };
+        Failure::Error(format!(
+            "{}: rendering {what} at {width}×{height} {e}",
+            out.display()
+        ))
+    })?;
+    // Render time as the bench and the study measure it (rayoflight::render::measure).
+    let pool = measure::RenderPool::new(request.threads).map_err(fail)?;
+    let counted = render::Progress::default();
+    // A signal stops the render at its next tile, or the write.
+    let _cleanly = interrupt::cleanly();
+    let never = render::Cancel::on_signal();
+    let cancelled = interrupted;
+    let elapsed = if let Some(pass) = pass {
+        let form = output::pixel_form(format);
+        let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
+            measure::kept_pass_timed(scene, request, pass, form, &pool, &never, &counted)
+        });
+        let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
+        output::save_kept_pass(&timed.image, &out).map_err(fail)?;
+        if let Some((near, far)) = timed.image.depth_range {
+            eprintln!("depth: t from {near} to {far}");
+        }
+        timed.elapsed
+    } else {
+        let rendered = progress::render(&counted, progress::wanted(r.quiet), || {
+            measure::render_timed(scene, request, &pool, &never, &counted)
+        });
+        let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
+        match request.region {
+            // A part records where it belongs, for `assemble`.
+            Some(region) => {
+                let part = Part::new(scene, &request.options(scene), region);
+                rayoflight::cluster::part::save(&timed.image, &part, &out).map_err(fail)?
+            }
+            None => output::save(&timed.image, &out).map_err(fail)?,
+        }
+        timed.elapsed
+    };
+    if r.time {
+        stdout::line(&format!("render: {} ns", elapsed.as_nanos()))?;
+    }
+    Ok(())
+}
+
+/// Opens the desktop app (GUI build). No display is a usage problem: the
+/// message names `--no-gui` and the exit status is 2.
+#[cfg(feature = "gui")]
+fn open_app(scene: Option<&Path>) -> Result<(), Failure> {
+    use rayoflight::gui::{self, GuiError};
+    match gui::run(scene) {
+        Ok(()) => Ok(()),
+        Err(e @ (GuiError::NoDisplay | GuiError::Window(_))) => {
+            Err(Failure::Usage(UsageError::Invalid {
+                message: e.to_string(),
+                command: None,
+            }))
+        }
+        Err(e) => Err(fail(e)),
+    }
 }

@@ -5,7 +5,7 @@
 //! subcommand's module.
 //!
 //! Their messages complete "--flag …, not "value"" (see
-//! [`super::spelling::clap_message`]).
+//! [`super::args::spelling::clap_message`]).
 
 use clap::builder::{PossibleValue, TypedValueParser};
 use rayoflight::render::region::Region;

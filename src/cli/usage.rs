@@ -1,6 +1,7 @@
-//! What a command line that does not parse is: its own module, below the
-//! parser and every subcommand's flags, so that each subcommand's module
-//! can refuse its arguments without importing the parser that imports it.
+//! What a command line that does not parse is ([`UsageError`], exit status
+//! 2): its own module, below the parser and every subcommand, so that each
+//! subcommand's module can refuse its arguments without importing the
+//! parser that imports it.
 
 use rayoflight::scene::edit::EditError;
 use std::path::PathBuf;

@@ -1,0 +1,96 @@
+//! `rayoflight install-desktop [--uninstall]`: the app in the desktop's
+//! menus and "Open with", for this user, or gone again. The files and
+//! their rules are the library's ([`rayoflight::desktop`]); this edge says
+//! what was done, on stderr.
+
+use super::failure::{Failure, fail};
+use super::subcommand::Subcommand;
+use super::usage::UsageError;
+use rayoflight::desktop;
+
+/// Put the app in the desktop's menus and "Open with", for this user.
+///
+/// Writes a desktop entry (that runs this binary, by its absolute
+/// path), the icons in the hicolor theme and the type of scenes that
+/// name rayoflight.xsd under $XDG_DATA_HOME (default ~/.local/share),
+/// and updates the desktop's databases when their tools are installed.
+/// RayOfLight is the default for its own type only, never for every
+/// XML file. Never over a file it did not write; --uninstall removes
+/// exactly what it wrote.
+#[derive(clap::Args, Debug, Clone, PartialEq)]
+#[command(override_usage = "rayoflight install-desktop [--uninstall]")]
+pub(super) struct InstallDesktopFlags {
+    /// Remove what install-desktop wrote.
+    #[arg(long)]
+    pub uninstall: bool,
+}
+
+impl Subcommand for InstallDesktopFlags {
+    type Args = InstallDesktopFlags;
+
+    fn resolve(self, _: &clap::ArgMatches) -> Result<InstallDesktopFlags, UsageError> {
+        Ok(self)
+    }
+
+    fn prints(_: &InstallDesktopFlags) -> bool {
+        false
+    }
+
+    fn run(args: InstallDesktopFlags, _: fn() -> clap::Command) -> Result<(), Failure> {
+        let uninstall = args.uninstall;
+        if !cfg!(feature = "gui") {
+            return Err(Failure::Error(
+                "rayoflight: this build has no desktop app (built without the gui feature): \
+                 nothing to install"
+                    .to_owned(),
+            ));
+        }
+        let home = desktop::data_home().map_err(fail)?;
+        let done = match uninstall {
+            false => {
+                let exec = std::env::current_exe()
+                    .and_then(std::fs::canonicalize)
+                    .map_err(|e| {
+                        Failure::Error(format!("rayoflight: where is this binary? {e}"))
+                    })?;
+                let done = desktop::install(&home, &exec).map_err(fail)?;
+                eprintln!(
+                    "installed under {}: the desktop entry (running {}), {} icons and the scene type",
+                    home.display(),
+                    exec.display(),
+                    desktop::ICON_PNGS.len() + 1
+                );
+                done
+            }
+            true => {
+                let done = desktop::uninstall(&home).map_err(fail)?;
+                match done.files.len() {
+                    0 => eprintln!(
+                        "nothing to remove: install-desktop wrote nothing under {}",
+                        home.display()
+                    ),
+                    n => eprintln!(
+                        "removed the {n} files install-desktop wrote under {}",
+                        home.display()
+                    ),
+                }
+                for kept in &done.kept {
+                    eprintln!(
+                        "left {}: it changed since install-desktop wrote it",
+                        rayoflight::system::escape::visible(&kept.display().to_string(), false)
+                    );
+                }
+                done
+            }
+        };
+        for ran in &done.ran {
+            eprintln!("ran {ran}");
+        }
+        for tool in &done.missing {
+            eprintln!(
+                "{tool} is not installed: the desktop may see the change only after its next login"
+            );
+        }
+        Ok(())
+    }
+}
