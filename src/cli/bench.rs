@@ -38,6 +38,9 @@ pub struct BenchArgs {
     pub quiet: bool,
     /// The side of the split-and-assemble render (0: skip that section).
     pub split_size: u32,
+    /// The width of the one-core-against-all render (0: skip that
+    /// section).
+    pub cores_size: u32,
     /// Spheres in the big scene (0: skip that section).
     pub big_spheres: usize,
     /// Not the bench: the big section's child, the app without its window
@@ -132,6 +135,7 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         0
     };
     let big_steps = if args.big_spheres > 0 { 3 } else { 0 };
+    let cores_steps = if args.cores_size > 0 { 3 } else { 0 };
     steps.set_total(
         (sets.len()
             + (sets.len() - 1) * counts.len()
@@ -139,6 +143,7 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             + 1
             + big_steps
             + formats.len()
+            + cores_steps
             + split_steps) as u64,
     );
     for (name, scene) in &sets {
@@ -321,6 +326,10 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         });
     }
 
+    if args.cores_size > 0 {
+        cores_section(args, &mut step, &out, &mut rows)?;
+    }
+
     if args.split_size > 0 {
         let (_, scene) = sets
             .iter()
@@ -390,8 +399,10 @@ fn split_section(
     step("split: the whole image");
     let whole_file = dir.path().join("whole.png");
     let whole = render(&RenderRequest::default())?;
-    let whole_write =
-        timed(&mut || output::save(&whole.image, &whole_file).map_err(|e| error(&e)))?;
+    // Written, and assembled, on the render's threads.
+    let whole_write = pool.install(|| {
+        timed(&mut || output::save(&whole.image, &whole_file).map_err(|e| error(&e)))
+    })?;
     rows.push(row(
         "whole".into(),
         size,
@@ -424,8 +435,10 @@ fn split_section(
         let part = render(&request)?;
         let path = dir.path().join(format!("part-{k}.png"));
         let record = Part::new(&scene, &request.options(&scene), *region);
-        writing += timed(&mut || {
-            rayoflight::cluster::part::save(&part.image, &record, &path).map_err(|e| error(&e))
+        writing += pool.install(|| {
+            timed(&mut || {
+                rayoflight::cluster::part::save(&part.image, &record, &path).map_err(|e| error(&e))
+            })
         })?;
         rendering += part.elapsed;
         rays += part.stats.rays;
@@ -443,10 +456,12 @@ fn split_section(
 
     step("split: assemble");
     let assembled = dir.path().join("assembled.png");
-    let assembly = timed(&mut || {
-        assemble::assemble(&parts, &assembled)
-            .map(drop)
-            .map_err(|e| error(&e))
+    let assembly = pool.install(|| {
+        timed(&mut || {
+            assemble::assemble(&parts, &assembled)
+                .map(drop)
+                .map_err(|e| error(&e))
+        })
     })?;
     // Its memory, as a cluster's assembly job runs it: a process of its
     // own (this one has held the whole image).
@@ -520,25 +535,161 @@ fn split_section(
     Ok(())
 }
 
+/// The whole process, one core against all: `rayoflight` rendering the
+/// example at `cores_size` pixels wide (4:3, whitted) and writing its PNG,
+/// then `rayoflight assemble` of 16 parts of that render, each run as a
+/// command of its own pinned to the first core (`taskset -c 0`, with
+/// `--threads 1`) and on every core, the best of `runs` each, interleaved.
+/// What a render spends outside parallel work (loading, preparing,
+/// writing) shows here as the gap between the speed-up and the core count.
+fn cores_section(
+    args: &BenchArgs,
+    step: &mut impl FnMut(&str),
+    out: &impl Fn(&str) -> Result<(), String>,
+    rows: &mut Vec<Row>,
+) -> Result<(), String> {
+    let (width, height) = (args.cores_size, args.cores_size / 4 * 3);
+    let cores = rayoflight::render::all_cores();
+    out(&format!(
+        "\nThe whole process on 1 core and on {cores} (wall ms of the command, best of {}; \
+         speed-up)\n",
+        args.runs
+    ))?;
+    if Command::new("taskset").arg("--version").output().is_err() {
+        return out("not measured: taskset (util-linux) is not installed\n");
+    }
+    let dir = tempfile::tempdir().map_err(|e| e.to_string())?;
+    let scene = dir.path().join("example.xml");
+    files::write_new(&scene, rayoflight::EXAMPLE_SCENE.as_bytes()).map_err(|e| e.to_string())?;
+    let size = [
+        format!("camera.width={width}"),
+        format!("camera.height={height}"),
+    ];
+    let render_args = |threads: usize, out: &Path| -> Vec<std::ffi::OsString> {
+        let mut a: Vec<std::ffi::OsString> = vec![
+            "--no-gui".into(),
+            "-q".into(),
+            scene.clone().into(),
+            "--threads".into(),
+            threads.to_string().into(),
+            "-out".into(),
+            out.into(),
+        ];
+        for set in &size {
+            a.extend(["--set".into(), set.into()]);
+        }
+        a
+    };
+    // The parts, once: the regions split gives, each rendered.
+    let mut parts = Vec::new();
+    let regions = {
+        let mut a: Vec<std::ffi::OsString> = vec![
+            "split".into(),
+            scene.clone().into(),
+            "--tasks".into(),
+            "16".into(),
+        ];
+        for set in &size {
+            a.extend(["--set".into(), set.clone().into()]);
+        }
+        let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+        let listed = Command::new(exe)
+            .args(&a)
+            .output()
+            .map_err(|e| e.to_string())?;
+        String::from_utf8_lossy(&listed.stdout).into_owned()
+    };
+    step("cores: the parts");
+    for (k, region) in regions.lines().enumerate() {
+        let part = dir.path().join(format!("part-{k}.png"));
+        let mut a = render_args(args.threads, &part);
+        a.extend(["--region".into(), region.into()]);
+        process_peak(&a, false)?;
+        parts.push(part);
+    }
+    let assemble_args = || -> Vec<std::ffi::OsString> {
+        let mut a: Vec<std::ffi::OsString> = vec![
+            "assemble".into(),
+            "-out".into(),
+            dir.path().join("a.png").into(),
+        ];
+        a.extend(parts.iter().map(|p| p.clone().into()));
+        a
+    };
+    out(&format!(
+        "{:<34} {:>10} {:>10} {:>9}\n",
+        "command", "1 core", "all", "speed-up"
+    ))?;
+    let rendered = dir.path().join("r.png");
+    // Each command, with the arguments for one core and for all.
+    let commands = [
+        (
+            "render + PNG",
+            render_args(1, &rendered),
+            render_args(args.threads, &rendered),
+        ),
+        ("assemble 16 parts", assemble_args(), assemble_args()),
+    ];
+    for (name, on_one, on_all) in &commands {
+        step(&format!("cores: {name}"));
+        let (mut one, mut all) = (Duration::MAX, Duration::MAX);
+        for _ in 0..args.runs {
+            one = one.min(process_peak(on_one, true)?.0);
+            all = all.min(process_peak(on_all, false)?.0);
+        }
+        let label = format!("{name} ({width}x{height})");
+        out(&format!(
+            "{label:<34} {:>10.1} {:>10.1} {:>8.2}x\n",
+            ms(one),
+            ms(all),
+            one.as_secs_f64() / all.as_secs_f64()
+        ))?;
+        for (threads, median) in [(1, one), (args.threads, all)] {
+            rows.push(Row {
+                section: "cores",
+                scene: name.to_string(),
+                width,
+                height,
+                threads,
+                objects: 0,
+                median,
+                stats: RenderStats::default(),
+                pov: None,
+                peak_mb: None,
+                app: None,
+            });
+        }
+    }
+    Ok(())
+}
+
 /// The peak resident memory (VmHWM) of `rayoflight assemble` on `parts`
 /// in a process of its own ([`process_peak`]).
 fn assemble_process_peak_mb(parts: &[PathBuf], out: &Path) -> Result<Option<f64>, String> {
     let mut args = vec!["assemble".into(), "-out".into(), out.as_os_str().to_owned()];
     args.extend(parts.iter().map(|p| p.as_os_str().to_owned()));
-    process_peak(&args).map(|(_, peak)| peak)
+    process_peak(&args, false).map(|(_, peak)| peak)
 }
 
 /// Runs this program with `args` in a process of its own: its wall time
 /// and its peak resident memory (VmHWM) in MB, read from /proc while it
 /// runs (Linux; `None` elsewhere). The peak only grows, so the last
 /// reading is the peak but for the process's last milliseconds.
-fn process_peak(args: &[std::ffi::OsString]) -> Result<(Duration, Option<f64>), String> {
+fn process_peak(
+    args: &[std::ffi::OsString],
+    first_core: bool,
+) -> Result<(Duration, Option<f64>), String> {
     let exe = std::env::current_exe().map_err(|e| e.to_string())?;
+    let mut command = match first_core {
+        true => {
+            let mut taskset = Command::new("taskset");
+            taskset.args(["-c", "0"]).arg(exe);
+            taskset
+        }
+        false => Command::new(exe),
+    };
     let start = Instant::now();
-    let mut child = Command::new(exe)
-        .args(args)
-        .spawn()
-        .map_err(|e| e.to_string())?;
+    let mut child = command.args(args).spawn().map_err(|e| e.to_string())?;
     let status_file = format!("/proc/{}/status", child.id());
     let mut peak_kb: Option<f64> = None;
     let status = loop {
@@ -685,7 +836,7 @@ fn big_section(
         "--threads".into(),
         threads.to_string().into(),
     ];
-    let (wall, peak) = process_peak(&args)?;
+    let (wall, peak) = process_peak(&args, false)?;
     let memory = peak
         .map(|p| {
             format!(
@@ -1129,7 +1280,7 @@ fn peak_memory(
 #[derive(Args, Debug)]
 #[command(
     override_usage = "rayoflight bench [--threads N] [--runs K] [--csv FILE] [--no-pov] \
-                      [--split-size PIXELS]\n                        [--big-spheres N] [--quiet]"
+                      [--split-size PIXELS]\n                        [--cores-size PIXELS] [--big-spheres N] [--quiet]"
 )]
 pub(super) struct BenchFlags {
     /// Render threads [default: one per core]
@@ -1157,6 +1308,17 @@ pub(super) struct BenchFlags {
         allow_negative_numbers = true
     )]
     split_size: u32,
+    /// The width of the render (4:3) run as a whole process, and then
+    /// assembled from 16 parts, pinned to one core and on every core
+    /// (0: skip that section).
+    #[arg(
+        long,
+        value_name = "PIXELS",
+        default_value_t = 6000,
+        value_parser = cores_size,
+        allow_negative_numbers = true
+    )]
+    cores_size: u32,
     /// Spheres in the big scene loaded, checked and prepared against
     /// xmllint's streaming parse of the same file (0: skip that section).
     #[arg(
@@ -1184,6 +1346,7 @@ impl Subcommand for BenchFlags {
             pov: !self.no_pov,
             quiet: self.quiet,
             split_size: self.split_size,
+            cores_size: self.cores_size,
             big_spheres: self.big_spheres,
             app_document: self.app_document,
         })
@@ -1197,6 +1360,17 @@ impl Subcommand for BenchFlags {
         let steps = Steps::new(progress::wanted(args.quiet));
         run_bench(&args, &steps).map_err(Failure::Error)
     }
+}
+
+/// The bench's section of one core against all: 0 (skipped), or a width
+/// from 64 pixels (16 parts of a 64×48 image) to the render's limit.
+fn cores_size(text: &str) -> Result<u32, String> {
+    let max = (rayoflight::scene::MAX_PIXELS / 3 * 4).isqrt();
+    text.parse::<u64>()
+        .ok()
+        .filter(|&n| n == 0 || (64..=max).contains(&n))
+        .and_then(|n| u32::try_from(n).ok())
+        .ok_or_else(|| format!("expects 0 (skip the section) or a width from 64 to {max} pixels"))
 }
 
 /// The bench's split section: 0 (skipped), or a square image of at least

@@ -297,14 +297,16 @@ pub(super) fn run(r: RenderArgs) -> Result<(), Failure> {
             measure::render_timed(scene, request, &pool, &never, &counted)
         });
         let timed = rendered.map_err(fail)?.ok_or_else(cancelled)?;
-        match request.region {
+        // Written on the render's threads (a PNG's bands are deflated on
+        // all of them).
+        pool.install(|| match request.region {
             // A part records where it belongs, for `assemble`.
             Some(region) => {
                 let part = Part::new(scene, &request.options(scene), region);
-                rayoflight::cluster::part::save(&timed.image, &part, &out).map_err(fail)?
+                rayoflight::cluster::part::save(&timed.image, &part, &out).map_err(fail)
             }
-            None => output::save(&timed.image, &out).map_err(fail)?,
-        }
+            None => output::save(&timed.image, &out).map_err(fail),
+        })?;
         timed.elapsed
     };
     if r.time {

@@ -406,8 +406,7 @@ pub fn assemble_until(
     let (width, height) = parts[0].part.image;
     output::check_target(out, width, height)?;
     check_open_files(&parts)?;
-    let (send, receive) =
-        std::sync::mpsc::sync_channel::<Result<Vec<u8>, AssembleError>>(QUEUED_ROWS);
+    let (send, receive) = crossbeam_channel::bounded::<Result<Vec<u8>, AssembleError>>(QUEUED_ROWS);
     let mut failure: Option<AssembleError> = None;
     let written = std::thread::scope(|scope| {
         scope.spawn(|| {

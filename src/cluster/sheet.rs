@@ -154,7 +154,7 @@ pub fn draw<'a, E: From<SheetError>>(
 ) -> Result<RgbImage, E> {
     let (width, height) = (layout.width, layout.height);
     let mut raw =
-        crate::system::resources::buffer(layout.bytes() as usize, 0u8).map_err(|source| {
+        crate::system::resources::buffer::<u8>(layout.bytes() as usize).map_err(|source| {
             SheetError::Memory {
                 width,
                 height,

@@ -1,6 +1,7 @@
 //! Image files: the format follows the file's extension ([`SUPPORTED`]),
 //! the target is checked before any work ([`check_target`]), every PNG
-//! goes through one row writer ([`write_png`]) and an EXR is written from
+//! goes through one row writer ([`write_png`], which deflates bands of
+//! rows on every core: [`png_writer`]) and an EXR is written from
 //! the pixels with no copy ([`save_exr`]). The bytes leave through the
 //! one atomic writer of [`crate::system::files::write`]; the font drawn
 //! into images (the study chart, the contact sheet) is [`font`]'s.
@@ -16,6 +17,9 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 pub mod font;
+mod png_writer;
+
+pub use png_writer::{band_rows, write_png, write_png_image};
 
 /// JPEG quality used for `.jpg` / `.jpeg`.
 pub const JPEG_QUALITY: u8 = 95;
@@ -206,53 +210,15 @@ pub fn save(image: &RgbImage, path: &Path) -> Result<(), OutputError> {
 
 /// Writes `image` as a PNG with `texts` (keyword, text) in tEXt chunks
 /// before its pixels, atomically. Every PNG the project writes goes
-/// through [`write_png`]: a render saved whole and the same image put
-/// together from parts by `assemble` are the same file, byte for byte.
+/// through [`png_writer`]: a render saved whole ([`write_png_image`]) and
+/// the same image put together from parts by `assemble` ([`write_png`])
+/// are the same file, byte for byte.
 pub fn save_png(image: &RgbImage, texts: &[(&str, &str)], path: &Path) -> Result<(), OutputError> {
     write_atomic_with(
         path,
-        |w| {
-            let mut rows = image.as_raw().chunks_exact(image.width() as usize * 3);
-            write_png(w, image.width(), image.height(), texts, |row| {
-                row.copy_from_slice(rows.next().unwrap_or_default());
-                Ok(())
-            })
-        },
+        |w| write_png_image(w, image.width(), image.height(), image.as_raw(), texts),
         |_| Ok::<(), OutputError>(()),
     )
-}
-
-/// Writes a `width × height` PNG (8-bit RGB) into `w` a row at a time,
-/// top to bottom, so that an image need never be in memory whole:
-/// `next_row` fills each row (width × 3 bytes) in turn. `texts` (keyword,
-/// text) go in Latin-1 tEXt chunks before the pixels. Compressed as
-/// `image` writes PNG by default (fast deflate, adaptive filter).
-pub fn write_png<W: Write>(
-    w: W,
-    width: u32,
-    height: u32,
-    texts: &[(&str, &str)],
-    mut next_row: impl FnMut(&mut [u8]) -> std::io::Result<()>,
-) -> std::io::Result<()> {
-    let mut encoder = png::Encoder::new(w, width, height);
-    encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
-    encoder.set_compression(png::Compression::Fast);
-    encoder.set_filter(png::Filter::Adaptive);
-    for (keyword, text) in texts {
-        encoder
-            .add_text_chunk((*keyword).to_owned(), (*text).to_owned())
-            .map_err(std::io::Error::other)?;
-    }
-    let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
-    let mut stream = writer.stream_writer().map_err(std::io::Error::other)?;
-    let mut row = vec![0; width as usize * 3];
-    for _ in 0..height {
-        next_row(&mut row)?;
-        stream.write_all(&row)?;
-    }
-    stream.finish().map_err(std::io::Error::other)?;
-    writer.finish().map_err(std::io::Error::other)
 }
 
 /// Whether writing `pass` to `path` takes the passes' render (f64 values,
@@ -408,6 +374,15 @@ pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::I
         image.write_with_encoder(JpegEncoder::new_with_quality(&mut bytes, JPEG_QUALITY))?;
     } else if format == ImageFormat::Gif {
         return encode_gif(image);
+    } else if format == ImageFormat::Png {
+        write_png_image(
+            &mut bytes,
+            image.width(),
+            image.height(),
+            image.as_raw(),
+            &[],
+        )
+        .map_err(image::ImageError::IoError)?;
     } else {
         image.write_to(&mut bytes, format)?;
     }

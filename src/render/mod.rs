@@ -1,9 +1,10 @@
 //! Rendering: from a loaded [`Scene`] to an 8-bit image.
 //!
 //! [`prepare`] turns the scene into a [`Prepared`] scene (what tracing needs
-//! and nothing more); [`trace_tiles`] is the one tile loop (bands over the
-//! rayon pool, a [`Cancel`] token checked once per pixel, counting
-//! [`Progress`]) that [`render`], the
+//! and nothing more); [`trace_tiles`] is the one tile loop (bands of
+//! tiles to the rayon pool's threads, their last tiles shared one at a
+//! time, a [`Cancel`] token
+//! checked once per pixel, counting [`Progress`]) that [`render`], the
 //! app's worker and `--region` share: a region of the image is traced in
 //! the whole image's tiles, so its pixels are the whole render's.
 //! [`RenderOptions`] holds every method choice (and the [`region`] to
@@ -57,6 +58,8 @@ use crate::scene::Scene;
 use crate::shading::{SurfacePoint, reflect};
 use image::RgbImage;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{Mutex, PoisonError};
 
 /// The most render threads a render may ask for: four per core, at most
 /// 1024. More cannot go faster, and asking the system for a billion
@@ -313,7 +316,7 @@ fn render_all(
         .saturating_mul(height as usize)
         .saturating_mul(3);
     let pixels =
-        crate::system::resources::buffer(bytes, 0u8).map_err(|source| RenderError::Memory {
+        crate::system::resources::buffer::<u8>(bytes).map_err(|source| RenderError::Memory {
             what: format!("the {width}×{height} image"),
             source,
         })?;
@@ -336,11 +339,18 @@ fn render_all(
 /// app's worker, the passes, `--region`): `region` of the prepared view's
 /// image (all of it, or a part) cut along the image's grid of
 /// [`TILE_SIZE`] tiles, so that every pixel is traced as the whole render
-/// traces it; bands of tiles spread over the current rayon pool, each
-/// traced tile by tile (so each tile culls once). Each finished tile
-/// (three texels a pixel, row-major: 8-bit channels of the image, or f64
-/// values of the prepared view's [`Pass`]) is copied into `image` when one
-/// is given (region-sized; its rows in place, no lock) and handed to
+/// traces it. Each thread of the current rayon pool takes a band (a row
+/// of tiles) no other has begun and traces its tiles left to right, one
+/// at a time; once every band is begun, a thread that is done helps with
+/// the band that has the most tiles left, a tile at a time. So however
+/// uneven the tiles' costs (mirrors beside floor) and however many the
+/// threads, they finish within about one tile of each other, while the
+/// threads mostly write rows of their own (no waiting on a band's lock, no
+/// cache line written by two); each tile is traced whole (so it culls
+/// once). Each finished tile (three texels a pixel, row-major: 8-bit
+/// channels of the image, or f64 values of the prepared view's [`Pass`])
+/// is copied into `image` when one is given (region-sized; into its band
+/// of rows, whose lock is held for the copy only) and handed to
 /// `finished` (on a render thread), and counted in `progress`. Returns the
 /// rays traced, or `None` once `cancel` is set.
 pub fn trace_tiles<T: Texel>(
@@ -354,49 +364,92 @@ pub fn trace_tiles<T: Texel>(
     debug_assert!(region.x1 <= prepared.width() && region.y1 <= prepared.height());
     progress.start(region.area());
     let row_bytes = region.width() as usize * 3;
-    // The bands: the grid's rows of tiles, cut to the region.
+    // The bands (the grid's rows of tiles) and columns, cut to the region.
     let bands: Vec<(u32, u32)> = grid_cuts(region.y0, region.y1).collect();
-    let mut rows: Vec<Option<&mut [T]>> = match image {
+    let columns: Vec<(u32, u32)> = grid_cuts(region.x0, region.x1).collect();
+    // Each band's rows of the image: the tiles of a band write disjoint
+    // columns of the same rows, one copy at a time.
+    let rows: Vec<Mutex<Option<&mut [T]>>> = match image {
         Some(mut image) => {
             debug_assert_eq!(image.len(), row_bytes * region.height() as usize);
             let mut rows = Vec::with_capacity(bands.len());
             for &(y0, y1) in &bands {
                 let (band, rest) = image.split_at_mut(row_bytes * (y1 - y0) as usize);
-                rows.push(Some(band));
+                rows.push(Mutex::new(Some(band)));
                 image = rest;
             }
             rows
         }
-        None => bands.iter().map(|_| None).collect(),
+        None => bands.iter().map(|_| Mutex::new(None)).collect(),
     };
-    bands
-        .par_iter()
-        .zip(rows.par_iter_mut())
-        .map(|(&(y, y_end), rows)| {
-            let mut pixels = Vec::new();
-            let mut rays = 0;
-            for (x, x_end) in grid_cuts(region.x0, region.x1) {
-                let tile = Tile {
-                    x,
-                    y,
-                    width: x_end - x,
-                    height: y_end - y,
-                };
-                let traced = prepared.render_tile_into(&tile, cancel, &mut pixels)?;
-                rays += traced;
-                progress.add(u64::from(tile.width) * u64::from(tile.height), traced);
-                if let Some(rows) = rows.as_deref_mut() {
-                    let tile_row = tile.width as usize * 3;
-                    for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
-                        let start = r * row_bytes + (x - region.x0) as usize * 3;
-                        rows[start..start + tile_row].copy_from_slice(src);
+    let tiles = bands.len() * columns.len();
+    // The next band no thread has begun, and each band's next tile.
+    let next_band = AtomicUsize::new(0);
+    let next_tile: Vec<Padded> = bands.iter().map(|_| Padded::default()).collect();
+    let stopped = AtomicBool::new(false);
+    // The tiles of band `b` that are left, one at a time, to `worker`'s
+    // thread; false once the render is cancelled.
+    let drain = |b: usize, pixels: &mut Vec<T>, rays: &mut u64| -> bool {
+        let (y, y_end) = bands[b];
+        loop {
+            let c = next_tile[b].0.fetch_add(1, Ordering::Relaxed);
+            if c >= columns.len() || stopped.load(Ordering::Relaxed) {
+                return true;
+            }
+            let (x, x_end) = columns[c];
+            let tile = Tile {
+                x,
+                y,
+                width: x_end - x,
+                height: y_end - y,
+            };
+            let Some(traced) = prepared.render_tile_into(&tile, cancel, pixels) else {
+                stopped.store(true, Ordering::Relaxed);
+                return false;
+            };
+            *rays += traced;
+            progress.add(u64::from(tile.width) * u64::from(tile.height), traced);
+            let mut band = rows[b].lock().unwrap_or_else(PoisonError::into_inner);
+            if let Some(rows) = band.as_deref_mut() {
+                let tile_row = tile.width as usize * 3;
+                for (r, src) in pixels.chunks_exact(tile_row).enumerate() {
+                    let start = r * row_bytes + (x - region.x0) as usize * 3;
+                    rows[start..start + tile_row].copy_from_slice(src);
+                }
+            }
+            drop(band);
+            finished(&tile, pixels);
+        }
+    };
+    // One worker a thread: it takes a band no one has begun and traces its
+    // tiles left to right; once every band is begun, it helps with the
+    // band that has the most tiles left, a tile at a time.
+    let worker = |_| {
+        let (mut pixels, mut rays) = (Vec::new(), 0);
+        loop {
+            let b = next_band.fetch_add(1, Ordering::Relaxed);
+            let b = match b < bands.len() {
+                true => b,
+                false => {
+                    let left = |b: &usize| {
+                        columns
+                            .len()
+                            .saturating_sub(next_tile[*b].0.load(Ordering::Relaxed))
+                    };
+                    match (0..bands.len()).filter(|b| left(b) > 0).max_by_key(left) {
+                        Some(b) => b,
+                        None => return rays,
                     }
                 }
-                finished(&tile, &pixels);
+            };
+            if !drain(b, &mut pixels, &mut rays) {
+                return rays;
             }
-            Some(rays)
-        })
-        .sum::<Option<u64>>()
+        }
+    };
+    let workers = rayon::current_num_threads().min(tiles);
+    let rays: u64 = (0..workers).into_par_iter().map(worker).sum();
+    (!stopped.load(Ordering::Relaxed)).then_some(rays)
 }
 
 /// The half-open spans of `start..end` that the image's tile grid (lines
@@ -412,6 +465,12 @@ fn grid_cuts(start: u32, end: u32) -> impl Iterator<Item = (u32, u32)> {
         })
     })
 }
+
+/// A counter on a cache line of its own: the bands' counters are taken
+/// by different threads at once.
+#[derive(Default)]
+#[repr(align(64))]
+struct Padded(AtomicUsize);
 
 /// Clamps a channel to [0, 1] and rounds it to 8 bits: floor(c·255 + 0.5).
 /// NaN becomes 0.
@@ -429,6 +488,52 @@ pub fn to_8bit(c: f64) -> u8 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// However many threads take the tiles, and in whatever order they
+    /// finish, the image and every region of it are the same bytes: the
+    /// mirrors (uneven tiles), at a size that is not a whole number of
+    /// tiles, on 1 to 64 threads.
+    #[test]
+    fn every_thread_count_gives_the_same_image_and_regions() {
+        let text = include_str!("../../scenes/bench/mirrors.xml");
+        let mut scene = crate::scene::parse(text, std::path::Path::new("mirrors.xml")).unwrap();
+        (scene.camera.width, scene.camera.height) = (150, 101);
+        let on = |threads: usize, options: &RenderOptions| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| render(&scene, options).unwrap())
+        };
+        let whole = on(1, &RenderOptions::default());
+        let regions = [
+            (0, 0, 150, 101),
+            (31, 0, 97, 33),
+            (5, 40, 6, 101),
+            (64, 64, 150, 101),
+        ];
+        for threads in 1..=64 {
+            assert!(
+                on(threads, &RenderOptions::default()) == whole,
+                "the image on {threads} threads"
+            );
+            if threads % 7 != 1 {
+                continue;
+            }
+            for (x0, y0, x1, y1) in regions {
+                let options = RenderOptions {
+                    region: Some(Region::new(x0, y0, x1, y1).unwrap()),
+                    ..RenderOptions::default()
+                };
+                let part = on(threads, &options);
+                let crop = image::imageops::crop_imm(&whole, x0, y0, x1 - x0, y1 - y0).to_image();
+                assert!(
+                    part == crop,
+                    "region {x0},{y0},{x1},{y1} on {threads} threads"
+                );
+            }
+        }
+    }
 
     #[test]
     fn the_grid_cuts_a_span_once_at_the_images_tile_lines() {

@@ -319,7 +319,7 @@ pub fn render_pass(
         }
         .for_pass(pass);
         let (width, height) = (region.width(), region.height());
-        let mut values = pass_buffer(width, height, 3, 0.0, pass, "its f64 values")?;
+        let mut values = pass_buffer::<f64>(width, height, 3, pass, "its f64 values")?;
         let Some(rays) = trace_tiles(
             &prepared,
             region,
@@ -344,18 +344,17 @@ pub fn render_pass(
 
 /// A buffer of `per_pixel` values a pixel for a pass, or the error that
 /// names what it would have taken.
-fn pass_buffer<T: Clone>(
+fn pass_buffer<T: bytemuck::Zeroable>(
     width: u32,
     height: u32,
     per_pixel: usize,
-    value: T,
     pass: Pass,
     what: &str,
 ) -> Result<Vec<T>, RenderError> {
     let len = (width as usize)
         .saturating_mul(height as usize)
         .saturating_mul(per_pixel);
-    crate::system::resources::buffer(len, value).map_err(|source| RenderError::Memory {
+    crate::system::resources::buffer(len).map_err(|source| RenderError::Memory {
         what: format!("the {width}×{height} {} pass ({what})", pass.name()),
         source,
     })
@@ -432,7 +431,7 @@ pub fn render_pass_as(
         let (width, height) = (region.width(), region.height());
         let done = match form {
             PassForm::Floats => {
-                let buffer = pass_buffer(width, height, 3, 0f32, pass, "its f32 values")?;
+                let buffer = pass_buffer::<f32>(width, height, 3, pass, "its f32 values")?;
                 keep_tiles(&view(), region, cancel, progress, buffer, 3, |v, out| {
                     for c in 0..3 {
                         out[c] = in_exr(pass, v[c]);
@@ -447,7 +446,7 @@ pub fn render_pass_as(
             PassForm::Picture if pass == Pass::Depth => {
                 // t in f64, little-endian, 8 bytes a pixel: the range is
                 // known only at the end.
-                let buffer = pass_buffer(width, height, 8, 0u8, pass, "t in f64")?;
+                let buffer = pass_buffer::<u8>(width, height, 8, pass, "t in f64")?;
                 keep_tiles(&view(), region, cancel, progress, buffer, 8, |v, out| {
                     out.copy_from_slice(&v.x.to_le_bytes());
                 })
@@ -470,7 +469,7 @@ pub fn render_pass_as(
                 })
             }
             PassForm::Picture => {
-                let buffer = pass_buffer(width, height, 3, 0u8, pass, "its 8-bit picture")?;
+                let buffer = pass_buffer::<u8>(width, height, 3, pass, "its 8-bit picture")?;
                 keep_tiles(&view(), region, cancel, progress, buffer, 3, |v, out| {
                     out.copy_from_slice(&shown(pass, v, None));
                 })

@@ -165,17 +165,18 @@ pub fn check_memory(buffers: u64) -> Result<(), NotEnoughMemory> {
     }
 }
 
-/// A buffer of `len` copies of `value`, or the error that it cannot be
-/// had: the allocation is tried, not assumed (a failed one would abort).
-pub fn buffer<T: Clone>(len: usize, value: T) -> Result<Vec<T>, NotEnoughMemory> {
+/// A buffer of `len` zeros, or the error that it cannot be had: the
+/// allocation is tried, not assumed (a failed one would abort). Its pages
+/// are the system's zeroed ones (calloc's), touched first by whoever
+/// writes them: an image's render threads, in parallel, not one thread
+/// filling it before the render (5 ms of a 20 ms render of a 2000×2000
+/// image on two cores).
+pub fn buffer<T: bytemuck::Zeroable>(len: usize) -> Result<Vec<T>, NotEnoughMemory> {
     let needed = (len as u64).saturating_mul(std::mem::size_of::<T>() as u64);
-    let mut v = Vec::new();
-    v.try_reserve_exact(len).map_err(|_| NotEnoughMemory {
+    bytemuck::allocation::try_zeroed_vec(len).map_err(|()| NotEnoughMemory {
         needed,
         available: None,
-    })?;
-    v.resize(len, value);
-    Ok(v)
+    })
 }
 
 /// Raises this process's soft limit of open files to its hard limit
@@ -252,8 +253,8 @@ mod tests {
 
     #[test]
     fn what_cannot_be_had_is_refused_not_aborted() {
-        assert!(buffer(usize::MAX / 2, 0u8).is_err());
-        assert_eq!(buffer(3, 7u8).unwrap(), vec![7, 7, 7]);
+        assert!(buffer::<u8>(usize::MAX / 2).is_err());
+        assert_eq!(buffer::<f64>(3).unwrap(), vec![0.0; 3]);
         if cfg!(target_os = "linux") {
             let available = available_memory().expect("/proc/meminfo at least");
             assert!(available > 1 << 20, "{available}");
