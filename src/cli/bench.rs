@@ -188,7 +188,13 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         ))?;
     }
 
-    out("\nThread scaling (ms, and speed-up over 1 thread)\n")?;
+    // The serial share: what of a 1-thread render did not spread over the
+    // cores, by Amdahl's law from the speed-up on every core.
+    let cores = rayoflight::render::all_cores();
+    out(&format!(
+        "\nThread scaling (ms, and speed-up over 1 thread; serial: the share of the 1-thread \
+         render that did not spread over the {cores} cores, from the speed-up on {cores})\n"
+    ))?;
     out(&format!("{:<14}", "scene"))?;
     for &t in &counts {
         out(&format!(
@@ -196,14 +202,18 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
             format!("{t} thread{}", if t == 1 { "" } else { "s" })
         ))?;
     }
-    out("\n")?;
+    out(&format!(" {:>8}\n", "serial"))?;
     for (name, scene) in sets.iter().skip(1) {
         out(&format!("{name:<14}"))?;
         let mut one = None;
+        let mut serial = None;
         for &t in &counts {
             step(&format!("{name}, {t} threads"));
             let (median, stats, _) = time_render(scene, t, args.runs)?;
             let base = *one.get_or_insert(median);
+            if t == cores && t > 1 {
+                serial = Some(serial_share(base, median, t));
+            }
             out(&format!(
                 " {:>16}",
                 format!(
@@ -226,7 +236,10 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
                 app: None,
             });
         }
-        out("\n")?;
+        match serial {
+            Some(share) => out(&format!(" {:>7.1}%\n", 100.0 * share))?,
+            None => out(&format!(" {:>8}\n", "—"))?,
+        }
     }
 
     out("\nCost against object count (n spheres on a floor, 800x600, phong)\n")?;
@@ -1037,6 +1050,16 @@ impl PeakMemory {
     }
 }
 
+/// The share of a render that did not spread over `n` threads, by
+/// Amdahl's law from its times on one (`one`) and on `n` (`on_n`):
+/// on_n = one × (s + (1 − s) / n), so s = (n × on_n / one − 1) / (n − 1).
+/// Below zero (a speed-up past n, from caches) it is 0.
+fn serial_share(one: Duration, on_n: Duration, n: usize) -> f64 {
+    let n = n as f64;
+    let s = (n * on_n.as_secs_f64() / one.as_secs_f64() - 1.0) / (n - 1.0);
+    s.max(0.0)
+}
+
 fn ms(d: Duration) -> f64 {
     d.as_secs_f64() * 1e3
 }
@@ -1400,4 +1423,21 @@ fn big_spheres(text: &str) -> Result<usize, String> {
                 MAX_BIG_SPHERES
             )
         })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_serial_share_is_amdahls() {
+        let ms = Duration::from_millis;
+        assert!((serial_share(ms(100), ms(55), 2) - 0.1).abs() < 1e-9);
+        assert_eq!(serial_share(ms(100), ms(100), 2), 1.0);
+        assert_eq!(serial_share(ms(100), ms(50), 2), 0.0);
+        assert_eq!(serial_share(ms(100), ms(40), 2), 0.0, "past n: caches");
+        // 12x on 16 threads: about 2 % serial.
+        let twelve = Duration::from_secs_f64(100.0 / 12.0);
+        assert!((serial_share(Duration::from_secs(100), twelve, 16) - 0.0222).abs() < 1e-3);
+    }
 }

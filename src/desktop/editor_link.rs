@@ -23,6 +23,7 @@
 //! A message is one line of JSON (`{"kind":"buffer","path":…,"bytes":N}`)
 //! followed by N bytes of text for a buffer.
 
+pub use crate::scene::language::Under;
 use std::io::{self, BufRead, Read, Write};
 use std::os::unix::fs::PermissionsExt;
 use std::os::unix::net::{UnixListener, UnixStream};
@@ -42,9 +43,10 @@ pub enum Message {
     /// (its number among the spheres and planes of the text, from 0): the
     /// user clicked it.
     Show { path: PathBuf, object: usize },
-    /// The editor's cursor is in the element of object `object`: the app
-    /// selects it.
-    Select { path: PathBuf, object: usize },
+    /// The editor's cursor moved into the element of an object or a
+    /// light (the app selects it), or out of every one (`None`: the app
+    /// selects nothing).
+    Select { path: PathBuf, under: Option<Under> },
 }
 
 /// Why the runtime folder cannot be used.
@@ -220,10 +222,15 @@ pub fn send(w: &mut impl Write, message: &Message) -> io::Result<()> {
             serde_json::json!({"kind": "show", "path": path(p), "object": object}),
             &[][..],
         ),
-        Message::Select { path: p, object } => (
-            serde_json::json!({"kind": "select", "path": path(p), "object": object}),
-            &[][..],
-        ),
+        Message::Select { path: p, under } => {
+            let mut header = serde_json::json!({"kind": "select", "path": path(p)});
+            match under {
+                Some(Under::Object(n)) => header["object"] = (*n).into(),
+                Some(Under::Light(n)) => header["light"] = (*n).into(),
+                None => {}
+            }
+            (header, &[][..])
+        }
     };
     let mut bytes = header.to_string().into_bytes();
     bytes.push(b'\n');
@@ -268,14 +275,25 @@ pub fn receive(r: &mut impl BufRead) -> io::Result<Option<Message>> {
             Message::Buffer { path, text }
         }
         Some("released") => Message::Released { path },
-        Some(kind @ ("show" | "select")) => {
-            let object =
-                usize::try_from(number("object")?).map_err(|_| bad("an object out of range"))?;
-            if kind == "show" {
-                Message::Show { path, object }
-            } else {
-                Message::Select { path, object }
-            }
+        Some("show") => Message::Show {
+            path,
+            object: usize::try_from(number("object")?)
+                .map_err(|_| bad("an object out of range"))?,
+        },
+        Some("select") => {
+            let index = |key: &str| match header.get(key) {
+                None => Ok(None),
+                Some(_) => usize::try_from(number(key)?)
+                    .map(Some)
+                    .map_err(|_| bad("an index out of range")),
+            };
+            let under = match (index("object")?, index("light")?) {
+                (Some(n), None) => Some(Under::Object(n)),
+                (None, Some(n)) => Some(Under::Light(n)),
+                (None, None) => None,
+                (Some(_), Some(_)) => return Err(bad("an object and a light at once")),
+            };
+            Message::Select { path, under }
         }
         _ => return Err(bad("an unknown message")),
     }))
@@ -327,7 +345,15 @@ mod tests {
             },
             Message::Select {
                 path: "/s.xml".into(),
-                object: 0,
+                under: Some(Under::Object(0)),
+            },
+            Message::Select {
+                path: "/s.xml".into(),
+                under: Some(Under::Light(2)),
+            },
+            Message::Select {
+                path: "/s.xml".into(),
+                under: None,
             },
         ];
         let mut bytes = Vec::new();

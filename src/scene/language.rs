@@ -757,6 +757,30 @@ pub fn object_at(text: &str, offset: usize) -> Option<(usize, Range<usize>)> {
         .map(|(index, (_, selection))| (index, selection))
 }
 
+/// An element the editor's cursor can be in that the app shows: an
+/// object (outlined) or a light (its marker), by its index among its
+/// kind in file order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Under {
+    Object(usize),
+    Light(usize),
+}
+
+/// The object's or light's element that holds byte `offset`, with its
+/// start tag's bytes; none when the cursor is in neither (the camera, the
+/// model, between elements) or the text is not well-formed.
+pub fn element_at(text: &str, offset: usize) -> Option<(Under, Range<usize>)> {
+    if let Some((object, tag)) = object_at(text, offset) {
+        return Some((Under::Object(object), tag));
+    }
+    layout::top_level(text)
+        .into_iter()
+        .filter(|(name, ..)| *name == "light")
+        .enumerate()
+        .find(|(_, (_, range, _))| range.contains(&offset))
+        .map(|(index, (_, _, tag))| (Under::Light(index), tag))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1077,6 +1101,16 @@ mod tests {
         );
         // In a light, or a text that is not XML: no object.
         assert_eq!(object_at(text, text.find("<light").unwrap() + 2), None);
+        let light = text.find("<light").unwrap();
+        assert_eq!(
+            element_at(text, light + 2).map(|(u, tag)| (u, &text[tag])),
+            Some((Under::Light(0), "<light x=\"0\" y=\"0\" z=\"0\"/>"))
+        );
+        assert_eq!(
+            element_at(text, inside).map(|(u, _)| u),
+            Some(Under::Object(0))
+        );
+        assert_eq!(element_at(text, 2), None, "in the scene, no element");
         assert_eq!(object_at("<scene><sphere>", 9), None);
     }
 }

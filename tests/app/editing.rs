@@ -464,6 +464,93 @@ fn enter_in_an_untouched_angle_field_changes_nothing() {
     assert_eq!(read(&path), SCENE);
 }
 
+/// The editor's cursor over the link: into an object's element selects
+/// it, into a light's rings its marker, out of every element selects
+/// nothing (the outline goes).
+#[test]
+fn the_editors_cursor_selects_an_object_a_light_or_nothing() {
+    use rayoflight::desktop::editor_link::{self, Message, Under};
+    let (dir, path) = common::scene_file("scene.xml", SCENE);
+    let mut harness = app_on(Document::open(&path).unwrap());
+    let folder = editor_link::folder_in(&dir.path().join("run")).unwrap();
+    let listener = editor_link::Listener::bind(&folder).unwrap();
+    let socket = listener.path().to_owned();
+    harness.state_mut().listen_to_editors(listener);
+    let mut editor = editor_link::connect(&socket).unwrap();
+    let path = std::fs::canonicalize(&path).unwrap();
+    let mut cursor_in = |under| {
+        let message = Message::Select {
+            path: path.clone(),
+            under,
+        };
+        editor_link::send(&mut editor, &message).unwrap();
+    };
+    cursor_in(Some(Under::Object(1)));
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the object selected",
+        |app| app.selected_object() == Some(1),
+    );
+    cursor_in(Some(Under::Light(0)));
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the light selected",
+        |app| app.selected_light() == Some(0) && app.selected_object().is_none(),
+    );
+    cursor_in(Some(Under::Object(0)));
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the object selected",
+        |app| app.selected_object() == Some(0) && app.selected_light().is_none(),
+    );
+    cursor_in(None);
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "nothing selected",
+        |app| app.selected_object().is_none() && app.selected_light().is_none(),
+    );
+}
+
+/// The error banner lies over the picture: breaking the file and fixing
+/// it again never moves the picture.
+#[test]
+fn the_error_banner_never_moves_the_picture() {
+    let (_dir, path) = common::scene_file("scene.xml", SCENE);
+    let mut harness = app_on(Document::open(&path).unwrap());
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the picture never showed",
+        |app| app.picture_rect().is_some(),
+    );
+    harness.run_steps(2);
+    let before = harness.state().picture_rect();
+    let broken = SCENE.replace("<model type=\"phong\"/>", "<model type=\"phong\">");
+    std::fs::write(&path, &broken).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the broken file never showed its error",
+        |app| app.document().error().is_some(),
+    );
+    harness.run_steps(3);
+    harness.get_by_label_contains("does not load");
+    assert_eq!(harness.state().picture_rect(), before, "with the banner");
+    std::fs::write(&path, SCENE).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the fixed file never loaded",
+        |app| app.document().error().is_none(),
+    );
+    harness.run_steps(3);
+    assert_eq!(harness.state().picture_rect(), before, "after it");
+}
+
 #[test]
 fn a_file_broken_at_launch_opens_with_the_error_and_waits() {
     let broken = SCENE.replace("<model type=\"phong\"/>", "<model type=\"phong\">");

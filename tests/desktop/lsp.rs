@@ -182,7 +182,11 @@ fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
         let mut r = std::io::BufReader::new(stream);
         while let Ok(Some(m)) = editor_link::receive(&mut r) {
             // The app's answer to the cursor: a click on the same object.
-            if let Message::Select { path, object } = &m {
+            if let Message::Select {
+                path,
+                under: Some(editor_link::Under::Object(object)),
+            } = &m
+            {
                 let show = Message::Show {
                     path: path.clone(),
                     object: *object,
@@ -197,6 +201,11 @@ fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
         .lines()
         .position(|l| l.contains("green=\"1\""))
         .unwrap();
+    // Then the camera's line: in no object's element.
+    let leave = TWO_SPHERES
+        .lines()
+        .position(|l| l.contains("<camera"))
+        .unwrap();
     let o = neovim(
         dir.path(),
         "show.lua",
@@ -205,6 +214,7 @@ fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
             ("ROL_FILE", scene.as_os_str()),
             ("ROL_OUT", out.as_os_str()),
             ("ROL_CURSOR_LINE", line.to_string().as_ref()),
+            ("ROL_LEAVE_LINE", leave.to_string().as_ref()),
         ],
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
@@ -215,10 +225,25 @@ fn the_cursor_selects_in_the_app_and_a_click_shows_the_element() {
     assert!(
         said.contains(&Message::Select {
             path: path.clone(),
-            object: 1
+            under: Some(editor_link::Under::Object(1))
         }),
         "{said:?}"
     );
+    // The cursor left every element: the app is told to select nothing,
+    // and the editor highlights nothing.
+    let selects: Vec<&Message> = said
+        .iter()
+        .filter(|m| matches!(m, Message::Select { .. }))
+        .collect();
+    assert_eq!(
+        selects.last(),
+        Some(&&Message::Select {
+            path: path.clone(),
+            under: None
+        }),
+        "{said:?}"
+    );
+    assert_eq!(got["left_highlight"], serde_json::json!([]), "{got}");
     // The second sphere's start tag, after "  <!-- é😀 -->": 14 UTF-16
     // units (é is one, 😀 two; 16 bytes, 13 characters) on line 4.
     let tag_line = 4;

@@ -5,8 +5,9 @@
 -- (0-based), column 4, and asks for highlights there as editors do when
 -- the cursor moves, records the
 -- answer, then waits until a server asks it to show a document, does so
--- (cursor on the selection's start) and records the request as JSON to
--- $ROL_OUT; then quits.
+-- (cursor on the selection's start), moves the cursor out of every element
+-- when $ROL_LEAVE_LINE is set, and records the requests and answers as
+-- JSON to $ROL_OUT; then quits.
 local out = {}
 local handlers = {
   ['window/showDocument'] = function(_, result, ctx)
@@ -39,6 +40,15 @@ vim.api.nvim_win_set_cursor(0, { tonumber(os.getenv('ROL_CURSOR_LINE')) + 1, 4 }
 local r = vim.lsp.buf_request_sync(buf, 'textDocument/documentHighlight', vim.lsp.util.make_position_params(), 5000)
 for _, answer in pairs(r or {}) do out.highlight = answer.result end
 out.shown = vim.wait(tonumber(os.getenv('ROL_WAIT_SHOW') or '10000'), function() return out.show ~= nil end, 20)
+-- Then, if asked, the cursor leaves to line $ROL_LEAVE_LINE (0-based),
+-- in no object's element, and asks for highlights there.
+if os.getenv('ROL_LEAVE_LINE') then
+  vim.api.nvim_win_set_cursor(0, { tonumber(os.getenv('ROL_LEAVE_LINE')) + 1, 2 })
+  local left = vim.lsp.buf_request_sync(buf, 'textDocument/documentHighlight', vim.lsp.util.make_position_params(), 5000)
+  for _, answer in pairs(left or {}) do out.left_highlight = answer.result end
+  -- Time for the server to tell the app.
+  vim.wait(300, function() return false end, 50)
+end
 local f = io.open(os.getenv('ROL_OUT') .. '.part', 'w')
 f:write(vim.fn.json_encode(out))
 f:close()

@@ -51,7 +51,7 @@ use lsp_types::{
     SymbolKind, TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
 };
 use rayoflight::desktop::editor_link;
-use rayoflight::scene::language::{self, Lines, Place};
+use rayoflight::scene::language::{self, Lines, Place, Under};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -349,8 +349,9 @@ fn diagnosis_thread(
     let (tx, rx) = mpsc::channel::<Changed>();
     std::thread::spawn(move || {
         let mut apps = Apps::new(from_apps);
-        // The object each document's cursor was last in, told to the apps.
-        let mut told: HashMap<String, Option<usize>> = HashMap::new();
+        // The object or light each document's cursor was last in, told to
+        // the apps.
+        let mut told: HashMap<String, Option<Under>> = HashMap::new();
         let mut last = Instant::now() - DIAGNOSE_EVERY;
         loop {
             let first = match rx.recv_timeout(LOOK_FOR_APPS_EVERY) {
@@ -397,14 +398,15 @@ fn diagnosis_thread(
                     }
                     Changed::Text(key, uri) => (key, uri),
                     Changed::Cursor(key, uri, offset, id) => {
-                        let answer = in_object(&documents, &key, offset);
-                        let object = answer.as_ref().map(|(object, _)| *object);
-                        if let Some(object) = object
-                            && told.get(&key) != Some(&Some(object))
-                        {
-                            apps.selected(&uri, object);
+                        let answer = under_cursor(&documents, &key, offset);
+                        let under = answer.as_ref().map(|(under, _)| *under);
+                        // The apps hear of a move into another element or
+                        // out of every one (not of the first cursor in
+                        // none).
+                        if told.get(&key).copied().flatten() != under {
+                            apps.selected(&uri, under);
                         }
-                        told.insert(key, object);
+                        told.insert(key, under);
                         let highlights: Vec<DocumentHighlight> = answer
                             .map(|(_, range)| DocumentHighlight {
                                 range,
@@ -465,10 +467,10 @@ fn diagnosis_thread(
 
 /// The object whose element holds byte `offset` of the document, and its
 /// start tag's range: scanned in a copy, the message loop going on.
-fn in_object(documents: &Documents, key: &str, offset: usize) -> Option<(usize, Range)> {
+fn under_cursor(documents: &Documents, key: &str, offset: usize) -> Option<(Under, Range)> {
     let (text, lines) = lock(documents).get(key)?.copy();
-    let (object, tag) = language::object_at(&text, offset)?;
-    Some((object, range(&text, &lines, tag)))
+    let (under, tag) = language::element_at(&text, offset)?;
+    Some((under, range(&text, &lines, tag)))
 }
 
 /// What an app says over the link, handled on that connection's thread.
@@ -662,9 +664,9 @@ impl Apps {
         }
     }
 
-    fn selected(&mut self, uri: &Uri, object: usize) {
+    fn selected(&mut self, uri: &Uri, under: Option<Under>) {
         if let Some(path) = editor_link::uri_path(uri.as_str()) {
-            self.tell(&editor_link::Message::Select { path, object });
+            self.tell(&editor_link::Message::Select { path, under });
         }
     }
 }

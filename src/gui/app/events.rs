@@ -219,10 +219,11 @@ impl RayOfLightApp {
 
     /// The user's editor's unsaved text of the open file is shown as it
     /// comes, and the document again when the editor saves or closes it;
-    /// the object its cursor is in is selected (and outlined). Messages
-    /// about other files are not this window's.
+    /// the object or light its cursor is in is selected (outlined, its
+    /// marker ringed), and nothing once the cursor leaves every one.
+    /// Messages about other files are not this window's.
     fn editor_said(&mut self, message: crate::desktop::editor_link::Message) {
-        use crate::desktop::editor_link::Message;
+        use crate::desktop::editor_link::{Message, Under};
         let ours = |path: &Path| {
             self.doc
                 .path()
@@ -237,13 +238,18 @@ impl RayOfLightApp {
                 }
                 self.after_edit();
             }
-            Message::Select { path, object } if ours(&path) => {
+            Message::Select { path, under } if ours(&path) => match under {
                 // The object as the panel numbers it now (objects added or
                 // deleted in the panel since the file was read move it).
-                if let Some(n) = self.doc.object_from_text(object) {
-                    self.selection = Selection::revealed(Some(n));
+                Some(Under::Object(object)) => {
+                    if let Some(n) = self.doc.object_from_text(object) {
+                        self.selection = Selection::revealed(Some(n));
+                    }
                 }
-            }
+                Some(Under::Light(light)) => self.selection = Selection::light(light),
+                // Out of every object and light: nothing outlined.
+                None => self.selection = Selection::default(),
+            },
             Message::Released { path } if ours(&path) && self.doc.is_following() => {
                 self.keeping_selection(|app| app.doc.unfollow());
                 self.notify("your editor let go of its text: the file again".into());

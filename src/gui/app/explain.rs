@@ -206,9 +206,8 @@ impl RayOfLightApp {
             });
         if let Some((object, field)) = select {
             self.selection = Selection {
-                object: Some(object),
-                reveal: true,
                 field,
+                ..Selection::revealed(Some(object))
             };
         }
         if !open {

@@ -406,6 +406,11 @@ impl RayOfLightApp {
     }
 
     /// The object selected in the picture or the panel.
+    /// The light selected (the editor's cursor in its element), if any.
+    pub fn selected_light(&self) -> Option<usize> {
+        self.selection.light
+    }
+
     pub fn selected_object(&self) -> Option<usize> {
         self.selection.object
     }
@@ -418,6 +423,11 @@ impl RayOfLightApp {
     /// The field marked in the panel (a term of an explained pixel).
     pub fn marked_field(&self) -> Option<crate::scene::edit::Field> {
         self.selection.field
+    }
+
+    /// Where the picture was drawn in the last frame (points), if it was.
+    pub fn picture_rect(&self) -> Option<egui::Rect> {
+        self.screen.shown_at
     }
 
     pub fn preview(&self) -> &Preview {
@@ -501,7 +511,6 @@ impl RayOfLightApp {
             self.status.title = title;
         }
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
-        self.error_banner(ui);
         self.status_bar(ui);
         self.side_panel(ui);
         self.picture(ui);

@@ -179,6 +179,10 @@ impl RayOfLightApp {
                 Color32::from_rgb(255, 220, 60),
                 egui::Stroke::new(if strong { 2.5 } else { 1.5 }, Color32::BLACK),
             );
+            // Selected (the editor's cursor in its element): a ring.
+            if self.selection.light == Some(n) {
+                painter.circle_stroke(pos, MARKER + 4.0, egui::Stroke::new(2.0, Color32::WHITE));
+            }
             painter.text(
                 pos + Vec2::new(MARKER + 2.0, -MARKER),
                 egui::Align2::LEFT_BOTTOM,

@@ -24,6 +24,8 @@ pub(super) struct Screen {
     pub(super) interaction: super::Interaction,
     /// When the wheel last moved the camera, while its undo step is open.
     pub(super) wheel_at: Option<std::time::Instant>,
+    /// Where the picture was drawn in the last frame.
+    pub(super) shown_at: Option<Rect>,
 }
 
 /// How the picture is placed in the central area.
@@ -71,6 +73,7 @@ impl Default for View {
 impl RayOfLightApp {
     pub(super) fn picture(&mut self, ui: &mut egui::Ui) {
         egui::CentralPanel::default().show(ui, |ui| {
+            self.error_banner(ui.ctx(), ui.available_rect_before_wrap());
             let (cleared, dirty) = self.preview.take_dirty();
             // At the zoom of the last frame (one frame late when it
             // changes).
@@ -135,6 +138,7 @@ impl RayOfLightApp {
                 ),
                 size,
             );
+            self.screen.shown_at = Some(rect);
             // Image pixels (x, y) under a screen position.
             let to_image = |pos: Pos2| {
                 let rel = (pos - rect.min) / size * image_size;

@@ -53,25 +53,33 @@ impl FrameStats {
 }
 
 impl RayOfLightApp {
-    pub(super) fn error_banner(&mut self, ui: &mut egui::Ui) {
+    /// The error banner, over the top of the picture's `area` (a layer
+    /// above it, not a panel that pushes it down): the picture never moves
+    /// while the text in the editor is broken and fixed again.
+    pub(super) fn error_banner(&mut self, ctx: &egui::Context, area: egui::Rect) {
         let Some(error) = self.doc.error().map(str::to_owned) else {
             return;
         };
-        egui::Panel::top("error-banner")
-            .frame(
+        let what = if self.doc.is_following() {
+            "Your editor's unsaved text does not load; showing the last good scene."
+        } else if self.doc.is_placeholder() {
+            "The file does not load yet; it will show as soon as it does."
+        } else {
+            "The last save does not load; showing the last good scene."
+        };
+        egui::Area::new(egui::Id::unique("error-banner"))
+            .order(egui::Order::Foreground)
+            .fixed_pos(area.min)
+            .interactable(false)
+            .show(ctx, |ui| {
+                ui.set_width(area.width());
                 egui::Frame::new()
                     .fill(Color32::from_rgb(120, 20, 20))
-                    .inner_margin(6.0),
-            )
-            .show(ui, |ui| {
-                let what = if self.doc.is_following() {
-                    "Your editor's unsaved text does not load; showing the last good scene."
-                } else if self.doc.is_placeholder() {
-                    "The file does not load yet; it will show as soon as it does."
-                } else {
-                    "The last save does not load; showing the last good scene."
-                };
-                ui.colored_label(Color32::WHITE, format!("{what}\n{error}"));
+                    .inner_margin(6.0)
+                    .show(ui, |ui| {
+                        ui.set_width(area.width() - 12.0);
+                        ui.colored_label(Color32::WHITE, format!("{what}\n{error}"));
+                    });
             });
     }
 

@@ -29,10 +29,14 @@ use egui::{CollapsingHeader, Ui};
 mod form;
 use form::Form;
 
-/// The object picked in the picture.
+/// The object picked in the picture, or the object or light the
+/// editor's cursor is in.
 #[derive(Debug, Default, Clone, Copy, PartialEq, Eq)]
 pub struct Selection {
     pub object: Option<usize>,
+    /// A light selected (its marker drawn so): the editor's cursor is in
+    /// its element.
+    pub light: Option<usize>,
     /// Open and scroll to it once (set by a pick, cleared when done).
     pub reveal: bool,
     /// A value of the object marked in its editor (a term of an
@@ -47,7 +51,15 @@ impl Selection {
         Selection {
             object,
             reveal: true,
-            field: None,
+            ..Selection::default()
+        }
+    }
+
+    /// Light `light` selected: its marker shows it.
+    pub fn light(light: usize) -> Selection {
+        Selection {
+            light: Some(light),
+            ..Selection::default()
         }
     }
 }
