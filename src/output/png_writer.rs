@@ -73,14 +73,33 @@ pub fn write_png<W: Write>(
             })
             .collect::<io::Result<Vec<Vec<u8>>>>()
     };
-    let mut first = 0;
-    let mut read = read_batch(first, &mut next_row)?;
-    while first < bands {
-        let count = read.len();
-        // Compress this batch while the next is read.
-        let (compressed, next) = rayon::join(
-            || {
-                read.par_iter()
+    // A thread of its own reads the rows, a batch ahead, while the
+    // pool's threads compress the batch before: reading (decoding parts,
+    // for `assemble`) never holds one of the pool's threads.
+    std::thread::scope(|scope| -> io::Result<()> {
+        let (send, receive) = std::sync::mpsc::sync_channel::<io::Result<Vec<Vec<u8>>>>(1);
+        let reader = std::thread::Builder::new()
+            .name("png rows".into())
+            .spawn_scoped(scope, move || {
+                let mut first = 0;
+                while first < bands {
+                    let batch = read_batch(first, &mut next_row);
+                    let failed = batch.is_err();
+                    first += batch.as_ref().map_or(0, Vec::len);
+                    // The writer stopped (an error): nothing more to read.
+                    if send.send(batch).is_err() || failed {
+                        return;
+                    }
+                }
+            })?;
+        let mut first = 0;
+        let written = (|| {
+            while first < bands {
+                let read = receive
+                    .recv()
+                    .map_err(|_| io::Error::other("the rows' reader stopped"))??;
+                let compressed = read
+                    .par_iter()
                     .enumerate()
                     .map(|(k, pixels)| {
                         let above = match k {
@@ -89,22 +108,22 @@ pub fn write_png<W: Write>(
                         };
                         compress_band(above, pixels, row_bytes, first + k + 1 == bands)
                     })
-                    .collect::<io::Result<Vec<Band>>>()
-            },
-            || match first + count < bands {
-                true => read_batch(first + count, &mut next_row),
-                false => Ok(Vec::new()),
-            },
-        );
-        for band in compressed? {
-            idat.put(band)?;
-        }
-        if let Some(last) = read.last() {
-            above.copy_from_slice(&last[last.len() - row_bytes..]);
-        }
-        first += count;
-        read = next?;
-    }
+                    .collect::<io::Result<Vec<Band>>>()?;
+                for band in compressed {
+                    idat.put(band)?;
+                }
+                if let Some(last) = read.last() {
+                    above.copy_from_slice(&last[last.len() - row_bytes..]);
+                }
+                first += read.len();
+            }
+            Ok(())
+        })();
+        // A writer that stopped lets the reader's next send fail.
+        drop(receive);
+        let _ = reader.join();
+        written
+    })?;
     idat.finish()
 }
 
