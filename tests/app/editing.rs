@@ -515,6 +515,77 @@ fn the_editors_cursor_selects_an_object_a_light_or_nothing() {
     );
 }
 
+/// Two editors hold unsaved text of the file: when the one on screen lets
+/// go (quits), the other's newest text is shown again, and the file only
+/// once neither holds any.
+#[test]
+fn the_app_follows_any_editor_that_still_holds_unsaved_text() {
+    use rayoflight::desktop::editor_link::{self, Message};
+    let (dir, path) = common::scene_file("scene.xml", SCENE);
+    let mut harness = app_on(Document::open(&path).unwrap());
+    let folder = editor_link::folder_in(&dir.path().join("run")).unwrap();
+    let listener = editor_link::Listener::bind(&folder).unwrap();
+    let socket = listener.path().to_owned();
+    harness.state_mut().listen_to_editors(listener);
+    let path = std::fs::canonicalize(&path).unwrap();
+    let with_ka = |ka: &str| SCENE.replacen("ka=\"0.2\"", &format!("ka=\"{ka}\""), 1);
+    let shown_ka = |app: &RayOfLightApp| app.document().scene().objects[0].material.ka;
+    let mut first = editor_link::connect(&socket).unwrap();
+    let buffer = |text: String| Message::Buffer {
+        path: path.clone(),
+        text,
+    };
+    editor_link::send(&mut first, &buffer(with_ka("0.3"))).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the first editor's text",
+        |app| shown_ka(app) == 0.3,
+    );
+    let mut second = editor_link::connect(&socket).unwrap();
+    editor_link::send(&mut second, &buffer(with_ka("0.4"))).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the second editor's text",
+        |app| shown_ka(app) == 0.4,
+    );
+    // The first types again, then the second quits: the first's newest.
+    editor_link::send(&mut first, &buffer(with_ka("0.5"))).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the first editor's newer text",
+        |app| shown_ka(app) == 0.5,
+    );
+    editor_link::send(&mut second, &buffer(with_ka("0.6"))).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the second editor's newer text",
+        |app| shown_ka(app) == 0.6,
+    );
+    drop(second);
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the first editor's text again",
+        |app| shown_ka(app) == 0.5 && app.document().is_following(),
+    );
+    drop(first);
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the file again",
+        |app| shown_ka(app) == 0.2 && !app.document().is_following(),
+    );
+    assert_eq!(
+        read(&dir.path().join("scene.xml")),
+        SCENE,
+        "nothing written"
+    );
+}
+
 /// The error banner lies over the picture: breaking the file and fixing
 /// it again never moves the picture.
 #[test]

@@ -211,7 +211,7 @@ impl RayOfLightApp {
                 Background::Exported(path, result) => self.exported(&path, result),
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
                 Background::Opened(id, result) => self.opened(id, *result),
-                Background::Editor(message) => self.editor_said(message),
+                Background::Editor(connection, message) => self.editor_said(connection, message),
                 Background::Explained(id, explanation) => self.explained(id, explanation),
             }
         }
@@ -222,7 +222,7 @@ impl RayOfLightApp {
     /// the object or light its cursor is in is selected (outlined, its
     /// marker ringed), and nothing once the cursor leaves every one.
     /// Messages about other files are not this window's.
-    fn editor_said(&mut self, message: crate::desktop::editor_link::Message) {
+    fn editor_said(&mut self, connection: u64, message: crate::desktop::editor_link::Message) {
         use crate::desktop::editor_link::{Message, Under};
         let ours = |path: &Path| {
             self.doc
@@ -232,7 +232,17 @@ impl RayOfLightApp {
         match message {
             Message::Buffer { path, text } if ours(&path) => {
                 let was = self.doc.is_following();
-                self.keeping_selection(|app| app.doc.follow(text));
+                let held = self.keeping_selection(|app| app.doc.follow(text));
+                // This editor's text is the newest: last in the list.
+                self.editors.holding.retain(|(c, _)| *c != connection);
+                match held {
+                    Some(held) => self.editors.holding.push((connection, held)),
+                    // This editor's text is the file's again (it saved):
+                    // another editor's unsaved text, if one holds any.
+                    None => {
+                        self.show_newest_held();
+                    }
+                }
                 if !was && self.doc.is_following() {
                     self.notify("the panel waits while your editor has unsaved text".into());
                 }
@@ -250,13 +260,42 @@ impl RayOfLightApp {
                 // Out of every object and light: nothing outlined.
                 None => self.selection = Selection::default(),
             },
-            Message::Released { path } if ours(&path) && self.doc.is_following() => {
-                self.keeping_selection(|app| app.doc.unfollow());
-                self.notify("your editor let go of its text: the file again".into());
+            Message::Released { path } if ours(&path) => {
+                let on_screen = self.editors.holding.last().map(|(c, _)| *c);
+                self.editors.holding.retain(|(c, _)| *c != connection);
+                if on_screen != Some(connection) && !self.editors.holding.is_empty() {
+                    // Another editor's text is on screen: it stays.
+                    return;
+                }
+                match self.show_newest_held() {
+                    // Another editor still holds unsaved text: its newest
+                    // is shown again.
+                    true => self.notify(
+                        "an editor let go of its text: another editor's unsaved text".into(),
+                    ),
+                    false if self.doc.is_following() => {
+                        self.keeping_selection(|app| app.doc.unfollow());
+                        self.notify("your editor let go of its text: the file again".into());
+                    }
+                    false => return,
+                }
                 self.after_edit();
             }
             _ => {}
         }
+    }
+
+    /// Shows again the newest unsaved text an editor still holds of the
+    /// open file; false when none does.
+    fn show_newest_held(&mut self) -> bool {
+        let Some((editor, held)) = self.editors.holding.pop() else {
+            return false;
+        };
+        let text = held.text().into_owned();
+        if let Some(held) = self.keeping_selection(|app| app.doc.follow(text)) {
+            self.editors.holding.push((editor, held));
+        }
+        true
     }
 
     pub(super) fn file_event(&mut self, event: FileEvent) {

@@ -80,9 +80,9 @@ enum Background {
     /// picture).
     Explained(u64, Option<Box<crate::render::Explanation>>),
     /// What the user's editor said over the editor link
-    /// ([`crate::desktop::editor_link`]): its unsaved text of a file, or that it
-    /// let go of it.
-    Editor(crate::desktop::editor_link::Message),
+    /// ([`crate::desktop::editor_link`]), on the connection numbered so:
+    /// its unsaved text of a file, or that it let go of it.
+    Editor(u64, crate::desktop::editor_link::Message),
 }
 
 /// What the mouse is doing on the picture, or will do at the next click:
@@ -166,6 +166,11 @@ struct EditorLink {
     failed: (Sender<String>, Receiver<String>),
     socket: Option<PathBuf>,
     peers: crate::desktop::editor_link::Peers,
+    /// The editors (by connection) that hold unsaved text of the open
+    /// file, the one on screen last, each with its newest text: when it
+    /// lets go, the one before is shown again, and the file only when none
+    /// holds any.
+    holding: Vec<(u64, crate::scene::source::Source)>,
 }
 
 /// What the app remembers between runs: the recent files, and the window
@@ -219,6 +224,7 @@ impl RayOfLightApp {
                 failed: mpsc::channel(),
                 socket: None,
                 peers: crate::desktop::editor_link::Peers::default(),
+                holding: Vec::new(),
             },
             kept: Kept { recent, settings },
             hot_exit: journal.map(hot_exit::HotExit::new),
@@ -262,7 +268,10 @@ impl RayOfLightApp {
         let _ = std::thread::Builder::new()
             .name("editor link".into())
             .spawn(move || {
+                let mut connections = 0u64;
                 while let Ok(stream) = listener.accept() {
+                    connections += 1;
+                    let connection = connections;
                     let (tx, ctx, editors) = (tx.clone(), ctx.clone(), editors.clone());
                     let _ = std::thread::Builder::new()
                         .name("editor".into())
@@ -281,7 +290,7 @@ impl RayOfLightApp {
                                 {
                                     sent.push(path.clone());
                                 }
-                                if tx.send(Background::Editor(message)).is_err() {
+                                if tx.send(Background::Editor(connection, message)).is_err() {
                                     return;
                                 }
                                 ctx.request_repaint();
@@ -290,7 +299,10 @@ impl RayOfLightApp {
                                 editors.remove(peer);
                             }
                             for path in sent {
-                                let _ = tx.send(Background::Editor(Message::Released { path }));
+                                let _ = tx.send(Background::Editor(
+                                    connection,
+                                    Message::Released { path },
+                                ));
                             }
                             ctx.request_repaint();
                         });
@@ -347,6 +359,8 @@ impl RayOfLightApp {
 
     fn replace_document(&mut self, doc: Document) {
         self.doc = doc;
+        // Editors' texts were of the other file.
+        self.editors.holding.clear();
         self.selection = Selection::default();
         self.screen.view = View::default();
         self.restore_journal();

@@ -300,19 +300,24 @@ impl Document {
     /// document (which waits, unsaved edits and all): what `rayoflight lsp`
     /// hands over as it is typed. A text that does not load keeps the last
     /// one that did on screen, with its error; the file's own text ends
-    /// the following. Nothing is written.
-    pub fn follow(&mut self, text: String) {
+    /// the following. Nothing is written. Returns the text as held (shared,
+    /// packed when big: no copy), for a caller that may show it again
+    /// later (another editor's text replaced it meanwhile), or `None` when
+    /// it is the file's.
+    pub fn follow(&mut self, text: String) -> Option<Source> {
         if self.file.source.is(&text) {
             self.unfollow();
-            return;
+            return None;
         }
         let path = self.path.clone().unwrap_or_default();
         let like = &self.on_screen().edited.scene().objects;
-        match scene::parse_sharing(&text, &path, like) {
+        let held = match scene::parse_sharing(&text, &path, like) {
             Ok(scene) => {
                 let labels = Arc::new(names::object_labels(&text));
-                self.editor = Some(Version::new(Source::new(text), scene, labels));
+                let held = Source::new(text);
+                self.editor = Some(Version::new(held.clone(), scene, labels));
                 self.editor_error = None;
+                held
             }
             Err(e) => {
                 // The first text that does not load: the document's on
@@ -321,9 +326,11 @@ impl Document {
                     self.editor = Some(self.shown.clone());
                 }
                 self.editor_error = Some(e.to_string());
+                Source::new(text)
             }
-        }
+        };
         self.generation = next_generation();
+        Some(held)
     }
 
     /// Back to the document: the editor saved or closed the file.
