@@ -881,6 +881,106 @@ fn the_window_follows_the_editors_unsaved_text() {
     assert_eq!(std::fs::read_to_string(path).unwrap(), TWO_SPHERES);
 }
 
+/// The app started by a process that is not the test's child, ended
+/// with SIGTERM when dropped.
+struct Pid(u32);
+
+impl Drop for Pid {
+    fn drop(&mut self) {
+        let _ = Command::new("kill").arg(self.0.to_string()).status();
+    }
+}
+
+/// The preview from the editor, set up as the README says: Neovim 0.7
+/// with the README's `init.lua` as written turns the red sphere blue
+/// without saving and runs `:RayOfLightPreview`; the language server
+/// starts the app on the file, and the window shows the blue sphere of the
+/// unsaved buffer, the file untouched.
+#[test]
+fn the_readmes_neovim_set_up_previews_the_unsaved_buffer() {
+    if !common::tool("nvim", "neovim") {
+        return;
+    }
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let (_xvfb, display) = start_xvfb();
+    let shots = shots_folder();
+    std::fs::create_dir_all(&shots).unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("preview.xml");
+    std::fs::write(&path, TWO_SPHERES).unwrap();
+    let run = dir.path().join("run");
+    std::fs::create_dir(&run).unwrap();
+    std::fs::set_permissions(&run, std::os::unix::fs::PermissionsExt::from_mode(0o700)).unwrap();
+    let readme =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md")).unwrap();
+    let init = readme
+        .split("Neovim 0.7 or later")
+        .nth(1)
+        .and_then(|after| after.split("```lua\n").nth(1))
+        .and_then(|block| block.split("```").next())
+        .expect("the README's Neovim set-up");
+    std::fs::write(dir.path().join("init.lua"), init).unwrap();
+    let bin = Path::new(env!("CARGO_BIN_EXE_rayoflight"))
+        .parent()
+        .unwrap();
+    let search = format!(
+        "{}:{}",
+        bin.display(),
+        std::env::var("PATH").unwrap_or_default()
+    );
+    let line = TWO_SPHERES
+        .lines()
+        .position(|l| l.contains(r#"<color red="1" green="0""#))
+        .unwrap();
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/lsp/preview.lua");
+    let _editor = Killed(
+        Command::new("nvim")
+            .args(["--headless", "-i", "NONE", "-u", "init.lua", "-S"])
+            .arg(&script)
+            .current_dir(dir.path())
+            .env("PATH", search)
+            .env("HOME", dir.path())
+            .env("XDG_RUNTIME_DIR", &run)
+            .env("XDG_CONFIG_HOME", dir.path().join("config"))
+            .env("XDG_STATE_HOME", dir.path().join("state"))
+            .env("XDG_DATA_HOME", dir.path().join("data"))
+            .env("DISPLAY", &display)
+            .env_remove("WAYLAND_DISPLAY")
+            .env("LIBGL_ALWAYS_SOFTWARE", "1")
+            .env("ROL_FILE", &path)
+            .env("ROL_LINE", line.to_string())
+            .env("ROL_WAIT", "30000")
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
+    // The app the server started: its socket names its process.
+    let folder = run.join("rayoflight");
+    wait_for_the_link(&folder);
+    let socket = rayoflight::desktop::editor_link::apps(&folder).remove(0);
+    let pid = socket
+        .file_name()
+        .and_then(|n| n.to_str())
+        .and_then(|n| n.strip_prefix("app-")?.strip_suffix(".sock")?.parse().ok())
+        .expect("app-PID.sock");
+    let _app = Pid(pid);
+    wait_for(
+        &display,
+        &shots.join("preview-1-unsaved.png"),
+        Duration::from_secs(20),
+        "the unsaved buffer's blue sphere",
+        |s| centroid(s, BLUE).1 > 500 && centroid(s, RED).1 == 0,
+    );
+    assert_eq!(
+        std::fs::read_to_string(&path).unwrap(),
+        TWO_SPHERES,
+        "the file untouched"
+    );
+}
+
 /// The selected object's outline colour (`gui::app::overlay`).
 const OUTLINE: [u8; 3] = [255, 140, 0];
 

@@ -682,12 +682,16 @@ pub fn hover(text: &str, offset: usize, marks: &mut Marks) -> Option<(String, Ra
 /// One entry of a text's outline.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Symbol {
-    /// As the app's panel names it: `#2 RED sphere`, `light 1`, `camera`.
+    /// As the app's panel names it: `#2 RED sphere`, `light 1`, `camera`;
+    /// a group's: `1000000 objects`, `… 999500 more objects`.
     pub name: String,
     pub kind: SymbolKind,
-    /// The element's bytes, and its start tag's.
+    /// The element's bytes, and its start tag's (a group's: from its first
+    /// element's start to its last one's end, and the first start tag).
     pub range: Range<usize>,
     pub selection: Range<usize>,
+    /// A group's entries ([`symbols`]); none for an element.
+    pub children: Vec<Symbol>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -698,37 +702,166 @@ pub enum SymbolKind {
     Model,
 }
 
-/// The objects, lights, camera and model of `text`, in file order (none
-/// when it is not well-formed XML).
+/// The most objects, and the most lights, an outline lists one by one
+/// ([`symbols`]): about what an editor's outline shows at once, and what
+/// it can draw quickly. Past it they are found by name ([`find_symbols`]).
+pub const SYMBOLS_LISTED: usize = 500;
+
+/// The outline of `text`: its root's children in file order, named as the
+/// app's panel names them; none when it is not well-formed XML.
+///
+/// Objects, or lights, over [`SYMBOLS_LISTED`] are one group in place of
+/// the first (`1000000 objects`), holding the first [`SYMBOLS_LISTED`] and
+/// one entry for the rest (`… 999500 more objects`, spanning them): an
+/// outline of a million spheres is 600 entries, not 218 MB of JSON, and
+/// names are made for those only.
 pub fn symbols(text: &str) -> Vec<Symbol> {
+    let elements = layout::top_level(text);
+    let (objects, lights) = elements
+        .iter()
+        .fold((0, 0), |(o, l), e| match kind_of(e.0) {
+            SymbolKind::Object => (o + 1, l),
+            SymbolKind::Light => (o, l + 1),
+            _ => (o, l),
+        });
+    let count = |kind| match kind {
+        SymbolKind::Object => objects,
+        SymbolKind::Light => lights,
+        _ => 1,
+    };
+    let grouped = |kind| count(kind) > SYMBOLS_LISTED;
     let labels = names::object_labels(text);
-    let (mut objects, mut lights) = (0, 0);
-    layout::top_level(text)
-        .into_iter()
-        .map(|(name, range, selection)| {
-            let (name, kind) = match name {
-                _ if Shape::from_name(name).is_some() => {
-                    objects += 1;
-                    (
-                        names::object_name(objects - 1, name, labels.get(objects - 1)),
-                        SymbolKind::Object,
-                    )
-                }
-                "light" => {
-                    lights += 1;
-                    (format!("light {lights}"), SymbolKind::Light)
-                }
-                "camera" => ("camera".to_owned(), SymbolKind::Camera),
-                other => (other.to_owned(), SymbolKind::Model),
-            };
-            Symbol {
-                name,
-                kind,
-                range,
-                selection,
+    let mut named = Named::default();
+    let mut out: Vec<Symbol> = Vec::new();
+    // Where each kind's group is in `out`, once begun.
+    let mut groups: Vec<(SymbolKind, usize)> = Vec::new();
+    for (name, range, selection) in &elements {
+        let kind = kind_of(name);
+        if !grouped(kind) {
+            out.push(named.symbol(name, kind, range, selection, &labels));
+            named.skip(kind);
+            continue;
+        }
+        let group = match groups.iter().find(|(k, _)| *k == kind) {
+            Some(&(_, at)) => at,
+            None => {
+                let (noun, total) = (plural(kind), count(kind));
+                groups.push((kind, out.len()));
+                out.push(Symbol {
+                    name: format!("{total} {noun}"),
+                    kind,
+                    range: range.clone(),
+                    selection: selection.clone(),
+                    children: Vec::with_capacity(SYMBOLS_LISTED + 1),
+                });
+                out.len() - 1
             }
-        })
-        .collect()
+        };
+        let group = &mut out[group];
+        group.range.end = range.end;
+        let listed = group.children.len();
+        if listed < SYMBOLS_LISTED {
+            let symbol = named.symbol(name, kind, range, selection, &labels);
+            group.children.push(symbol);
+        } else if listed == SYMBOLS_LISTED {
+            let rest = count(kind) - SYMBOLS_LISTED;
+            group.children.push(Symbol {
+                name: format!("… {rest} more {}", plural(kind)),
+                kind,
+                range: range.clone(),
+                selection: selection.clone(),
+                children: Vec::new(),
+            });
+        } else if let Some(more) = group.children.last_mut() {
+            more.range.end = range.end;
+        }
+        named.skip(kind);
+    }
+    out
+}
+
+/// The symbols of `text` whose names hold `query` (letter case aside),
+/// in file order, at most `limit`, and how many hold it in all: an
+/// outline too long to list is searched by name (`workspace/symbol`).
+pub fn find_symbols(text: &str, query: &str, limit: usize) -> (Vec<Symbol>, usize) {
+    let query = query.to_lowercase();
+    let labels = names::object_labels(text);
+    let mut named = Named::default();
+    let (mut found, mut total) = (Vec::new(), 0);
+    for (name, range, selection) in layout::top_level(text) {
+        let kind = kind_of(name);
+        let symbol = named.symbol(name, kind, &range, &selection, &labels);
+        named.skip(kind);
+        if symbol.name.to_lowercase().contains(&query) {
+            total += 1;
+            if found.len() < limit {
+                found.push(symbol);
+            }
+        }
+    }
+    (found, total)
+}
+
+/// The kind of a root's child named `name`.
+fn kind_of(name: &str) -> SymbolKind {
+    match name {
+        _ if Shape::from_name(name).is_some() => SymbolKind::Object,
+        "light" => SymbolKind::Light,
+        "camera" => SymbolKind::Camera,
+        _ => SymbolKind::Model,
+    }
+}
+
+/// A kind's elements as a group names them.
+fn plural(kind: SymbolKind) -> &'static str {
+    match kind {
+        SymbolKind::Object => "objects",
+        SymbolKind::Light => "lights",
+        SymbolKind::Camera => "cameras",
+        SymbolKind::Model => "models",
+    }
+}
+
+/// The objects and lights named so far, in file order: the next one's
+/// number.
+#[derive(Default)]
+struct Named {
+    objects: usize,
+    lights: usize,
+}
+
+impl Named {
+    /// The symbol of element `name` (of `kind`), the next of its kind.
+    fn symbol(
+        &self,
+        name: &str,
+        kind: SymbolKind,
+        range: &Range<usize>,
+        selection: &Range<usize>,
+        labels: &names::Labels,
+    ) -> Symbol {
+        let name = match kind {
+            SymbolKind::Object => names::object_name(self.objects, name, labels.get(self.objects)),
+            SymbolKind::Light => format!("light {}", self.lights + 1),
+            _ => name.to_owned(),
+        };
+        Symbol {
+            name,
+            kind,
+            range: range.clone(),
+            selection: selection.clone(),
+            children: Vec::new(),
+        }
+    }
+
+    /// Counts one more element of `kind`.
+    fn skip(&mut self, kind: SymbolKind) {
+        match kind {
+            SymbolKind::Object => self.objects += 1,
+            SymbolKind::Light => self.lights += 1,
+            _ => {}
+        }
+    }
 }
 
 /// The objects' elements of `text` (spheres and planes, in file order, as
@@ -1078,6 +1211,41 @@ mod tests {
             ["#1 RED ball sphere", "#2 plane", "light 1", "camera"]
         );
         assert_eq!(&text[s[0].range.clone()], "<sphere/>");
+        assert!(s.iter().all(|s| s.children.is_empty()));
+    }
+
+    #[test]
+    fn an_outline_too_long_to_list_is_grouped_and_searched_by_name() {
+        let n = SYMBOLS_LISTED + 7;
+        let mut text = String::from("<scene>\n<light x=\"0\" y=\"0\" z=\"0\"/>\n");
+        for _ in 0..n {
+            text.push_str("<sphere/>\n");
+        }
+        text.push_str("<camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>\n</scene>");
+        let s = symbols(&text);
+        let names: Vec<&str> = s.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["light 1", &format!("{n} objects"), "camera"]);
+        let group = &s[1];
+        assert_eq!(group.children.len(), SYMBOLS_LISTED + 1);
+        assert_eq!(group.children[0].name, "#1 sphere");
+        assert_eq!(
+            group.children[SYMBOLS_LISTED - 1].name,
+            format!("#{SYMBOLS_LISTED} sphere")
+        );
+        let more = &group.children[SYMBOLS_LISTED];
+        assert_eq!(more.name, "… 7 more objects");
+        // The group spans its objects, the last entry those not listed.
+        let first = text.find("<sphere/>").unwrap();
+        let last = text.rfind("<sphere/>").unwrap() + "<sphere/>".len();
+        assert_eq!(group.range, first..last);
+        assert_eq!(more.range, first + SYMBOLS_LISTED * 10..last);
+        // Any of them is found by name.
+        let (found, total) = find_symbols(&text, "#50", 3);
+        assert_eq!(total, 9, "#50 and #500 to #507");
+        let names: Vec<&str> = found.iter().map(|s| s.name.as_str()).collect();
+        assert_eq!(names, ["#50 sphere", "#500 sphere", "#501 sphere"]);
+        assert_eq!(&text[found[2].range.clone()], "<sphere/>");
+        assert_eq!(find_symbols(&text, "LIGHT", 10).1, 1);
     }
 
     #[test]

@@ -492,3 +492,225 @@ fn a_message_too_large_is_refused_and_the_session_goes_on() {
         }
     }
 }
+
+/// A server on pipes, talked to a message at a time as an editor talks.
+struct Server {
+    child: std::process::Child,
+    input: std::process::ChildStdin,
+    output: std::io::BufReader<std::process::ChildStdout>,
+}
+
+impl Server {
+    /// `rayoflight lsp` with `env` changed, initialized.
+    fn start(env: &[(&str, Option<&str>)]) -> Server {
+        use std::process::Stdio;
+        let mut command = Command::new(env!("CARGO_BIN_EXE_rayoflight"));
+        command
+            .arg("lsp")
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped());
+        for (name, value) in env {
+            match value {
+                Some(value) => command.env(name, value),
+                None => command.env_remove(name),
+            };
+        }
+        let mut child = command.spawn().unwrap();
+        let input = child.stdin.take().unwrap();
+        let output = std::io::BufReader::new(child.stdout.take().unwrap());
+        let mut server = Server {
+            child,
+            input,
+            output,
+        };
+        server.request(
+            0,
+            "initialize",
+            serde_json::json!({"capabilities": {}, "processId": null, "rootUri": null}),
+        );
+        server.notify("initialized", serde_json::json!({}));
+        server
+    }
+
+    fn send(&mut self, message: serde_json::Value) {
+        use std::io::Write;
+        let body = message.to_string();
+        write!(self.input, "Content-Length: {}\r\n\r\n{body}", body.len()).unwrap();
+        self.input.flush().unwrap();
+    }
+
+    fn notify(&mut self, method: &str, params: serde_json::Value) {
+        self.send(serde_json::json!({"jsonrpc": "2.0", "method": method, "params": params}));
+    }
+
+    /// The next message the server sends.
+    fn receive(&mut self) -> serde_json::Value {
+        use std::io::{BufRead, Read};
+        let mut length = 0;
+        loop {
+            let mut line = String::new();
+            assert!(
+                self.output.read_line(&mut line).unwrap() > 0,
+                "the server ended"
+            );
+            if line.trim().is_empty() {
+                break;
+            }
+            if let Some(n) = line.to_ascii_lowercase().strip_prefix("content-length:") {
+                length = n.trim().parse().unwrap();
+            }
+        }
+        let mut body = vec![0; length];
+        self.output.read_exact(&mut body).unwrap();
+        serde_json::from_slice(&body).unwrap()
+    }
+
+    /// The answer to a request, what came before it passed over.
+    fn request(&mut self, id: u64, method: &str, params: serde_json::Value) -> serde_json::Value {
+        self.send(
+            serde_json::json!({"jsonrpc": "2.0", "id": id, "method": method, "params": params}),
+        );
+        loop {
+            let message = self.receive();
+            if message["id"] == id && message.get("method").is_none() {
+                return message;
+            }
+        }
+    }
+
+    /// The first notification of `method` (others passed over).
+    fn notification(&mut self, method: &str) -> serde_json::Value {
+        loop {
+            let message = self.receive();
+            if message["method"] == method {
+                return message["params"].clone();
+            }
+        }
+    }
+
+    fn end(mut self) {
+        self.request(99, "shutdown", serde_json::Value::Null);
+        self.notify("exit", serde_json::Value::Null);
+        assert!(self.child.wait().unwrap().success());
+    }
+}
+
+/// The preview is one command away: a code lens on the root's start tag
+/// and a code action anywhere run `rayoflight.preview`, which starts the
+/// app on the document; with no display to open a window on, the app's
+/// own word comes back to the editor as an error message. A bad argument
+/// is an error answer.
+#[test]
+fn the_preview_command_is_offered_and_starts_the_app() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.xml");
+    fs::write(&scene, rayoflight::EXAMPLE_SCENE).unwrap();
+    let uri = format!("file://{}", scene.display());
+    let mut server = Server::start(&[
+        ("DISPLAY", None),
+        ("WAYLAND_DISPLAY", None),
+        ("XDG_RUNTIME_DIR", Some(dir.path().to_str().unwrap())),
+    ]);
+    let text = rayoflight::EXAMPLE_SCENE;
+    server.notify(
+        "textDocument/didOpen",
+        serde_json::json!({"textDocument": {"uri": uri, "languageId": "xml", "version": 1, "text": text}}),
+    );
+    let document = serde_json::json!({"uri": uri});
+    let lenses = server.request(
+        1,
+        "textDocument/codeLens",
+        serde_json::json!({"textDocument": document}),
+    );
+    let lens = &lenses["result"][0];
+    let root_line = text.lines().position(|l| l.contains("<scene")).unwrap();
+    assert_eq!(lens["range"]["start"]["line"], root_line, "{lenses}");
+    assert_eq!(lens["command"]["command"], "rayoflight.preview");
+    assert_eq!(lens["command"]["arguments"], serde_json::json!([uri]));
+    let range = serde_json::json!({"start": {"line": 5, "character": 0}, "end": {"line": 5, "character": 0}});
+    let actions = server.request(
+        2,
+        "textDocument/codeAction",
+        serde_json::json!({"textDocument": document, "range": range, "context": {"diagnostics": []}}),
+    );
+    assert_eq!(
+        actions["result"][0]["command"], "rayoflight.preview",
+        "{actions}"
+    );
+    let bad = server.request(
+        3,
+        "workspace/executeCommand",
+        serde_json::json!({"command": "rayoflight.preview", "arguments": ["http://example.com/s.xml"]}),
+    );
+    assert!(
+        bad["error"]["message"]
+            .as_str()
+            .unwrap()
+            .contains("not a file"),
+        "{bad}"
+    );
+    let started = server.request(
+        4,
+        "workspace/executeCommand",
+        serde_json::json!({"command": "rayoflight.preview", "arguments": [uri]}),
+    );
+    assert_eq!(started["result"], serde_json::Value::Null, "{started}");
+    let said = server.notification("window/showMessage");
+    assert_eq!(said["type"], 1, "an error: {said}");
+    let message = said["message"].as_str().unwrap();
+    assert!(
+        message.contains("display") && message.contains("--no-gui"),
+        "{message}"
+    );
+    server.end();
+    assert_eq!(fs::read_to_string(&scene).unwrap(), text, "nothing written");
+}
+
+/// An outline too long to list: a million-object scene's symbols are a
+/// group with the first objects and a "more" entry, and any object is
+/// found by name (`workspace/symbol`).
+#[test]
+fn a_long_outline_is_grouped_and_any_object_found_by_name() {
+    let n = 20_000;
+    let mut text = String::from("<scene>\n<camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>\n");
+    for _ in 0..n {
+        text.push_str("<sphere/>\n");
+    }
+    text.push_str("</scene>\n");
+    let uri = "file:///tmp/long.xml";
+    let mut server = Server::start(&[]);
+    server.notify(
+        "textDocument/didOpen",
+        serde_json::json!({"textDocument": {"uri": uri, "languageId": "xml", "version": 1, "text": text}}),
+    );
+    let answer = server.request(
+        1,
+        "textDocument/documentSymbol",
+        serde_json::json!({"textDocument": {"uri": uri}}),
+    );
+    let symbols = answer["result"].as_array().unwrap();
+    let names: Vec<&str> = symbols
+        .iter()
+        .map(|s| s["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["camera", "20000 objects"]);
+    let group = symbols[1]["children"].as_array().unwrap();
+    assert_eq!(group.len(), rayoflight::scene::language::SYMBOLS_LISTED + 1);
+    assert_eq!(group.last().unwrap()["name"], "… 19500 more objects");
+    assert_eq!(group.last().unwrap()["range"]["end"]["line"], n + 1);
+    assert!(
+        answer.to_string().len() < 200_000,
+        "{} bytes",
+        answer.to_string().len()
+    );
+    let found = server.request(
+        2,
+        "workspace/symbol",
+        serde_json::json!({"query": "#12345 "}),
+    );
+    let found = found["result"].as_array().unwrap();
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert_eq!(found[0]["name"], "#12345 sphere");
+    assert_eq!(found[0]["location"]["range"]["start"]["line"], 12345 + 1);
+    server.end();
+}

@@ -1,7 +1,9 @@
 //! `rayoflight lsp`: a language server for scene files on stdin and stdout
 //! (lsp-server's loop, lsp-types' messages), for completion, hover
-//! documentation, errors as you type and an outline in any editor with an
-//! LSP client.
+//! documentation, errors as you type, an outline (grouped past
+//! [`language::SYMBOLS_LISTED`] objects, any of them found by name with
+//! `workspace/symbol`) and the app's preview ([`preview`]) in any editor
+//! with an LSP client.
 //!
 //! What it answers comes from `rayoflight::scene::language`; this module
 //! only speaks the protocol. Positions are UTF-16 code units (the
@@ -25,6 +27,7 @@
 //! `exit`, or when the editor's end of stdin closes; every thread sends through one sender, let go then, so
 //! that the thread writing to the editor ends too.
 
+mod preview;
 mod transport;
 
 use super::failure::Failure;
@@ -37,18 +40,22 @@ use lsp_types::notification::{
 };
 use lsp_types::notification::{LogMessage, ShowMessage};
 use lsp_types::request::{
-    Completion, DocumentHighlightRequest, DocumentSymbolRequest, HoverRequest, Request as _,
-    ShowDocument,
+    CodeActionRequest, CodeLensRequest, Completion, DocumentHighlightRequest,
+    DocumentSymbolRequest, ExecuteCommand, HoverRequest, Request as _, ShowDocument,
+    WorkspaceSymbolRequest,
 };
 use lsp_types::{
+    CodeActionParams, CodeActionProviderCapability, CodeLensOptions, CodeLensParams,
     CompletionItem, CompletionItemKind, CompletionOptions, CompletionParams, CompletionResponse,
     Diagnostic, DiagnosticSeverity, DidChangeTextDocumentParams, DidCloseTextDocumentParams,
     DidOpenTextDocumentParams, DidSaveTextDocumentParams, DocumentHighlight, DocumentHighlightKind,
     DocumentHighlightParams, DocumentSymbol, DocumentSymbolParams, DocumentSymbolResponse,
-    Documentation, Hover, HoverContents, HoverParams, HoverProviderCapability, LogMessageParams,
-    MarkupContent, MarkupKind, MessageType, OneOf, Position, PositionEncodingKind,
-    PublishDiagnosticsParams, Range, ServerCapabilities, ShowDocumentParams, ShowMessageParams,
-    SymbolKind, TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
+    Documentation, ExecuteCommandOptions, ExecuteCommandParams, Hover, HoverContents, HoverParams,
+    HoverProviderCapability, Location, LogMessageParams, MarkupContent, MarkupKind, MessageType,
+    OneOf, Position, PositionEncodingKind, PublishDiagnosticsParams, Range, ServerCapabilities,
+    ShowDocumentParams, ShowMessageParams, SymbolInformation, SymbolKind,
+    TextDocumentSyncCapability, TextDocumentSyncKind, TextDocumentSyncOptions, Uri,
+    WorkspaceSymbolParams, WorkspaceSymbolResponse,
 };
 use rayoflight::desktop::editor_link;
 use rayoflight::scene::language::{self, Lines, Place, Under};
@@ -163,6 +170,15 @@ fn serve() -> Result<(), String> {
         }),
         hover_provider: Some(HoverProviderCapability::Simple(true)),
         document_symbol_provider: Some(OneOf::Left(true)),
+        workspace_symbol_provider: Some(OneOf::Left(true)),
+        code_lens_provider: Some(CodeLensOptions {
+            resolve_provider: Some(false),
+        }),
+        code_action_provider: Some(CodeActionProviderCapability::Simple(true)),
+        execute_command_provider: Some(ExecuteCommandOptions {
+            commands: vec![preview::COMMAND.to_owned()],
+            ..ExecuteCommandOptions::default()
+        }),
         document_highlight_provider: Some(OneOf::Left(true)),
         ..ServerCapabilities::default()
     };
@@ -184,7 +200,7 @@ fn serve() -> Result<(), String> {
     let documents: Documents = Arc::default();
     let shows = client["capabilities"]["window"]["showDocument"]["support"].as_bool() == Some(true);
     let from_apps = from_apps(Arc::clone(&documents), Arc::clone(&send), shows);
-    let diagnose = diagnosis_thread(Arc::clone(&documents), send, from_apps);
+    let diagnose = diagnosis_thread(Arc::clone(&documents), Arc::clone(&send), from_apps);
     let mut shut_down = false;
     for message in &connection.receiver {
         match message {
@@ -207,7 +223,7 @@ fn serve() -> Result<(), String> {
                         Err(response) => *response,
                     }
                 } else {
-                    answer(&documents, request)
+                    answer(&documents, request, &send)
                 };
                 connection
                     .sender
@@ -673,7 +689,7 @@ impl Apps {
 
 /// The answer to a request, or an error response for what it does not
 /// know.
-fn answer(documents: &Documents, request: Request) -> Response {
+fn answer(documents: &Documents, request: Request, send: &Send) -> Response {
     let id = request.id.clone();
     let result = match request.method.as_str() {
         Completion::METHOD => serde_json::from_value::<CompletionParams>(request.params).map(|p| {
@@ -699,20 +715,55 @@ fn answer(documents: &Documents, request: Request) -> Response {
         DocumentSymbolRequest::METHOD => {
             serde_json::from_value::<DocumentSymbolParams>(request.params).map(|p| {
                 json!(with_document(documents, &p.text_document.uri, |d| {
-                    DocumentSymbolResponse::Nested(document_symbols(&d.text, &d.lines))
+                    DocumentSymbolResponse::Nested(document_symbols(
+                        language::symbols(&d.text),
+                        &d.text,
+                        &d.lines,
+                    ))
                 }))
             })
+        }
+        CodeLensRequest::METHOD => {
+            serde_json::from_value::<CodeLensParams>(request.params).map(|p| {
+                let uri = p.text_document.uri;
+                json!(with_document(documents, &uri, |d| preview::lenses(
+                    &d.text, &d.lines, &uri
+                )))
+            })
+        }
+        CodeActionRequest::METHOD => serde_json::from_value::<CodeActionParams>(request.params)
+            .map(|p| {
+                let uri = p.text_document.uri;
+                json!(with_document(documents, &uri, |_| preview::actions(&uri)))
+            }),
+        ExecuteCommand::METHOD => {
+            let p = match serde_json::from_value::<ExecuteCommandParams>(request.params) {
+                Ok(p) => p,
+                Err(e) => return invalid(id, e.to_string()),
+            };
+            if p.command != preview::COMMAND {
+                return invalid(id, format!("rayoflight lsp has no command {}", p.command));
+            }
+            return match preview::start(&p.arguments, Arc::clone(send)) {
+                Ok(()) => Response::new_ok(id, serde_json::Value::Null),
+                Err(message) => invalid(id, message),
+            };
+        }
+        WorkspaceSymbolRequest::METHOD => {
+            serde_json::from_value::<WorkspaceSymbolParams>(request.params)
+                .map(|p| json!(Some(workspace_symbols(documents, &p.query))))
         }
         _ => return unknown(id, &request.method),
     };
     match result {
         Ok(value) => Response::new_ok(id, value),
-        Err(e) => Response::new_err(
-            id,
-            lsp_server::ErrorCode::InvalidParams as i32,
-            e.to_string(),
-        ),
+        Err(e) => invalid(id, e.to_string()),
     }
+}
+
+/// An error answer: what the request asked cannot be done.
+fn invalid(id: RequestId, message: String) -> Response {
+    Response::new_err(id, lsp_server::ErrorCode::InvalidParams as i32, message)
 }
 
 fn unknown(id: RequestId, method: &str) -> Response {
@@ -753,23 +804,65 @@ fn completion_items(text: &str, offset: usize, marks: &mut language::Marks) -> V
 }
 
 #[allow(deprecated)] // DocumentSymbol's `deprecated` field must be given.
-fn document_symbols(text: &str, lines: &Lines) -> Vec<DocumentSymbol> {
-    language::symbols(text)
+fn document_symbols(
+    symbols: Vec<language::Symbol>,
+    text: &str,
+    lines: &Lines,
+) -> Vec<DocumentSymbol> {
+    symbols
         .into_iter()
         .map(|s| DocumentSymbol {
             name: s.name,
             detail: None,
-            kind: match s.kind {
-                language::SymbolKind::Object => SymbolKind::OBJECT,
-                language::SymbolKind::Light => SymbolKind::EVENT,
-                language::SymbolKind::Camera => SymbolKind::FIELD,
-                language::SymbolKind::Model => SymbolKind::PROPERTY,
-            },
+            kind: symbol_kind(s.kind),
             tags: None,
             deprecated: None,
             range: range(text, lines, s.range),
             selection_range: range(text, lines, s.selection),
-            children: None,
+            children: (!s.children.is_empty()).then(|| document_symbols(s.children, text, lines)),
         })
         .collect()
+}
+
+fn symbol_kind(kind: language::SymbolKind) -> SymbolKind {
+    match kind {
+        language::SymbolKind::Object => SymbolKind::OBJECT,
+        language::SymbolKind::Light => SymbolKind::EVENT,
+        language::SymbolKind::Camera => SymbolKind::FIELD,
+        language::SymbolKind::Model => SymbolKind::PROPERTY,
+    }
+}
+
+/// The most symbols a `workspace/symbol` answer holds.
+const WORKSPACE_SYMBOLS: usize = 200;
+
+/// The symbols of the open documents whose names hold `query`: how an
+/// object of an outline too long to list ([`language::SYMBOLS_LISTED`])
+/// is found, at most [`WORKSPACE_SYMBOLS`] in all.
+#[allow(deprecated)] // SymbolInformation's `deprecated` field must be given.
+fn workspace_symbols(documents: &Documents, query: &str) -> WorkspaceSymbolResponse {
+    let all = lock(documents);
+    let mut found = Vec::new();
+    for (key, d) in all.iter() {
+        let Ok(uri) = key.parse::<Uri>() else {
+            continue;
+        };
+        let left = WORKSPACE_SYMBOLS - found.len();
+        let (symbols, _) = language::find_symbols(&d.text, query, left);
+        found.extend(symbols.into_iter().map(|s| SymbolInformation {
+            name: s.name,
+            kind: symbol_kind(s.kind),
+            tags: None,
+            deprecated: None,
+            location: Location {
+                uri: uri.clone(),
+                range: range(&d.text, &d.lines, s.selection),
+            },
+            container_name: None,
+        }));
+        if found.len() >= WORKSPACE_SYMBOLS {
+            break;
+        }
+    }
+    WorkspaceSymbolResponse::Flat(found)
 }

@@ -305,9 +305,9 @@ fn parse_body(
     let pieces = (2 * threads).min(body.len() / PIECE_BYTES);
     if threads > 1
         && pieces > 1
-        && let Some(scene) = in_pieces(body, path, like, progress, pieces)
+        && let Some(parsed) = in_pieces(body, path, like, progress, pieces)
     {
-        return Ok(scene);
+        return parsed;
     }
     if let Some(progress) = progress {
         let len = body.len() as u64;

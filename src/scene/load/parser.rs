@@ -180,6 +180,9 @@ pub(super) struct Parser<'a> {
     events: u32,
     /// How far into `text` `progress` has been told.
     reported: usize,
+    /// Bytes of `text` the reader was moved past unread
+    /// ([`Parser::document_from`]): added to the offsets it counts.
+    skipped: usize,
 }
 
 impl<'a> Parser<'a> {
@@ -204,6 +207,7 @@ impl<'a> Parser<'a> {
             progress: None,
             events: 0,
             reported: 0,
+            skipped: 0,
         }
     }
 
@@ -236,7 +240,9 @@ impl<'a> Parser<'a> {
     }
 
     fn reader_offset(&self) -> usize {
-        usize::try_from(self.reader.buffer_position()).unwrap_or(usize::MAX)
+        usize::try_from(self.reader.buffer_position())
+            .unwrap_or(usize::MAX)
+            .saturating_add(self.skipped)
     }
 
     // ----- events -----
@@ -260,7 +266,9 @@ impl<'a> Parser<'a> {
             let event = match self.reader.read_event() {
                 Ok(event) => event,
                 Err(e) => {
-                    let at = usize::try_from(self.reader.error_position()).unwrap_or(usize::MAX);
+                    let at = usize::try_from(self.reader.error_position())
+                        .unwrap_or(usize::MAX)
+                        .saturating_add(self.skipped);
                     let message = match e {
                         quick_xml::Error::Syntax(e) => e.to_string(),
                         quick_xml::Error::IllFormed(e) => e.to_string(),
@@ -680,8 +688,44 @@ impl<'a> Parser<'a> {
 
     pub(super) fn document(mut self) -> Result<Scene, LoadError> {
         let root = self.root()?;
-        let mut scene = Gathered::default();
-        self.children(&root, "scene", SCENE_CHILDREN, false, |p, e, name| {
+        self.rest_of_document(&root, Gathered::default())
+    }
+
+    /// [`Parser::document`], the root's children before byte `at` of the
+    /// text not read: `before` is what a parse in one has gathered when it
+    /// gets there, and `at` must be a place between two of the root's
+    /// children, as a cut that the pieces before it confirmed
+    /// ([`in_pieces`](super::pieces::in_pieces)). The rest is read as a
+    /// parse in one reads it (the reader holds the root open, as there),
+    /// so what it returns, an error included, is what a parse in one
+    /// returns. `None` where `at` is not after the root's start tag.
+    pub(super) fn document_from(
+        mut self,
+        at: usize,
+        before: Gathered,
+    ) -> Option<Result<Scene, LoadError>> {
+        let root = match self.root() {
+            Ok(root) => root,
+            Err(e) => return Some(Err(e)),
+        };
+        let here = self.reader_offset();
+        if root.empty || at < here {
+            return None;
+        }
+        let text: &'a str = self.text;
+        *self.reader.get_mut() = text.as_bytes().get(at..)?;
+        self.skipped = at - here;
+        Some(self.rest_of_document(&root, before))
+    }
+
+    /// The root's children after those in `scene`, its end and what
+    /// follows it.
+    fn rest_of_document(
+        mut self,
+        root: &Elem<'a>,
+        mut scene: Gathered,
+    ) -> Result<Scene, LoadError> {
+        self.children(root, "scene", SCENE_CHILDREN, false, |p, e, name| {
             p.scene_child(e, name, &mut scene)
         })?;
         self.epilogue()?;

@@ -18,6 +18,7 @@ use std::sync::Arc;
 
 use super::parser::{Gathered, Parser};
 use super::{LoadProgress, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS};
+use crate::scene::error::LoadError;
 use crate::scene::grammar::SCENE_CHILDREN;
 use crate::scene::source::Block;
 use crate::scene::{Object, Objects, Scene};
@@ -246,17 +247,20 @@ pub(super) const PIECE_BYTES: usize = 1 << 22;
 /// piece that does not end exactly at the next one's start, with nothing
 /// left open, fails as an error, and so does anything the pieces would
 /// only see whole (a second camera or model, one object or light over the
-/// limit). Any failure gives `None`, and the text is parsed again in one
-/// piece, which gives the error of a parse in one, at its line and column:
-/// what is accepted, and what it makes, is what a parse in one accepts and
-/// makes.
+/// limit). Where a piece fails, those before it confirmed its cut, and
+/// the text is read on from that cut as a parse in one reads it
+/// ([`Parser::document_from`]); where that cannot be (the first piece
+/// fails, or a second camera in the pieces before), `None`, and the text is
+/// parsed again in one. Either way the error is that of a parse in one,
+/// at its line and column: what is accepted, and what it makes, is what a
+/// parse in one accepts and makes.
 pub(super) fn in_pieces(
     body: &str,
     path: &Path,
     like: &[Arc<Object>],
     progress: Option<&LoadProgress>,
     count: usize,
-) -> Option<Scene> {
+) -> Option<Result<Scene, LoadError>> {
     use rayon::prelude::*;
     let end = root_end(body)?;
     let mut cuts = vec![0];
@@ -271,7 +275,7 @@ pub(super) fn in_pieces(
         let len = body.len() as u64;
         progress.set(len, 2 * len);
     }
-    let pieces: Vec<Gathered> = cuts
+    let pieces: Vec<Option<Gathered>> = cuts
         .par_windows(2)
         .enumerate()
         .map(|(k, cut)| {
@@ -281,9 +285,29 @@ pub(super) fn in_pieces(
             parser.progress = progress;
             parser.piece(k == 0).ok()
         })
-        .collect::<Option<_>>()?;
-
-    join(pieces, Objects::default(), like, path)
+        .collect();
+    let Some(failed) = pieces.iter().position(Option::is_none) else {
+        let pieces = pieces.into_iter().flatten().collect();
+        return join(pieces, Objects::default(), like, path).map(Ok);
+    };
+    // The pieces before the first that failed confirmed its cut: the text
+    // is read on from there in one, gathered so far what they gathered (an
+    // error in the middle of a million objects costs a piece's parse more
+    // than a clean text, not a second parse of the whole).
+    let before = pieces
+        .into_iter()
+        .take(failed)
+        .flatten()
+        .collect::<Vec<_>>();
+    if before.is_empty() {
+        return None;
+    }
+    let (mut before, mut objects) = gather(before, Objects::default(), like)?;
+    before.objects = std::mem::take(&mut *objects);
+    let mut parser = Parser::new(body, path);
+    parser.like = like;
+    parser.progress = progress;
+    parser.document_from(*cuts.get(failed)?, before)
 }
 
 /// The scene the `pieces` of a text make, joined in order after
@@ -296,6 +320,19 @@ fn join(
     like: &[Arc<Object>],
     path: &Path,
 ) -> Option<Scene> {
+    let (scene, objects) = gather(pieces, objects, like)?;
+    scene.finish_with(objects, path).ok()
+}
+
+/// What the `pieces` of a text gather, joined in order after `objects`
+/// (those of the pieces before them), the objects apart; `None` where only
+/// a parse in one can tell (a second camera or model, objects or lights
+/// over the limit).
+fn gather(
+    pieces: Vec<Gathered>,
+    objects: Objects,
+    like: &[Arc<Object>],
+) -> Option<(Gathered, Objects)> {
     let in_pieces = pieces.iter().map(|p| p.objects.len()).sum::<usize>();
     let lights = pieces.iter().map(|p| p.lights.len()).sum::<usize>();
     if objects.len() + in_pieces > MAX_OBJECTS || lights > MAX_LIGHTS {
@@ -330,7 +367,7 @@ fn join(
     if in_pieces > 0 {
         share(&mut objects, like);
     }
-    scene.finish_with(objects, path).ok()
+    Some((scene, objects))
 }
 
 /// Shares with `like` each object equal to the one at the same place.
@@ -434,16 +471,13 @@ mod tests {
     }
 
     /// A parse in pieces either makes what the parse in one makes, to the
-    /// bit, or gives way to it.
+    /// bit, error included, or gives way to it; `Ok(true)` where it made it.
     fn agrees(text: &str, count: usize) -> Result<bool, String> {
-        let one = in_one(text);
+        let one = format!("{:?}", in_one(text));
         match in_pieces(text, Path::new("t.xml"), &[], None, count) {
             None => Ok(false),
-            Some(pieces) => match one {
-                Ok(one) if format!("{one:?}") == format!("{pieces:?}") => Ok(true),
-                Ok(_) => Err(format!("{count} pieces made another scene")),
-                Err(e) => Err(format!("{count} pieces accepted what one refuses: {e}")),
-            },
+            Some(pieces) if format!("{pieces:?}") == one => Ok(true),
+            Some(pieces) => Err(format!("{count} pieces made {pieces:?}, one piece {one}")),
         }
     }
 
@@ -455,8 +489,66 @@ mod tests {
         }
         // The objects come back shared as a parse in one shares them.
         let like = in_one(&text).unwrap().objects;
-        let again = in_pieces(&text, Path::new("t.xml"), &like, None, 5).unwrap();
+        let again = in_pieces(&text, Path::new("t.xml"), &like, None, 5)
+            .unwrap()
+            .unwrap();
         assert!(all_shared(&again.objects, &like));
+    }
+
+    #[test]
+    fn an_error_after_the_first_piece_is_found_reading_on_from_its_cut() {
+        let text = varied(700);
+        // An error at each tenth of the text after the first piece, in
+        // several kinds; a second camera or model is seen only when the
+        // pieces are joined (`None`: the text is parsed again in one).
+        let faults = [
+            ("  <sphere>\n", "  <sphere><sphere>\n", false),
+            ("<light ", "<light y=\"1\" ", false),
+            ("</sphere>", "</plane>", false),
+            ("ka=\"", "ka=\"-", false),
+            (
+                "<plane",
+                "<camera width=\"2\" height=\"2\" eyeDistance=\"1\"/><plane",
+                true,
+            ),
+            ("<plane", "<model type=\"lambert\"/><plane", true),
+            ("  <sphere>\n", "  x<sphere>\n", false),
+        ];
+        for (k, (find, put, joined)) in faults.iter().enumerate() {
+            for tenth in 2..10 {
+                let from = text.len() * tenth / 10;
+                let at = from + text[from..].find(find).unwrap();
+                let mut bad = text.clone();
+                bad.replace_range(at..at + find.len(), put);
+                let found = in_pieces(&bad, Path::new("t.xml"), &[], None, 7);
+                assert!(in_one(&bad).is_err(), "fault {k} is no fault");
+                if *joined && found.is_none() {
+                    continue;
+                }
+                assert_eq!(
+                    format!("{found:?}"),
+                    format!("{:?}", Some(in_one(&bad))),
+                    "fault {k} at {tenth}/10"
+                );
+            }
+        }
+        // In the first piece: parsed again in one.
+        let at = text.find("  <sphere>\n").unwrap();
+        let mut bad = text.clone();
+        bad.insert(at, 'x');
+        assert!(in_pieces(&bad, Path::new("t.xml"), &[], None, 7).is_none());
+        // A cut in a comment that a piece misread: the text read on from
+        // the cut before it, as valid as it is.
+        let from = text.len() / 2;
+        let at = from + text[from..].find("  <sphere>\n").unwrap();
+        let mut commented = text.clone();
+        commented.insert_str(at, &format!("<!--{}-->", "\n<light x=\"1\"/>".repeat(2000)));
+        let read = in_pieces(&commented, Path::new("t.xml"), &[], None, 7);
+        assert_eq!(
+            format!("{read:?}"),
+            format!("{:?}", Some(in_one(&commented)))
+        );
+        assert!(matches!(read, Some(Ok(_))));
     }
 
     #[test]
