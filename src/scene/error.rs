@@ -34,12 +34,17 @@ impl Position {
         }
         let before = text.get(..offset).unwrap_or(text);
         let bytes = before.as_bytes();
-        // A CR followed by LF is counted at its LF.
-        let breaks = bytes
-            .iter()
-            .enumerate()
-            .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')));
-        let line = 1 + breaks.count();
+        // A CR followed by LF is counted at its LF; without a CR, the LFs
+        // are counted as fast as memchr finds them (an error in the middle
+        // of 200 MB is placed in milliseconds).
+        let line = 1 + match memchr::memchr(b'\r', bytes) {
+            None => memchr::memchr_iter(b'\n', bytes).count(),
+            Some(_) => bytes
+                .iter()
+                .enumerate()
+                .filter(|&(i, &b)| b == b'\n' || (b == b'\r' && bytes.get(i + 1) != Some(&b'\n')))
+                .count(),
+        };
         let line_start = before.rfind(['\n', '\r']).map_or(0, |i| i + 1);
         let column = 1 + before.get(line_start..).map_or(0, |s| s.chars().count());
         Position { line, column }

@@ -14,7 +14,7 @@
 
 use super::grammar::{self, Value};
 use super::xml::is_name_char;
-use super::{LoadError, Position, Shape, layout, names};
+use super::{LoadError, Position, Reading, Shape, layout, names};
 use std::ops::Range;
 use std::path::Path;
 
@@ -152,7 +152,22 @@ pub fn diagnostics(text: &str) -> Vec<Diagnostic> {
     }
 }
 
+/// The first error of `text` after edits `reading` was told of, as the
+/// loader reports it, or none: read from the edits on where it can be
+/// ([`Reading`]), placed by the text's `lines`.
+pub fn diagnostics_after(reading: &mut Reading, text: &str, lines: &Lines) -> Vec<Diagnostic> {
+    match reading.check(text) {
+        Ok(()) => Vec::new(),
+        Err(e) => vec![diagnostic_with(text, Some(lines), &e)],
+    }
+}
+
 fn diagnostic(text: &str, e: &LoadError) -> Diagnostic {
+    diagnostic_with(text, None, e)
+}
+
+/// [`diagnostic`], placed by `lines` (those of `text`) where given.
+fn diagnostic_with(text: &str, lines: Option<&Lines>, e: &LoadError) -> Diagnostic {
     let message = e.kind.to_string();
     let range = match e.position {
         Some(position) => {
@@ -162,8 +177,22 @@ fn diagnostic(text: &str, e: &LoadError) -> Diagnostic {
             } else {
                 0
             };
-            let body = &text[bom..];
-            let at = bom + Lines::new(body).offset_of_position(body, position);
+            let at = match lines {
+                // On the first line after a byte-order mark: counted from
+                // after it.
+                _ if bom > 0 => {
+                    let column = position.column.saturating_sub(1);
+                    bom + text[bom..]
+                        .char_indices()
+                        .nth(column)
+                        .map_or(text.len() - bom, |(i, _)| i)
+                }
+                Some(lines) => lines.offset_of_position(text, position),
+                None => {
+                    let body = &text[bom..];
+                    bom + Lines::new(body).offset_of_position(body, position)
+                }
+            };
             at..word_end(text, at)
         }
         None => {
@@ -716,66 +745,55 @@ pub const SYMBOLS_LISTED: usize = 500;
 /// outline of a million spheres is 600 entries, not 218 MB of JSON, and
 /// names are made for those only.
 pub fn symbols(text: &str) -> Vec<Symbol> {
-    let elements = layout::top_level(text);
-    let (objects, lights) = elements
-        .iter()
-        .fold((0, 0), |(o, l), e| match kind_of(e.0) {
-            SymbolKind::Object => (o + 1, l),
-            SymbolKind::Light => (o, l + 1),
-            _ => (o, l),
-        });
-    let count = |kind| match kind {
-        SymbolKind::Object => objects,
-        SymbolKind::Light => lights,
-        _ => 1,
-    };
-    let grouped = |kind| count(kind) > SYMBOLS_LISTED;
+    // The first SYMBOLS_LISTED + 1 of each kind, in file order, and each
+    // kind's count and last end: all that is shown.
     let labels = names::object_labels(text);
     let mut named = Named::default();
-    let mut out: Vec<Symbol> = Vec::new();
-    // Where each kind's group is in `out`, once begun.
-    let mut groups: Vec<(SymbolKind, usize)> = Vec::new();
-    for (name, range, selection) in &elements {
+    let mut kept: Vec<Symbol> = Vec::new();
+    let mut last_end = [0usize; 4];
+    let well_formed = layout::each_top_level(text, |name, range, selection| {
         let kind = kind_of(name);
-        if !grouped(kind) {
-            out.push(named.symbol(name, kind, range, selection, &labels));
-            named.skip(kind);
-            continue;
-        }
-        let group = match groups.iter().find(|(k, _)| *k == kind) {
-            Some(&(_, at)) => at,
-            None => {
-                let (noun, total) = (plural(kind), count(kind));
-                groups.push((kind, out.len()));
-                out.push(Symbol {
-                    name: format!("{total} {noun}"),
-                    kind,
-                    range: range.clone(),
-                    selection: selection.clone(),
-                    children: Vec::with_capacity(SYMBOLS_LISTED + 1),
-                });
-                out.len() - 1
-            }
-        };
-        let group = &mut out[group];
-        group.range.end = range.end;
-        let listed = group.children.len();
-        if listed < SYMBOLS_LISTED {
-            let symbol = named.symbol(name, kind, range, selection, &labels);
-            group.children.push(symbol);
-        } else if listed == SYMBOLS_LISTED {
-            let rest = count(kind) - SYMBOLS_LISTED;
-            group.children.push(Symbol {
-                name: format!("… {rest} more {}", plural(kind)),
-                kind,
-                range: range.clone(),
-                selection: selection.clone(),
-                children: Vec::new(),
-            });
-        } else if let Some(more) = group.children.last_mut() {
-            more.range.end = range.end;
+        let k = kind as usize;
+        last_end[k] = range.end;
+        if named.count(kind) <= SYMBOLS_LISTED {
+            kept.push(named.symbol(name, kind, &range, &selection, &labels));
         }
         named.skip(kind);
+    });
+    if !well_formed {
+        return Vec::new();
+    }
+    let mut out: Vec<Symbol> = Vec::new();
+    // Where each kind's group is in `out`, once begun.
+    let mut groups = [None::<usize>; 4];
+    let mut listed = [0usize; 4];
+    for symbol in kept {
+        let (kind, k) = (symbol.kind, symbol.kind as usize);
+        let total = named.count(kind);
+        if total <= SYMBOLS_LISTED {
+            out.push(symbol);
+            continue;
+        }
+        let group = *groups[k].get_or_insert_with(|| {
+            out.push(Symbol {
+                name: format!("{total} {}", plural(kind)),
+                kind,
+                range: symbol.range.start..last_end[k],
+                selection: symbol.selection.clone(),
+                children: Vec::with_capacity(SYMBOLS_LISTED + 1),
+            });
+            out.len() - 1
+        });
+        let entry = match listed[k] {
+            n if n < SYMBOLS_LISTED => symbol,
+            _ => Symbol {
+                name: format!("… {} more {}", total - SYMBOLS_LISTED, plural(kind)),
+                range: symbol.range.start..last_end[k],
+                ..symbol
+            },
+        };
+        listed[k] += 1;
+        out[group].children.push(entry);
     }
     out
 }
@@ -788,7 +806,7 @@ pub fn find_symbols(text: &str, query: &str, limit: usize) -> (Vec<Symbol>, usiz
     let labels = names::object_labels(text);
     let mut named = Named::default();
     let (mut found, mut total) = (Vec::new(), 0);
-    for (name, range, selection) in layout::top_level(text) {
+    let well_formed = layout::each_top_level(text, |name, range, selection| {
         let kind = kind_of(name);
         let symbol = named.symbol(name, kind, &range, &selection, &labels);
         named.skip(kind);
@@ -798,8 +816,11 @@ pub fn find_symbols(text: &str, query: &str, limit: usize) -> (Vec<Symbol>, usiz
                 found.push(symbol);
             }
         }
+    });
+    match well_formed {
+        true => (found, total),
+        false => (Vec::new(), 0),
     }
-    (found, total)
 }
 
 /// The kind of a root's child named `name`.
@@ -822,12 +843,11 @@ fn plural(kind: SymbolKind) -> &'static str {
     }
 }
 
-/// The objects and lights named so far, in file order: the next one's
-/// number.
+/// The elements of each kind named so far, in file order: the next
+/// object's or light's number.
 #[derive(Default)]
 struct Named {
-    objects: usize,
-    lights: usize,
+    counts: [usize; 4],
 }
 
 impl Named {
@@ -840,9 +860,10 @@ impl Named {
         selection: &Range<usize>,
         labels: &names::Labels,
     ) -> Symbol {
+        let n = self.count(kind);
         let name = match kind {
-            SymbolKind::Object => names::object_name(self.objects, name, labels.get(self.objects)),
-            SymbolKind::Light => format!("light {}", self.lights + 1),
+            SymbolKind::Object => names::object_name(n, name, labels.get(n)),
+            SymbolKind::Light => format!("light {}", n + 1),
             _ => name.to_owned(),
         };
         Symbol {
@@ -854,13 +875,14 @@ impl Named {
         }
     }
 
+    /// How many elements of `kind` were named.
+    fn count(&self, kind: SymbolKind) -> usize {
+        self.counts[kind as usize]
+    }
+
     /// Counts one more element of `kind`.
     fn skip(&mut self, kind: SymbolKind) {
-        match kind {
-            SymbolKind::Object => self.objects += 1,
-            SymbolKind::Light => self.lights += 1,
-            _ => {}
-        }
+        self.counts[kind as usize] += 1;
     }
 }
 

@@ -39,7 +39,7 @@ mod xml;
 
 pub use error::{LoadError, LoadErrorKind, Position};
 pub use load::{
-    LoadProgress, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, PackedLoad, load,
+    LoadProgress, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, PackedLoad, Reading, load,
     load_counting, load_like, load_packed, load_sharing, load_with_text, parse, parse_sharing,
 };
 

@@ -27,6 +27,7 @@
 //! `exit`, or when the editor's end of stdin closes; every thread sends through one sender, let go then, so
 //! that the thread writing to the editor ends too.
 
+mod json;
 mod preview;
 mod transport;
 
@@ -76,18 +77,32 @@ macro_rules! json {
 }
 
 /// An open document: the editor's text, where its lines start, and where
-/// a reading of it before a cursor may start again.
+/// a reading of it before a cursor may start again. The text and its
+/// lines are shared with the threads that read them ([`Document::copy`]);
+/// an edit while one reads copies them first ([`Arc::make_mut`]), so that
+/// a document is held once, not once more for each reading.
 struct Document {
-    text: String,
-    lines: Lines,
+    text: Arc<String>,
+    lines: Arc<Lines>,
     marks: language::Marks,
+    /// The edits since its errors were last checked, for the check to
+    /// read only where they fall ([`rayoflight::scene::Reading`]).
+    edits: Vec<Edit>,
+}
+
+/// An edit of a document, as its check is told of it.
+enum Edit {
+    /// These bytes (of the text as it then was) replaced by so many.
+    Spliced(std::ops::Range<usize>, usize),
+    /// The whole text replaced.
+    Whole,
 }
 
 impl Document {
     /// Its text and line index, to scan with the lock let go (the message
     /// loop goes on changing the document meanwhile).
-    fn copy(&self) -> (String, Lines) {
-        (self.text.clone(), self.lines.clone())
+    fn copy(&self) -> (Arc<String>, Arc<Lines>) {
+        (Arc::clone(&self.text), Arc::clone(&self.lines))
     }
 }
 
@@ -260,11 +275,12 @@ fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
             let p: DidOpenTextDocumentParams = serde_json::from_value(n.params).ok()?;
             let (uri, text) = (p.text_document.uri, p.text_document.text);
             let key = uri.to_string();
-            let lines = Lines::new(&text);
+            let lines = Arc::new(Lines::new(&text));
             let document = Document {
-                text,
+                text: Arc::new(text),
                 lines,
                 marks: language::Marks::default(),
+                edits: vec![Edit::Whole],
             };
             lock(documents).insert(key.clone(), document);
             Some(Changed::Text(key, uri))
@@ -275,18 +291,26 @@ fn changed(documents: &Documents, n: Notification) -> Option<Changed> {
             let mut all = lock(documents);
             let document = all.get_mut(&key)?;
             for change in p.content_changes {
-                let Document { text, lines, marks } = &mut *document;
+                let Document {
+                    text,
+                    lines,
+                    marks,
+                    edits,
+                } = &mut *document;
                 match change.range {
                     Some(range) => {
                         let start = lines.offset(text, place(range.start));
                         let end = lines.offset(text, place(range.end)).max(start);
+                        let text = Arc::make_mut(text);
                         text.replace_range(start..end, &change.text);
-                        lines.edit(text, start..end, change.text.len());
+                        Arc::make_mut(lines).edit(text, start..end, change.text.len());
                         marks.edited(start..end, change.text.len());
+                        edits.push(Edit::Spliced(start..end, change.text.len()));
                     }
                     None => {
-                        *lines = Lines::new(&change.text);
-                        *text = change.text;
+                        edits.push(Edit::Whole);
+                        *lines = Arc::new(Lines::new(&change.text));
+                        *text = Arc::new(change.text);
                         *marks = language::Marks::default();
                     }
                 }
@@ -368,6 +392,9 @@ fn diagnosis_thread(
         // The object or light each document's cursor was last in, told to
         // the apps.
         let mut told: HashMap<String, Option<Under>> = HashMap::new();
+        // What each document's last check knew, for the next to read only
+        // where the edits since fall.
+        let mut readings: HashMap<String, rayoflight::scene::Reading> = HashMap::new();
         let mut last = Instant::now() - DIAGNOSE_EVERY;
         loop {
             let first = match rx.recv_timeout(LOOK_FOR_APPS_EVERY) {
@@ -410,6 +437,7 @@ fn diagnosis_thread(
                     Changed::Closed(key, uri) => {
                         apps.released(&uri);
                         told.remove(&key);
+                        readings.remove(&key);
                         (key, uri)
                     }
                     Changed::Text(key, uri) => (key, uri),
@@ -436,33 +464,37 @@ fn diagnosis_thread(
                         continue;
                     }
                 };
-                // A copy, so that the message loop goes on changing it.
-                let text = lock(&documents).get(&key).map(|d| d.text.clone());
-                let diagnostics = match &text {
-                    Some(text) => {
-                        let found = language::diagnostics(text);
-                        if found.is_empty() {
-                            // No error to place: no line index (a scan of
-                            // the whole buffer) to build.
-                            Vec::new()
-                        } else {
-                            let lines = Lines::new(text);
-                            found
-                                .into_iter()
-                                .map(|d| Diagnostic {
-                                    range: range(text, &lines, d.range),
-                                    severity: Some(DiagnosticSeverity::ERROR),
-                                    source: Some("rayoflight".into()),
-                                    message: d.message,
-                                    ..Diagnostic::default()
-                                })
-                                .collect()
+                // Shared, so that the message loop goes on changing it; the
+                // edits it made, told to the document's reading.
+                let snapshot = lock(&documents).get_mut(&key).map(|d| {
+                    let edits = std::mem::take(&mut d.edits);
+                    (Arc::clone(&d.text), Arc::clone(&d.lines), edits)
+                });
+                let (text, diagnostics) = match snapshot {
+                    Some((text, lines, edits)) => {
+                        let reading = readings.entry(key).or_default();
+                        for edit in edits {
+                            match edit {
+                                Edit::Spliced(range, inserted) => reading.edited(range, inserted),
+                                Edit::Whole => reading.forget(),
+                            }
                         }
+                        let found = language::diagnostics_after(reading, &text, &lines)
+                            .into_iter()
+                            .map(|d| Diagnostic {
+                                range: range(&text, &lines, d.range),
+                                severity: Some(DiagnosticSeverity::ERROR),
+                                source: Some("rayoflight".into()),
+                                message: d.message,
+                                ..Diagnostic::default()
+                            })
+                            .collect();
+                        (Some(text), found)
                     }
-                    None => Vec::new(),
+                    None => (None, Vec::new()),
                 };
                 if let Some(text) = text {
-                    apps.buffer(&uri, text);
+                    apps.buffer(&uri, &text);
                 }
                 let params = PublishDiagnosticsParams {
                     uri,
@@ -632,12 +664,13 @@ impl Apps {
                     from_apps(message);
                 }
             });
-            let texts: Vec<(String, String)> = lock(documents)
+            let texts: Vec<(String, Arc<String>)> = lock(documents)
                 .iter()
-                .map(|(key, d)| (key.clone(), d.text.clone()))
+                .map(|(key, d)| (key.clone(), Arc::clone(&d.text)))
                 .collect();
             let sent = texts.into_iter().all(|(key, text)| {
                 editor_link::uri_path(&key).is_none_or(|path| {
+                    let text = text.as_str().to_owned();
                     editor_link::send(&mut stream, &editor_link::Message::Buffer { path, text })
                         .is_ok()
                 })
@@ -668,8 +701,14 @@ impl Apps {
         });
     }
 
-    fn buffer(&mut self, uri: &Uri, text: String) {
+    /// Hands every app the newest `text` of `uri` (copied only when an
+    /// app is there to take it).
+    fn buffer(&mut self, uri: &Uri, text: &str) {
+        if self.connections.is_empty() {
+            return;
+        }
         if let Some(path) = editor_link::uri_path(uri.as_str()) {
+            let text = text.to_owned();
             self.tell(&editor_link::Message::Buffer { path, text });
         }
     }

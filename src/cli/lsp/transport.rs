@@ -235,8 +235,8 @@ pub fn read_frame(input: &mut impl BufRead, available: Option<u64>) -> io::Resul
         body.extend_from_slice(&chunk[..n]);
         left -= n as u64;
     }
-    let message = serde_json::from_slice(&body)
-        .map_err(|e| invalid(format!("malformed LSP payload: {e}")))?;
+    // A big document's text becomes a string in the body's own memory.
+    let message = super::json::message(body).map_err(invalid)?;
     Ok(Frame::Message(message))
 }
 

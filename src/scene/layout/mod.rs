@@ -51,7 +51,10 @@ pub(in crate::scene) fn object_comments(text: &str) -> impl Iterator<Item = (usi
     // Where the objects are is all it needs: they are not kept as nodes
     // (a million objects would be a million nodes, and five million with
     // their elements).
-    let doc = Doc::scan(text, Keep::Placed).ok();
+    let doc = text
+        .contains("<!--")
+        .then(|| Doc::scan(text, Keep::Placed).ok())
+        .flatten();
     // Without a comment in the text, no object has one.
     let places = doc
         .as_ref()
@@ -87,21 +90,75 @@ pub(in crate::scene) fn source_object_comments(source: &Source) -> Vec<(usize, S
 /// its bytes (`<` to the end of its end tag) and its start tag's bytes.
 /// Empty when the text is not well-formed XML.
 pub fn top_level(text: &str) -> Vec<(&str, Range<usize>, Range<usize>)> {
-    let Ok(doc) = Doc::scan(text, Keep::TopLevel) else {
-        return Vec::new();
-    };
-    doc.node(doc.root)
-        .children
-        .iter()
-        .map(|&id| {
-            let node = doc.node(id);
-            (
-                node.name,
-                node.start..node.elem_end(),
-                node.start..node.tag_end,
-            )
-        })
-        .collect()
+    let mut children = Vec::new();
+    match each_top_level(text, |name, element, tag| {
+        children.push((name, element, tag))
+    }) {
+        true => children,
+        false => Vec::new(),
+    }
+}
+
+/// [`top_level`] one child at a time, none kept: `f` has each root's
+/// child's name, element bytes and start tag bytes, in file order; false
+/// (after the children before the fault) when the text is not
+/// well-formed XML. An outline of a million objects lists a few hundred,
+/// and holds no more.
+pub fn each_top_level<'t>(
+    text: &'t str,
+    mut f: impl FnMut(&'t str, Range<usize>, Range<usize>),
+) -> bool {
+    let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let base = text.len() - body.len();
+    let mut reader = Reader::from_str(body);
+    let config = reader.config_mut();
+    config.check_end_names = true;
+    config.expand_empty_elements = false;
+    config.trim_text(false);
+    let mut depth = 0usize;
+    let mut root_seen = false;
+    // The open child of the root: its name, start and start tag's end.
+    let mut open: Option<(&'t str, usize, usize)> = None;
+    loop {
+        let before = base + reader.buffer_position() as usize;
+        let Ok(event) = reader.read_event() else {
+            return false;
+        };
+        let after = base + reader.buffer_position() as usize;
+        let (start, empty) = match event {
+            Event::Start(start) => (start, false),
+            Event::Empty(start) => (start, true),
+            Event::End(_) => {
+                depth = depth.saturating_sub(1);
+                if depth == 1
+                    && let Some((name, at, tag_end)) = open.take()
+                {
+                    f(name, at..after, at..tag_end);
+                }
+                continue;
+            }
+            Event::Eof => return depth == 0 && root_seen,
+            _ => continue,
+        };
+        if depth == 0 {
+            if root_seen {
+                return false;
+            }
+            root_seen = true;
+        } else if depth == 1 {
+            let name_len = start.name().as_ref().len();
+            let Some(name) = text.get(before + 1..before + 1 + name_len) else {
+                return false;
+            };
+            match empty {
+                true => f(name, before..after, before..after),
+                false => open = Some((name, before, after)),
+            }
+        }
+        if !empty {
+            depth += 1;
+        }
+    }
 }
 
 /// Where the element of object `index` (spheres and planes in file order)
@@ -182,7 +239,9 @@ pub(super) struct Place {
 pub(super) enum Keep<'a> {
     #[cfg(test)]
     All,
-    /// The root and its children.
+    /// The root and its children (as nodes: [`each_top_level`] reads
+    /// them keeping none).
+    #[cfg(test)]
     TopLevel,
     /// The root and its children but the objects (spheres and planes),
     /// which are only placed (`Doc::objects`).
@@ -278,6 +337,7 @@ impl<'t> Doc<'t> {
                 _ if !object => (false, true),
                 #[cfg(test)]
                 Keep::All => (false, true),
+                #[cfg(test)]
                 Keep::TopLevel => (false, false),
                 Keep::Placed => (true, false),
                 Keep::Objects(deep) | Keep::Folded(deep) => {
@@ -298,7 +358,9 @@ impl<'t> Doc<'t> {
                 _ if placed => false,
                 #[cfg(test)]
                 Keep::All => true,
-                Keep::TopLevel | Keep::Placed => stack.len() <= 1,
+                #[cfg(test)]
+                Keep::TopLevel => stack.len() <= 1,
+                Keep::Placed => stack.len() <= 1,
                 Keep::Objects(_) | Keep::Folded(_) => skip_below.is_none_or(|d| stack.len() <= d),
             };
             if !kept {

@@ -11,7 +11,8 @@
 //! parses a big text on every core: a text held whole cut in pieces, or a
 //! file read and parsed a piece at a time; its guesses are checked, and
 //! any doubt falls back to the parse in one, so what is accepted and every
-//! error are those of a parse in one.
+//! error are those of a parse in one. [`reading`] checks a text again after
+//! edits, reading only where they fall.
 //!
 //! Nothing here panics on any input, and every count the file controls is
 //! checked against its limit before anything is allocated for it.
@@ -26,10 +27,12 @@ use super::{Object, Objects, Scene};
 
 mod parser;
 mod pieces;
+mod reading;
 
 use parser::Parser;
 pub(crate) use parser::{MAX_SIDE, NumberError, parse_integer, parse_number};
 use pieces::{PIECE_BYTES, in_pieces, parsing_threads, streamed};
+pub use reading::Reading;
 
 /// Largest scene file [`load`] reads: 1 GiB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;

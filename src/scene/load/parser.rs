@@ -95,6 +95,8 @@ enum Node<'a> {
     /// An end tag, with the byte offset of its `<`.
     Close(usize),
     Eof,
+    /// Between two of the root's children at [`Parser::stop`].
+    Stop,
 }
 
 /// One attribute of an element, its value unescaped.
@@ -128,11 +130,42 @@ pub(super) struct Gathered {
     pub(super) lights: Vec<Light>,
     pub(super) camera: Option<Camera>,
     pub(super) model: Option<Model>,
+    /// Objects and lights read but not kept ([`Parser::check_only`]).
+    pub(super) unkept_objects: usize,
+    pub(super) unkept_lights: usize,
+    /// Where each child of the root starts in the text, and what it is,
+    /// where [`Parser::record`] asks.
+    pub(super) places: Vec<(usize, Child)>,
+    /// Where the root's content starts (after its start tag) and ends (at
+    /// its end tag's `<`), once read.
+    pub(super) content_start: Option<usize>,
+    pub(super) content_end: Option<usize>,
+}
+
+impl Gathered {
+    /// The objects read, kept or not.
+    pub(super) fn object_count(&self) -> usize {
+        self.objects.len() + self.unkept_objects
+    }
+
+    /// The lights read, kept or not.
+    pub(super) fn light_count(&self) -> usize {
+        self.lights.len() + self.unkept_lights
+    }
+}
+
+/// What a child of the root is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Child {
+    Object,
+    Light,
+    Camera,
+    Model,
 }
 
 impl Gathered {
     /// The scene, once it is known to have a camera.
-    fn finish(mut self, path: &Path) -> Result<Scene, LoadError> {
+    pub(super) fn finish(mut self, path: &Path) -> Result<Scene, LoadError> {
         let objects = std::mem::take(&mut self.objects).into();
         self.finish_with(objects, path)
     }
@@ -183,6 +216,17 @@ pub(super) struct Parser<'a> {
     /// Bytes of `text` the reader was moved past unread
     /// ([`Parser::document_from`]): added to the offsets it counts.
     skipped: usize,
+    /// Where `text` starts in the whole text (a piece's cut), for
+    /// [`Gathered::places`].
+    pub(super) base: usize,
+    /// Objects and lights are read and checked, not kept: a check of a
+    /// text's errors holds no scene.
+    pub(super) check_only: bool,
+    /// The children's places are kept ([`Gathered::places`]).
+    pub(super) record: bool,
+    /// Between two of the root's children at this byte of `text`, the
+    /// parse stops ([`Node::Stop`]).
+    pub(super) stop: Option<usize>,
 }
 
 impl<'a> Parser<'a> {
@@ -208,6 +252,10 @@ impl<'a> Parser<'a> {
             events: 0,
             reported: 0,
             skipped: 0,
+            base: 0,
+            check_only: false,
+            record: false,
+            stop: None,
         }
     }
 
@@ -253,6 +301,9 @@ impl<'a> Parser<'a> {
     fn next(&mut self) -> Result<Node<'a>, LoadError> {
         loop {
             let before = self.reader_offset();
+            if self.depth == 1 && self.stop == Some(before) {
+                return Ok(Node::Stop);
+            }
             self.events = self.events.wrapping_add(1);
             if self.events.is_multiple_of(4096)
                 && let Some(progress) = self.progress
@@ -423,7 +474,7 @@ impl<'a> Parser<'a> {
                     f(self, &child, known)?;
                 }
                 Node::Close(_) => return Ok(()),
-                Node::Eof => return Err(self.unclosed(parent)),
+                Node::Eof | Node::Stop => return Err(self.unclosed(parent)),
             }
         }
     }
@@ -686,24 +737,42 @@ impl<'a> Parser<'a> {
 
     // ----- the grammar -----
 
-    pub(super) fn document(mut self) -> Result<Scene, LoadError> {
+    pub(super) fn document(self) -> Result<Scene, LoadError> {
+        let path = self.path;
+        self.gathered()?.finish(path)
+    }
+
+    /// What [`Parser::document`] gathers, before it makes the scene (a
+    /// camera checked for).
+    pub(super) fn gathered(mut self) -> Result<Gathered, LoadError> {
         let root = self.root()?;
-        self.rest_of_document(&root, Gathered::default())
+        let scene = Gathered {
+            content_start: Some(self.reader_offset()),
+            ..Gathered::default()
+        };
+        let path = self.path;
+        let (scene, _) = self.rest_of_document(&root, scene)?;
+        match scene.camera {
+            Some(_) => Ok(scene),
+            None => Err(LoadError::new(path, None, LoadErrorKind::MissingCamera)),
+        }
     }
 
     /// [`Parser::document`], the root's children before byte `at` of the
     /// text not read: `before` is what a parse in one has gathered when it
     /// gets there, and `at` must be a place between two of the root's
     /// children, as a cut that the pieces before it confirmed
-    /// ([`in_pieces`](super::pieces::in_pieces)). The rest is read as a
+    /// ([`in_pieces`](super::pieces::in_pieces)) or the place of a child
+    /// in a text read before ([`super::reading`]). The rest is read as a
     /// parse in one reads it (the reader holds the root open, as there),
     /// so what it returns, an error included, is what a parse in one
-    /// returns. `None` where `at` is not after the root's start tag.
+    /// returns; with true, it stopped at [`Parser::stop`] instead, the
+    /// rest not read. `None` where `at` is not after the root's start tag.
     pub(super) fn document_from(
         mut self,
         at: usize,
         before: Gathered,
-    ) -> Option<Result<Scene, LoadError>> {
+    ) -> Option<Result<(Gathered, bool), LoadError>> {
         let root = match self.root() {
             Ok(root) => root,
             Err(e) => return Some(Err(e)),
@@ -719,17 +788,30 @@ impl<'a> Parser<'a> {
     }
 
     /// The root's children after those in `scene`, its end and what
-    /// follows it.
+    /// follows it; true where it stopped at [`Parser::stop`] first.
     fn rest_of_document(
         mut self,
         root: &Elem<'a>,
         mut scene: Gathered,
-    ) -> Result<Scene, LoadError> {
-        self.children(root, "scene", SCENE_CHILDREN, false, |p, e, name| {
-            p.scene_child(e, name, &mut scene)
-        })?;
+    ) -> Result<(Gathered, bool), LoadError> {
+        if !root.empty {
+            loop {
+                match self.next()? {
+                    Node::Open(child) => {
+                        let (_, name) = self.known_child(&child, "scene", SCENE_CHILDREN)?;
+                        self.scene_child(&child, name, &mut scene)?;
+                    }
+                    Node::Close(at) => {
+                        scene.content_end = Some(at);
+                        break;
+                    }
+                    Node::Eof => return Err(self.unclosed("scene")),
+                    Node::Stop => return Ok((scene, true)),
+                }
+            }
+        }
         self.epilogue()?;
-        scene.finish(self.path)
+        Ok((scene, false))
     }
 
     /// The `<scene>` start tag and its attributes, after at most what may
@@ -749,7 +831,9 @@ impl<'a> Parser<'a> {
             Node::Close(at) => {
                 return Err(self.xml_at(at, "end tag without a start tag".to_owned()));
             }
-            Node::Eof => return Err(self.error_at(self.text.len(), LoadErrorKind::MissingRoot)),
+            Node::Eof | Node::Stop => {
+                return Err(self.error_at(self.text.len(), LoadErrorKind::MissingRoot));
+            }
         };
         if root.start.name().as_ref() != b"scene" {
             return Err(self.error_at(
@@ -792,7 +876,7 @@ impl<'a> Parser<'a> {
                 Err(self.error_at(e.at, LoadErrorKind::ContentAfterRoot { what }))
             }
             Node::Close(at) => Err(self.xml_at(at, "end tag without a start tag".to_owned())),
-            Node::Eof => Ok(()),
+            Node::Eof | Node::Stop => Ok(()),
         }
     }
 
@@ -802,16 +886,17 @@ impl<'a> Parser<'a> {
     /// others. An end tag of the root, or anything left open at
     /// the piece's end, is an error (and the text is parsed in one piece).
     pub(super) fn piece(mut self, first: bool) -> Result<Gathered, LoadError> {
+        let mut scene = Gathered::default();
         if first {
             let root = self.root()?;
             if root.empty {
                 return Err(self.xml_at(root.at, "an empty root in a piece".to_owned()));
             }
+            scene.content_start = Some(self.base + self.reader_offset());
         } else {
             self.at_start = false;
             self.depth = 1;
         }
-        let mut scene = Gathered::default();
         loop {
             match self.next()? {
                 Node::Open(child) => {
@@ -821,7 +906,7 @@ impl<'a> Parser<'a> {
                 Node::Close(at) => {
                     return Err(self.xml_at(at, "the root ends inside a piece".to_owned()));
                 }
-                Node::Eof => return Ok(scene),
+                Node::Eof | Node::Stop => return Ok(scene),
             }
         }
     }
@@ -832,8 +917,17 @@ impl<'a> Parser<'a> {
         name: &'static str,
         scene: &mut Gathered,
     ) -> Result<(), LoadError> {
+        if self.record {
+            let child = match name {
+                _ if Shape::from_name(name).is_some() => Child::Object,
+                "light" => Child::Light,
+                "camera" => Child::Camera,
+                _ => Child::Model,
+            };
+            scene.places.push((self.base + e.at, child));
+        }
         if let Some(shape) = Shape::from_name(name) {
-            if scene.objects.len() >= self.max_objects {
+            if scene.object_count() >= self.max_objects {
                 return Err(self.error_at(
                     e.at,
                     LoadErrorKind::TooManyObjects {
@@ -842,6 +936,10 @@ impl<'a> Parser<'a> {
                 ));
             }
             let object = self.object(e, shape)?;
+            if self.check_only {
+                scene.unkept_objects += 1;
+                return Ok(());
+            }
             let object = match self.like.get(scene.objects.len()) {
                 Some(same) if **same == object => Arc::clone(same),
                 _ => Arc::new(object),
@@ -851,7 +949,7 @@ impl<'a> Parser<'a> {
         }
         match name {
             "light" => {
-                if scene.lights.len() >= self.max_lights {
+                if scene.light_count() >= self.max_lights {
                     return Err(self.error_at(
                         e.at,
                         LoadErrorKind::TooManyLights {
@@ -860,7 +958,10 @@ impl<'a> Parser<'a> {
                     ));
                 }
                 let light = self.light(e)?;
-                scene.lights.push(light);
+                match self.check_only {
+                    true => scene.unkept_lights += 1,
+                    false => scene.lights.push(light),
+                }
             }
             "camera" => {
                 if scene.camera.is_some() {

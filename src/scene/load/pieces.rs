@@ -307,7 +307,9 @@ pub(super) fn in_pieces(
     let mut parser = Parser::new(body, path);
     parser.like = like;
     parser.progress = progress;
-    parser.document_from(*cuts.get(failed)?, before)
+    parser
+        .document_from(*cuts.get(failed)?, before)
+        .map(|read| read.and_then(|(scene, _)| scene.finish(path)))
 }
 
 /// The scene the `pieces` of a text make, joined in order after

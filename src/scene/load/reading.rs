@@ -1,0 +1,370 @@
+//! A text checked again after edits, read only where they fall: what the
+//! language server does at each keystroke, in time that follows the edit,
+//! not the file.
+//!
+//! A [`Reading`] knows, of the text as last found without error, where
+//! each of the root's children starts and what it is. The edits since are
+//! one span of that text ([`Reading::edited`]). [`Reading::check`] reads
+//! the new text from the child the span starts in, as a parse in one reads
+//! it (the reader holding the root open, the counts of what came before
+//! given: [`Parser::document_from`]), and stops at the first child past
+//! the span, where the rest of the text is the old one, in the same state:
+//! so an error is the one a parse in one gives, at its line and column,
+//! and a text without one is known for the next edit. What only the whole
+//! can tell (a camera or model more or less, a count past its limit)
+//! reads the whole text, as does a text never read without error.
+//!
+//! Objects and lights are checked, not kept: a million spheres cost their
+//! places (16 bytes each), not a scene.
+
+use std::ops::Range;
+use std::path::Path;
+
+use super::parser::{Child, Gathered, Parser};
+use super::{MAX_LIGHTS, MAX_OBJECTS};
+use crate::scene::Camera;
+use crate::scene::error::LoadError;
+use crate::shading::Model;
+
+/// What is known of a text between checks ([`Reading::check`]).
+#[derive(Default)]
+pub struct Reading {
+    known: Option<Known>,
+    /// The edits since `known` was read, as one span of that text.
+    dirty: Option<Dirty>,
+}
+
+/// The text as last found without error.
+struct Known {
+    /// Its byte-order mark's length: places are in the text after it.
+    bom: usize,
+    /// Where each child of the root starts, and what it is.
+    places: Vec<(usize, Child)>,
+    /// The root's content, from after its start tag to its end tag's `<`.
+    content: Range<usize>,
+    /// A camera and a model it has, if any: what a parse in one has seen
+    /// when it reads on past them.
+    camera: Option<Camera>,
+    model: Option<Model>,
+}
+
+/// Edits as one span `start..end` of the known text (after its byte-order
+/// mark), now `delta` bytes longer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Dirty {
+    start: usize,
+    end: usize,
+    delta: isize,
+}
+
+impl Reading {
+    /// The bytes `range` of the text (as it is now) were replaced by
+    /// `inserted` bytes.
+    pub fn edited(&mut self, range: Range<usize>, inserted: usize) {
+        let Some(known) = &self.known else {
+            return;
+        };
+        if range.start < known.bom {
+            self.known = None;
+            self.dirty = None;
+            return;
+        }
+        let (a, b) = (range.start - known.bom, range.end - known.bom);
+        let grown = inserted as isize - (b as isize - a as isize);
+        self.dirty = Some(match self.dirty {
+            None => Dirty {
+                start: a,
+                end: b,
+                delta: grown,
+            },
+            Some(d) => {
+                // `a` and `b` in the known text: before the span as they
+                // are, after it moved back, inside it the span's ends.
+                let now_end = (d.end as isize + d.delta) as usize;
+                let old = |x: usize, inside: usize| match x {
+                    x if x <= d.start => x,
+                    x if x >= now_end => (x as isize - d.delta) as usize,
+                    _ => inside,
+                };
+                Dirty {
+                    start: d.start.min(old(a, d.start)),
+                    end: d.end.max(old(b, d.end)),
+                    delta: d.delta + grown,
+                }
+            }
+        });
+    }
+
+    /// The text changed in ways not told: it is read whole next time.
+    pub fn forget(&mut self) {
+        self.known = None;
+        self.dirty = None;
+    }
+
+    /// The first error of `text` (the text as edited), as a parse in one
+    /// gives it; read from the edits on where it can be.
+    pub fn check(&mut self, text: &str) -> Result<(), LoadError> {
+        let path = Path::new("");
+        if let (Some(known), Some(dirty)) = (&mut self.known, self.dirty)
+            && let Some(found) = again(known, dirty, text, path)
+        {
+            if found.is_ok() {
+                self.dirty = None;
+            }
+            return found;
+        }
+        self.dirty = None;
+        let (known, found) = whole(text, path);
+        self.known = known;
+        found
+    }
+}
+
+/// The text read whole: what is known of it where it has no error.
+fn whole(text: &str, path: &Path) -> (Option<Known>, Result<(), LoadError>) {
+    let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut parser = Parser::new(body, path);
+    parser.check_only = true;
+    parser.record = true;
+    match parser.gathered() {
+        Ok(g) => {
+            let known = g
+                .content_start
+                .zip(g.content_end)
+                .map(|(start, end)| Known {
+                    bom: text.len() - body.len(),
+                    places: g.places,
+                    content: start..end,
+                    camera: g.camera,
+                    model: g.model,
+                });
+            (known, Ok(()))
+        }
+        Err(e) => (None, Err(e)),
+    }
+}
+
+/// The text read again from the edits `dirty` on, where `known` allows
+/// (`None`: read it whole), `known` brought up to date where it has no
+/// error.
+fn again(
+    known: &mut Known,
+    dirty: Dirty,
+    text: &str,
+    path: &Path,
+) -> Option<Result<(), LoadError>> {
+    let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+    if text.len() - body.len() != known.bom
+        || dirty.start < known.content.start
+        || dirty.end > known.content.end
+    {
+        return None;
+    }
+    // The children read again: from the one the edits start in (or the
+    // root's content) to the first that starts past them.
+    let (first, from) = match known.places.partition_point(|(at, _)| *at <= dirty.start) {
+        0 => (0, known.content.start),
+        n => (n - 1, known.places[n - 1].0),
+    };
+    let past = known.places.partition_point(|(at, _)| *at < dirty.end);
+    let past = past.max(first);
+    let stop = known
+        .places
+        .get(past)
+        .map_or(known.content.end, |(at, _)| *at);
+    let stop = usize::try_from(stop as isize + dirty.delta).ok()?;
+    // What a parse in one has gathered at `from`.
+    let mut before = Gathered::default();
+    let mut seen = [0usize; 4];
+    for (_, child) in &known.places[..first] {
+        seen[*child as usize] += 1;
+    }
+    before.unkept_objects = seen[Child::Object as usize];
+    before.unkept_lights = seen[Child::Light as usize];
+    if seen[Child::Camera as usize] > 0 {
+        before.camera = Some(known.camera.clone()?);
+    }
+    if seen[Child::Model as usize] > 0 {
+        before.model = Some(known.model?);
+    }
+    let mut parser = Parser::new(body, path);
+    parser.check_only = true;
+    parser.record = true;
+    parser.stop = Some(stop);
+    let (read, stopped) = match parser.document_from(from, before)? {
+        Ok(read) => read,
+        Err(e) => return Some(Err(e)),
+    };
+    if !stopped {
+        // Read to the end: all of it is known anew.
+        let (Some(camera), Some(end)) = (read.camera.clone(), read.content_end) else {
+            return None;
+        };
+        known.places.truncate(first);
+        known.places.extend(read.places);
+        known.content.end = end;
+        known.camera = Some(camera);
+        known.model = read.model;
+        return Some(Ok(()));
+    }
+    // Stopped where the old text goes on: what only the whole can tell
+    // is read whole.
+    let mut old = [0usize; 4];
+    for (_, child) in &known.places[first..past] {
+        old[*child as usize] += 1;
+    }
+    let mut new = [0usize; 4];
+    for (_, child) in &read.places {
+        new[*child as usize] += 1;
+    }
+    let (camera, model) = (Child::Camera as usize, Child::Model as usize);
+    if old[camera] != new[camera] || old[model] != new[model] {
+        return None;
+    }
+    let mut rest = [0usize; 4];
+    for (_, child) in &known.places[past..] {
+        rest[*child as usize] += 1;
+    }
+    if read.object_count() + rest[Child::Object as usize] > MAX_OBJECTS
+        || read.light_count() + rest[Child::Light as usize] > MAX_LIGHTS
+    {
+        return None;
+    }
+    if new[camera] > 0 {
+        known.camera = read.camera;
+    }
+    if new[model] > 0 {
+        known.model = read.model;
+    }
+    known.places.splice(first..past, read.places);
+    let moved = first + new.iter().sum::<usize>();
+    for (at, _) in &mut known.places[moved..] {
+        *at = (*at as isize + dirty.delta) as usize;
+    }
+    known.content.end = (known.content.end as isize + dirty.delta) as usize;
+    Some(Ok(()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::tests::{in_one, varied};
+    use super::*;
+
+    /// The error as a check gives it (a check names no file).
+    fn pathless(e: LoadError) -> LoadError {
+        LoadError {
+            path: Default::default(),
+            ..e
+        }
+    }
+
+    /// What a parse in one says of `text`, as a check says it.
+    fn one(text: &str) -> String {
+        let body = text.strip_prefix('\u{feff}').unwrap_or(text);
+        format!("{:?}", in_one(body).map(|_| ()).map_err(pathless))
+    }
+
+    /// Edits of every kind, one after another, each checked again from
+    /// the edits on: each check says what a parse in one of the whole text
+    /// says, error, line and column included.
+    #[test]
+    fn a_check_after_edits_says_what_a_parse_in_one_says() {
+        let snippets = [
+            "<sphere/>",
+            "<light x=\"1\" y=\"2\" z=\"3\"/>",
+            "<camera width=\"2\" height=\"2\" eyeDistance=\"1\"/>",
+            "<model type=\"lambert\"/>",
+            "<!-- a -->",
+            "<!--",
+            "-->",
+            "<",
+            ">",
+            "x",
+            "\"",
+            "</sphere>",
+            "<sphere>",
+            " ",
+            "\n",
+            "-",
+            "é",
+        ];
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        let base = varied(200);
+        let (mut incremental, mut valid) = (0, 0);
+        for round in 0..60 {
+            let mut text = base.clone();
+            let mut reading = Reading::default();
+            assert_eq!(format!("{:?}", reading.check(&text)), one(&text));
+            for step in 0..12 {
+                let mut at = next(text.len() + 1);
+                while !text.is_char_boundary(at) {
+                    at -= 1;
+                }
+                // A third of the rounds keep the text valid.
+                let kind = if round % 3 == 0 { 3 } else { next(4) };
+                let (range, insert) = match kind {
+                    // Before a child: an element that keeps the text valid.
+                    3 if text[at..].contains("\n  <sphere") => {
+                        let at = at + text[at..].find("\n  <sphere").unwrap_or(0) + 3;
+                        (at..at, snippets[next(2)].to_owned())
+                    }
+                    0 => {
+                        let mut to = (at + next(30)).min(text.len());
+                        while !text.is_char_boundary(to) {
+                            to -= 1;
+                        }
+                        (at..to, String::new())
+                    }
+                    _ => (at..at, snippets[next(snippets.len())].to_owned()),
+                };
+                text.replace_range(range.clone(), &insert);
+                reading.edited(range, insert.len());
+                let knew = reading.known.is_some() && reading.dirty.is_some();
+                let checked = format!("{:?}", reading.check(&text));
+                assert_eq!(checked, one(&text), "round {round}, step {step}:\n{text}");
+                incremental += usize::from(knew);
+                valid += usize::from(checked == "Ok(())");
+            }
+        }
+        // Most checks read from the edits on; some texts stay valid.
+        assert!(
+            incremental > 300 && valid > 150,
+            "{incremental} from the edits, {valid} valid"
+        );
+    }
+
+    /// An edit in the middle of a long text reads a few children, not the
+    /// text: its places move, and a fix is known without a whole reading.
+    #[test]
+    fn an_edit_reads_only_the_children_it_touches() {
+        let text = varied(2000);
+        let mut reading = Reading::default();
+        assert!(reading.check(&text).is_ok());
+        let places = reading.known.as_ref().unwrap().places.clone();
+        let at = text.len() / 2 + text[text.len() / 2..].find("<sphere/>").unwrap();
+        let mut broken = text.clone();
+        broken.insert(at + 1, 'x');
+        reading.edited(at + 1..at + 1, 1);
+        let e = reading.check(&broken).unwrap_err();
+        assert_eq!(Some(e.clone()), in_one(&broken).err().map(pathless));
+        // The fix: known again, the places as before.
+        reading.edited(at + 1..at + 2, 0);
+        assert!(reading.check(&text).is_ok());
+        assert_eq!(reading.known.as_ref().unwrap().places, places);
+        assert!(reading.dirty.is_none());
+        // A sphere more: the places after it move.
+        let mut more = text.clone();
+        more.insert_str(at, "<sphere/>");
+        reading.edited(at..at, 9);
+        assert!(reading.check(&more).is_ok());
+        let moved = &reading.known.as_ref().unwrap().places;
+        assert_eq!(moved.len(), places.len() + 1);
+        assert_eq!(moved.last().unwrap().0, places.last().unwrap().0 + 9);
+    }
+}
