@@ -6,12 +6,16 @@
 //! same clap `Command`. The subcommands `completions`, `man` and `schema`
 //! live here.
 //!
-//! Bash gets one addition to clap_complete's script. Its script offers only
-//! flags and subcommand names where a positional argument goes, and files
-//! after any flag without a list of values (`--threads`): the wrapper here
-//! offers files where the argument is a file (the scene, the parts, the
-//! images) and nothing after a flag whose value is a number, a region or a
-//! PATH=VALUE.
+//! Bash, zsh and fish get their scripts mended, so that the three offer
+//! the same (tests/desktop/home.rs runs one table of cases in each real
+//! shell). Bash's script offers only flags and subcommand names where a
+//! positional argument goes, and files after any flag without a list of
+//! values (`--threads`): the wrapper here offers files where the argument
+//! is a file (the scene, the parts, the images) and nothing after a flag
+//! whose value is a number, a region or a PATH=VALUE. Zsh's read the first
+//! word as the scene and the second as the subcommand
+//! ([`zsh_first_word`]); fish's lost every flag's values at the top level
+//! and had none for a subcommand's listed positional ([`fish_values`]).
 
 use super::failure::{Failure, fail, usage};
 use super::stdout;
@@ -132,10 +136,156 @@ fn completions(shell: Shell, definition: Definition) -> String {
     let mut script = Vec::new();
     clap_complete::generate(shell, &mut command, "rayoflight", &mut script);
     let mut script = String::from_utf8_lossy(&script).into_owned();
-    if shell == Shell::Bash {
-        script.push_str(&bash_paths(definition));
+    match shell {
+        Shell::Bash => script.push_str(&bash_paths(definition)),
+        Shell::Zsh => script = zsh_first_word(&script),
+        Shell::Fish => script = fish_values(&script, definition),
+        _ => {}
     }
     script
+}
+
+/// clap_complete's zsh script for a command that takes a positional
+/// (the scene) and subcommands reads the first word as the scene and the
+/// second as the subcommand: after `split` it offered the render's flags,
+/// after `completions` the subcommands. Here the first word is either,
+/// offered as both; a subcommand's words go to its own arguments, and a
+/// scene's to the render's flags. Unchanged where the script is not the
+/// one expected (a test fails then).
+fn zsh_first_word(script: &str) -> String {
+    let head = "    _arguments \"${_arguments_options[@]}\" : \\\n";
+    let Some(options_at) = script.find(head).map(|at| at + head.len()) else {
+        return script.to_owned();
+    };
+    let Some(scene_at) = script.find("'::scene -- ") else {
+        return script.to_owned();
+    };
+    let Some(dispatch_at) = script[scene_at..]
+        .find("\"*::: :->rayoflight\" \\\n")
+        .map(|at| scene_at + at)
+    else {
+        return script.to_owned();
+    };
+    // A value with nothing to complete (a number, a region, PATH=VALUE):
+    // nothing offered, not file names. `-o` takes its file as the next
+    // word (as `-o+`, `-out` read as `-o` and `ut`), and the render's own
+    // spellings `-out` and `-time` are offered.
+    let free = |text: &str| text.replace(":_default' \\\n", ": ' \\\n");
+    let options = format!(
+        "'-out=[The image to write (also -o, --out)]:FILE:_files' \\\n\
+         '-time[Print the render time (also --time)]' \\\n{}",
+        free(&script[options_at..scene_at]).replace("'-o+[", "'-o[")
+    );
+    let mut out = String::with_capacity(script.len() + 2 * options.len() + 400);
+    out.push_str(&script[..options_at]);
+    out.push_str(&options);
+    out.push_str("\": :->first\" \\\n");
+    let rest = free(&script[dispatch_at..]);
+    let rest = rest.replacen(
+        "    case $state in\n    (rayoflight)\n",
+        "    case $state in\n    (first)\n        \
+         if (( CURRENT > 2 )); then\n            \
+         # After a flag: a scene, not a subcommand.\n            \
+         _files && ret=0\n        \
+         else\n            \
+         _alternative 'commands:command:_rayoflight_commands' \
+         'scenes:scene file:_files' && ret=0\n        \
+         fi\n        ;;\n    (rayoflight)\n",
+        1,
+    );
+    let rest = rest
+        .replacen("words=($line[2] ", "words=($line[1] ", 1)
+        .replacen(
+            "rayoflight-command-$line[2]:",
+            "rayoflight-command-$line[1]:",
+            1,
+        )
+        .replacen(
+            "        case $line[2] in\n",
+            "        case $line[1] in\n",
+            1,
+        );
+    // A scene: the render's flags after it.
+    let render =
+        format!("(*)\n_arguments \"${{_arguments_options[@]}}\" : \\\n{options}&& ret=0\n;;\n");
+    let end = "        esac\n    ;;\nesac\n";
+    match rest.find(end) {
+        Some(at) => {
+            out.push_str(&rest[..at]);
+            out.push_str(&render);
+            out.push_str(&rest[at..]);
+        }
+        None => out.push_str(&rest),
+    }
+    out
+}
+
+/// clap_complete's fish script offered file names after a top-level flag
+/// waiting for its value (`--method `: its test of the words before fails
+/// on the flag without its value, so no flag's line applied), for a
+/// subcommand's listed positional (`completions `), and after flags that
+/// take a number. Here: the words before read without the flag that
+/// waits; each listed positional its values; no files after a number.
+fn fish_values(script: &str, definition: Definition) -> String {
+    let parse =
+        "    argparse -s (__fish_rayoflight_global_optspecs) -- $cmd 2>/dev/null\n    or return\n";
+    let retry = "    argparse -s (__fish_rayoflight_global_optspecs) -- $cmd 2>/dev/null\n    \
+                 or begin\n        \
+                 # The last word, a flag waiting for its value: the words before it.\n        \
+                 set -e cmd[-1]\n        \
+                 argparse -s (__fish_rayoflight_global_optspecs) -- $cmd 2>/dev/null\n    \
+                 end\n    or return\n";
+    let mut out = script.replacen(parse, retry, 1);
+    let mut root = definition();
+    root.build();
+    // A first word that is no subcommand is the scene: the render's
+    // flags go on after it; subcommands are offered as the first word only.
+    let names: Vec<&str> = root.get_subcommands().map(|s| s.get_name()).collect();
+    let command = "    if set -q argv[1]\n";
+    let subcommand = format!(
+        "    if set -q argv[1]; and contains -- $argv[1] {}\n",
+        names.join(" ")
+    );
+    out = out.replacen(command, &subcommand, 1);
+    out = out.replace(
+        "-n \"__fish_rayoflight_needs_command\" -a \"",
+        "-n \"__fish_rayoflight_needs_command; and test (count (commandline -opc)) -eq 1\" -a \"",
+    );
+    let mut free: Vec<String> = Vec::new();
+    let mut each = vec![(None, &root)];
+    each.extend(root.get_subcommands().map(|s| (Some(s.get_name()), s)));
+    for (name, command) in each {
+        for arg in command.get_arguments().filter(|a| takes_free_value(a)) {
+            if let Some(long) = arg.get_long() {
+                free.push(format!(" -l {long} "));
+            }
+        }
+        let Some(name) = name else {
+            continue;
+        };
+        for arg in command.get_positionals() {
+            let values = arg.get_value_parser().possible_values();
+            let Some(values) = values else {
+                continue;
+            };
+            let values: Vec<String> = values.map(|v| v.get_name().to_owned()).collect();
+            out.push_str(&format!(
+                "complete -c rayoflight -n \"__fish_rayoflight_using_subcommand {name}\" -f -a \"{}\"\n",
+                values.join(" ")
+            ));
+        }
+    }
+    // No files after a flag whose value is a number, a region or
+    // PATH=VALUE.
+    out.lines()
+        .map(|line| {
+            let wants_value = line.ends_with(" -r");
+            match wants_value && free.iter().any(|f| line.contains(f.as_str())) {
+                true => format!("{line} -f\n"),
+                false => format!("{line}\n"),
+            }
+        })
+        .collect()
 }
 
 /// Whether `arg` takes a file (or folder) name.
@@ -210,7 +360,11 @@ _rayoflight_files() {{
     if [[ ${{COMP_CWORD}} -gt 1 ]]; then
         case "${{COMP_WORDS[1]}}" in
             {with_files}) COMPREPLY=() ;;
-            {subcommands}) return 0 ;;
+            # A subcommand's words: its flags once a dash is typed.
+            {subcommands})
+                [[ -z ${{cur}} ]] && COMPREPLY=( $(compgen -X '-*' -W "${{COMPREPLY[*]}}" -- '') )
+                return 0
+                ;;
             # The top level: the scene, after flags.
             *) COMPREPLY=() ;;
         esac

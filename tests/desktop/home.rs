@@ -84,109 +84,204 @@ fn sorted(names: &[&str]) -> Vec<String> {
     v
 }
 
-#[test]
-fn bash_completes_subcommands_flags_files_and_values() {
-    if !tool("bash", "bash") {
-        return;
+/// What a shell's completion offers, line by line (the last word being
+/// completed), in a folder holding `scene.xml` and `shot.png`: the same in
+/// bash, zsh and fish.
+fn completion_cases() -> Vec<(Vec<&'static str>, Vec<String>)> {
+    let methods: Vec<&str> = rayoflight::render::methods()
+        .iter()
+        .map(|m| m.name)
+        .collect();
+    let passes: Vec<&str> = rayoflight::render::Pass::ALL
+        .iter()
+        .map(|p| p.name())
+        .collect();
+    let both = sorted(&["scene.xml", "shot.png"]);
+    let mut cases = vec![
+        // Subcommands, and the scene, where the first word goes.
+        (
+            vec!["rayoflight", "s"],
+            sorted(&["scene.xml", "schema", "sheet", "shot.png", "split", "study"]),
+        ),
+        (vec!["rayoflight", "install"], sorted(&["install-desktop"])),
+        // Flags: the render's after a scene, a subcommand's after it.
+        (
+            vec!["rayoflight", "scene.xml", "--no"],
+            sorted(&["--no-gui"]),
+        ),
+        (
+            vec!["rayoflight", "edit", "scene.xml", "--re"],
+            sorted(&["--remove"]),
+        ),
+        (vec!["rayoflight", "split", "--ta"], sorted(&["--tasks"])),
+        (
+            vec!["rayoflight", "install-desktop", "--u"],
+            sorted(&["--uninstall"]),
+        ),
+        // Values: the names the parser takes, from the library's own lists.
+        (
+            vec!["rayoflight", "scene.xml", "--method", ""],
+            sorted(&methods),
+        ),
+        (vec!["rayoflight", "--method", ""], sorted(&methods)),
+        (
+            vec![
+                "rayoflight",
+                "explain",
+                "scene.xml",
+                "1",
+                "2",
+                "--method",
+                "f32",
+            ],
+            sorted(&["f32", "f32-eps-1e-3"]),
+        ),
+        (
+            vec!["rayoflight", "scene.xml", "--pass", ""],
+            sorted(&passes),
+        ),
+        (vec!["rayoflight", "--pass", ""], sorted(&passes)),
+        (
+            vec!["rayoflight", "edit", "scene.xml", "--add", ""],
+            sorted(&["light", "plane", "sphere"]),
+        ),
+        (vec!["rayoflight", "completions", "z"], sorted(&["zsh"])),
+        (
+            vec!["rayoflight", "completions", ""],
+            sorted(&["bash", "elvish", "fish", "powershell", "zsh"]),
+        ),
+        (
+            vec!["rayoflight", "man", "ex"],
+            sorted(&["explain", "export-pov"]),
+        ),
+        (vec!["rayoflight", "explain", "sc"], sorted(&["scene.xml"])),
+        (
+            vec!["rayoflight", "split", "scene.xml", "--tasks", ""],
+            Vec::new(),
+        ),
+    ];
+    // Files where a file goes: the scene, -out, parts, images.
+    for line in [
+        vec!["rayoflight", "-q", ""],
+        vec!["rayoflight", "scene.xml", "-out", ""],
+        vec!["rayoflight", "edit", ""],
+        vec!["rayoflight", "plan", ""],
+        vec!["rayoflight", "assemble", "-o", "all.png", ""],
+        vec!["rayoflight", "sheet", "-o", "sheet.png", "shot.png", ""],
+        vec!["rayoflight", "bench", "--csv", ""],
+    ] {
+        cases.push((line, both.clone()));
     }
+    // Nothing after a flag whose value is a number or PATH=VALUE.
+    for flag in ["--threads", "--aa", "--set", "--region"] {
+        cases.push((vec!["rayoflight", "scene.xml", flag, ""], Vec::new()));
+    }
+    cases
+}
+
+/// Every case of [`completion_cases`] through `complete`; all the lines
+/// that differ, in one failure.
+fn completes_every_case(shell: &str, complete: impl Fn(&[&str]) -> Vec<String>) {
+    let wrong: Vec<String> = completion_cases()
+        .into_iter()
+        .filter_map(|(line, expected)| {
+            let offered = complete(&line);
+            (offered != expected)
+                .then(|| format!("{shell} {line:?}: offered {offered:?}, expected {expected:?}"))
+        })
+        .collect();
+    assert!(wrong.is_empty(), "{}", wrong.join("\n"));
+}
+
+/// The folder the cases complete in, and the script of `shell` in it.
+fn completion_folder(shell: &str, file: &str) -> (tempfile::TempDir, std::path::PathBuf) {
     let dir = tempfile::tempdir().unwrap();
-    let script = dir.path().join("rayoflight.bash");
-    fs::write(&script, run_ok(&["completions", "bash"])).unwrap();
     let work = dir.path().join("work");
     fs::create_dir(&work).unwrap();
     for f in ["scene.xml", "shot.png"] {
         fs::write(work.join(f), "").unwrap();
     }
-    let complete = |line: &[&str]| bash_completes(&script, &work, line);
+    fs::write(dir.path().join(file), run_ok(&["completions", shell])).unwrap();
+    (dir, work)
+}
 
-    // Subcommands, and the scene, where the first word goes.
-    assert_eq!(
-        complete(&["rayoflight", "s"]),
-        sorted(&["scene.xml", "schema", "sheet", "shot.png", "split", "study"])
-    );
-    assert_eq!(
-        complete(&["rayoflight", "install"]),
-        sorted(&["install-desktop"])
-    );
-    // Flags.
-    assert_eq!(
-        complete(&["rayoflight", "scene.xml", "--no"]),
-        sorted(&["--no-gui"])
-    );
-    assert_eq!(
-        complete(&["rayoflight", "edit", "scene.xml", "--re"]),
-        sorted(&["--remove"])
-    );
-    // Values: the names the parser takes, from the library's own lists.
-    let methods: Vec<&str> = rayoflight::render::methods()
-        .iter()
-        .map(|m| m.name)
-        .collect();
-    assert_eq!(
-        complete(&["rayoflight", "scene.xml", "--method", ""]),
-        sorted(&methods)
-    );
-    assert_eq!(
-        complete(&[
-            "rayoflight",
-            "explain",
-            "scene.xml",
-            "1",
-            "2",
-            "--method",
-            "f32"
-        ]),
-        sorted(&["f32", "f32-eps-1e-3"])
-    );
-    let passes: Vec<&str> = rayoflight::render::Pass::ALL
-        .iter()
-        .map(|p| p.name())
-        .collect();
-    assert_eq!(
-        complete(&["rayoflight", "scene.xml", "--pass", ""]),
-        sorted(&passes)
-    );
-    assert_eq!(
-        complete(&["rayoflight", "edit", "scene.xml", "--add", ""]),
-        sorted(&["light", "plane", "sphere"])
-    );
-    assert_eq!(
-        complete(&["rayoflight", "completions", "z"]),
-        sorted(&["zsh"])
-    );
-    assert_eq!(
-        complete(&["rayoflight", "man", "ex"]),
-        sorted(&["explain", "export-pov"])
-    );
-    // Files where a file goes: the scene, -out, parts, images.
-    let both = sorted(&["scene.xml", "shot.png"]);
-    for line in [
-        &["rayoflight", "-q", ""][..],
-        &["rayoflight", "scene.xml", "-out", ""],
-        &["rayoflight", "edit", ""],
-        &["rayoflight", "plan", ""],
-        &["rayoflight", "assemble", "-o", "all.png", ""],
-        &["rayoflight", "sheet", "-o", "sheet.png", "shot.png", ""],
-        &["rayoflight", "bench", "--csv", ""],
-    ] {
-        assert_eq!(complete(line), both, "{line:?}");
+#[test]
+fn bash_completes_subcommands_flags_files_and_values() {
+    if !tool("bash", "bash") {
+        return;
     }
-    assert_eq!(
-        complete(&["rayoflight", "explain", "sc"]),
-        sorted(&["scene.xml"])
-    );
-    // Nothing after a flag whose value is a number or PATH=VALUE.
-    for flag in ["--threads", "--aa", "--set", "--region"] {
-        assert_eq!(
-            complete(&["rayoflight", "scene.xml", flag, ""]),
-            Vec::<String>::new(),
-            "{flag}"
-        );
+    let (dir, work) = completion_folder("bash", "rayoflight.bash");
+    let script = dir.path().join("rayoflight.bash");
+    completes_every_case("bash", |line| bash_completes(&script, &work, line));
+}
+
+/// What zsh offers for `line`, as a Tab in an interactive zsh would
+/// (`tests/desktop/zsh-complete.zsh`: the completion system in a
+/// pseudo-terminal, each match printed).
+fn zsh_completes(fpath: &Path, dir: &Path, line: &[&str]) -> Vec<String> {
+    let capture = Path::new(ROOT).join("tests/desktop/zsh-complete.zsh");
+    let o = Command::new("zsh")
+        .arg("-f")
+        .arg(&capture)
+        .arg(fpath)
+        .arg(line.join(" "))
+        .current_dir(dir)
+        .env("HOME", dir)
+        .output()
+        .expect("zsh runs");
+    assert!(o.status.success(), "{line:?}: {}", stderr(&o));
+    let mut offered: Vec<String> = stdout(&o)
+        .lines()
+        .filter(|l| !l.is_empty())
+        .map(str::to_owned)
+        .collect();
+    offered.sort();
+    offered.dedup();
+    offered
+}
+
+#[test]
+fn zsh_completes_as_bash_does() {
+    if !tool("zsh", "zsh") {
+        return;
     }
-    assert_eq!(
-        complete(&["rayoflight", "split", "scene.xml", "--tasks", ""]),
-        Vec::<String>::new()
+    let (dir, work) = completion_folder("zsh", "_rayoflight");
+    completes_every_case("zsh", |line| zsh_completes(dir.path(), &work, line));
+}
+
+/// What fish offers for `line` (`complete -C`, the script sourced).
+fn fish_completes(script: &Path, dir: &Path, line: &[&str]) -> Vec<String> {
+    let program = format!(
+        "source '{}'; complete -C '{}'",
+        script.display(),
+        line.join(" ")
     );
+    let o = Command::new("fish")
+        .args(["--no-config", "-c", &program])
+        .current_dir(dir)
+        .env("HOME", dir)
+        .output()
+        .expect("fish runs");
+    assert!(o.status.success(), "{line:?}: {}", stderr(&o));
+    let mut offered: Vec<String> = stdout(&o)
+        .lines()
+        .filter_map(|l| l.split('\t').next())
+        .filter(|l| !l.is_empty())
+        .map(str::to_owned)
+        .collect();
+    offered.sort();
+    offered.dedup();
+    offered
+}
+
+#[test]
+fn fish_completes_as_bash_does() {
+    if !tool("fish", "fish") {
+        return;
+    }
+    let (dir, work) = completion_folder("fish", "rayoflight.fish");
+    let script = dir.path().join("rayoflight.fish");
+    completes_every_case("fish", |line| fish_completes(&script, &work, line));
 }
 
 #[test]
