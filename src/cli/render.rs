@@ -218,6 +218,18 @@ pub(super) fn opens_app(r: &RenderArgs) -> bool {
 
 /// Renders the scene as `r` asks, or opens the app on it.
 pub(super) fn run(r: RenderArgs) -> Result<(), Failure> {
+    // A scene that is not there: said, with no window waiting for it.
+    if let Some(scene) = &r.scene
+        && let Err(e) = std::fs::metadata(scene)
+        && e.kind() == std::io::ErrorKind::NotFound
+        && let Err(e) = scene::load(scene)
+    {
+        let hint = match scene.to_str() {
+            Some("help") => "; for help: rayoflight --help",
+            _ => "",
+        };
+        return Err(Failure::Error(format!("{e}{hint}")));
+    }
     if opens_app(&r) {
         #[cfg(feature = "gui")]
         return open_app(r.scene.as_deref());

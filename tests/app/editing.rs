@@ -1158,3 +1158,18 @@ fn a_save_runs_beside_the_window_and_edits_made_meanwhile_stay_unsaved() {
         Illumination::Ambient
     );
 }
+
+/// Opening a file that is not there (a path typed where no file dialog
+/// opens, a stale entry of Recent) says so and keeps the document on
+/// screen: no window waits for a file that never was.
+#[test]
+fn opening_a_missing_file_says_so_and_keeps_the_document() {
+    let (dir, path) = common::scene_file("scene.xml", SCENE);
+    let missing = dir.path().join("nosuch.xml");
+    let mut harness = app_on(Document::open(&path).unwrap());
+    harness.state_mut().run(Command::OpenFile(missing.clone()));
+    harness.run_steps(2);
+    assert_eq!(harness.state().document().path(), Some(path.as_path()));
+    harness.get_by_label_contains("no such file");
+    assert!(!missing.exists());
+}

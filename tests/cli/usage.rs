@@ -7,6 +7,7 @@ use crate::common;
 
 use crate::common::{TINY, files_in, rayoflight, stderr, stdout};
 use std::fs;
+use std::process::Command;
 
 /// A temporary directory holding `tiny.xml`.
 #[test]
@@ -571,4 +572,30 @@ fn quiet_alone_renders_without_opening_the_app() {
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(files_in(dir.path()), ["tiny.png", "tiny.xml"]);
+}
+
+/// A scene that is not there is an error said plainly, exit 1, even with
+/// a display where the app would open: no window waits for the file. A
+/// mistyped `rayoflight help` says where help is.
+#[test]
+fn a_missing_scene_is_an_error_not_a_window() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, hint) in [("nosuch.xml", false), ("help", true)] {
+        let o = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+            .arg(name)
+            .current_dir(dir.path())
+            // A display that is not there: a window tried would fail
+            // with status 2 and say so.
+            .env("DISPLAY", ":987")
+            .env_remove("WAYLAND_DISPLAY")
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(1), "{name}: {}", stderr(&o));
+        let said = stderr(&o);
+        assert!(
+            said.starts_with(&format!("{name}: cannot read the scene file: ")),
+            "{said}"
+        );
+        assert_eq!(said.contains("rayoflight --help"), hint, "{said}");
+    }
 }

@@ -84,6 +84,14 @@ impl RayOfLightApp {
     /// own while the window goes on (a million spheres take seconds to
     /// read), with the status saying so and Esc to stop waiting.
     pub(super) fn open(&mut self, path: &Path) {
+        // A file that is not there is said, not opened as a window waiting
+        // for it (nor kept in Recent).
+        if let Err(e) = std::fs::metadata(path)
+            && e.kind() == std::io::ErrorKind::NotFound
+        {
+            self.notify(format!("not opened: {}: no such file", path.display()));
+            return;
+        }
         let bytes = std::fs::metadata(path).map_or(0, |m| m.len());
         if bytes < crate::session::BACKGROUND_BYTES {
             match Document::open(path) {
@@ -628,7 +636,9 @@ impl RayOfLightApp {
             ui.horizontal(|ui| {
                 let enter = edit.lost_focus() && ui.input(|i| i.key_pressed(Key::Enter));
                 if (ui.button("OK").clicked() || enter) && !prompt.text.trim().is_empty() {
-                    chosen = Some(PathBuf::from(prompt.text.trim()));
+                    let home = std::env::var_os("HOME").map(PathBuf::from);
+                    let typed = prompt.text.trim();
+                    chosen = Some(crate::system::files::typed_path(typed, home.as_deref()));
                     close = true;
                 }
                 if ui.button("Cancel").clicked() {

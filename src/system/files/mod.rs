@@ -55,6 +55,19 @@ pub fn special_kind(meta: &Metadata) -> Option<&'static str> {
 /// `path` made absolute against the current folder (without resolving
 /// links or `..`), or as given when the current folder is unknown: the
 /// one name the app keeps a file under (watcher, recent files, journal).
+/// A path as a user types it: a leading `~` (alone or before a `/`) is
+/// the home folder (`$HOME`), as a shell reads it; anything else (and
+/// `~user`, and `~` without a home) is taken as written.
+pub fn typed_path(text: &str, home: Option<&Path>) -> PathBuf {
+    match (text.strip_prefix('~'), home) {
+        (Some(""), Some(home)) => home.to_owned(),
+        (Some(rest), Some(home)) if rest.starts_with('/') => {
+            home.join(rest.trim_start_matches('/'))
+        }
+        _ => PathBuf::from(text),
+    }
+}
+
 pub fn absolute(path: &Path) -> PathBuf {
     std::path::absolute(path).unwrap_or_else(|_| path.to_owned())
 }
@@ -333,6 +346,17 @@ fn identity_of(meta: &Metadata) -> (u64, u64) {
 
 #[cfg(all(test, unix))]
 mod tests {
+    #[test]
+    fn a_typed_tilde_is_the_home_folder() {
+        let home = Some(Path::new("/home/u"));
+        assert_eq!(typed_path("~", home), Path::new("/home/u"));
+        assert_eq!(typed_path("~/a/b.xml", home), Path::new("/home/u/a/b.xml"));
+        assert_eq!(typed_path("~//a.xml", home), Path::new("/home/u/a.xml"));
+        assert_eq!(typed_path("~bob/a.xml", home), Path::new("~bob/a.xml"));
+        assert_eq!(typed_path("a/~/b", home), Path::new("a/~/b"));
+        assert_eq!(typed_path("~/a.xml", None), Path::new("~/a.xml"));
+    }
+
     use super::*;
 
     #[test]
