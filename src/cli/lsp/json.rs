@@ -84,21 +84,21 @@ fn put(value: &mut serde_json::Value, text: String) {
 fn longest_string(body: &[u8]) -> Option<std::ops::Range<usize>> {
     let mut longest: Option<std::ops::Range<usize>> = None;
     let mut i = 0;
-    while i < body.len() {
-        if body[i] != b'"' {
-            i += 1;
-            continue;
-        }
-        let start = i;
-        i += 1;
+    // memchr finds the quotes and backslashes: a 230 MB text is crossed
+    // in tens of milliseconds, not a byte at a time.
+    while let Some(quote) = memchr::memchr(b'"', &body[i..]) {
+        let start = i + quote;
+        i = start + 1;
         loop {
-            match body.get(i)? {
-                b'\\' => i += 2,
-                b'"' => break,
-                _ => i += 1,
+            let at = i + memchr::memchr2(b'"', b'\\', body.get(i..)?)?;
+            match body[at] {
+                b'\\' => i = at + 2,
+                _ => {
+                    i = at + 1;
+                    break;
+                }
             }
         }
-        i += 1;
         if longest.as_ref().is_none_or(|l| i - start > l.len()) {
             longest = Some(start..i);
         }
