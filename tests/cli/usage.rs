@@ -599,3 +599,17 @@ fn a_missing_scene_is_an_error_not_a_window() {
         assert_eq!(said.contains("rayoflight --help"), hint, "{said}");
     }
 }
+
+/// `export-pov -out -` prints the POV-Ray text, as `new -` prints its
+/// scene; it wrote a file named `-` before.
+#[test]
+fn export_pov_to_dash_prints() {
+    let dir = tempfile::tempdir().unwrap();
+    fs::write(dir.path().join("s.xml"), rayoflight::EXAMPLE_SCENE).unwrap();
+    let o = rayoflight(dir.path(), &["export-pov", "s.xml", "-out", "-"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = stdout(&o);
+    assert!(text.starts_with("// POV-Ray 3.7 translation"), "{text}");
+    assert!(text.contains("+Is.pov"), "{text}");
+    assert_eq!(files_in(dir.path()), ["s.xml"]);
+}

@@ -623,7 +623,7 @@ impl RayOfLightApp {
             ui.label(match prompt.kind {
                 DialogKind::Open => "Open scene file:",
                 DialogKind::SaveAs => "Save scene as:",
-                DialogKind::Export => "Export image to (.png or .jpg):",
+                DialogKind::Export => "Export image to (.png, .jpg or .exr):",
             });
             let edit = ui.text_edit_singleline(&mut prompt.text);
             if !prompt.focused {

@@ -334,7 +334,6 @@ impl RayOfLightApp {
                 pick(ui, true, Command::OneToOne);
                 pick(ui, true, Command::CameraFromFile);
                 pick(ui, true, Command::Study);
-                pick(ui, true, Command::Help);
                 pick(ui, true, Command::Explain);
                 let overlays = binding(&Command::Overlays).map_or("", |b| b.label);
                 item(
@@ -363,6 +362,9 @@ impl RayOfLightApp {
                         Command::AntiAliasing(aa),
                     );
                 }
+            });
+            ui.menu_button("Help", |ui| {
+                pick(ui, true, Command::Help);
             });
         });
         if let Some(command) = chosen.take() {

@@ -241,6 +241,15 @@ impl RayOfLightApp {
             }
             app.notify(text);
         }
+        // The first screen says where the keys are, and the two things
+        // the mouse does that a newcomer would not guess.
+        if app.status.notice.is_none() {
+            app.notify(
+                "F1: keys and mouse (Help menu). Drag the picture to orbit; click an object \
+                 to select it"
+                    .to_owned(),
+            );
+        }
         app.watch();
         app.request_render();
         app
