@@ -25,6 +25,7 @@ use std::path::{Path, PathBuf};
 /// (the engine's errors list them too).
 pub const PATHS: &str = "\
 Paths count from 1, in file order; objects are spheres and planes together.
+
 Values (--set PATH=VALUE):
   model.type, model.depth
   camera.width, camera.height, camera.eyeDistance
@@ -34,8 +35,10 @@ Values (--set PATH=VALUE):
   object[N].transformation[K].<x|y|z|angle|factor>
   light[N].<x|y|z>
   light[N].color.<red|green|blue>
+
 Elements (--remove PATH):
   object[N], light[N], object[N].transformation[K], camera.transformation[K]
+
 Each value is checked as the loader checks the file: ka >= 0, model.type
 one of ambient, lambert, phong, whitted, and so on.";
 

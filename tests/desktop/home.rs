@@ -350,6 +350,20 @@ fn man_renders_every_page_without_a_warning() {
             None => "rayoflight".to_owned(),
         };
         assert!(shown.contains(&name), "{sub:?}: {shown}");
+        // Each heading of the edit page's list starts a line of its own
+        // (they ran into the line before).
+        if sub == Some("edit") {
+            for heading in [
+                "Values (--set PATH=VALUE):",
+                "Elements (--remove PATH):",
+                "Each ",
+            ] {
+                assert!(
+                    shown.lines().any(|l| l.trim_start().starts_with(heading)),
+                    "{heading}: {shown}"
+                );
+            }
+        }
     }
     let o = rayoflight(Path::new(ROOT), &["man", "frobnicate"]);
     assert_eq!(o.status.code(), Some(2));
