@@ -69,15 +69,23 @@ impl Lines {
             }
         };
         let keep = self.starts.partition_point(|&s| s < a.max(1));
-        let after = self.starts.partition_point(|&s| s < b + 1);
-        let moved: Vec<usize> = self.starts[after..]
-            .iter()
-            .map(|&s| s - b + new_end)
+        let after = self.starts.partition_point(|&s| s < b + 1).max(keep);
+        let found: Vec<usize> = (a.max(1)..=new_end.min(text.len()))
+            .filter(|&p| is_start(p))
             .collect();
-        self.starts.truncate(keep);
-        self.starts
-            .extend((a.max(1)..=new_end.min(text.len())).filter(|&p| is_start(p)));
-        self.starts.extend(moved);
+        // In place: the lines of a million spheres are 56 MB, moved once
+        // and shifted where they lie, not copied out and back at each
+        // keystroke.
+        let moved_from = keep + found.len();
+        self.starts.splice(keep..after, found);
+        for s in &mut self.starts[moved_from..] {
+            *s = *s - b + new_end;
+        }
+    }
+
+    /// Where each line starts, in bytes.
+    pub fn starts(&self) -> &[usize] {
+        &self.starts
     }
 
     /// The place of byte `offset` of `text` (clamped to the text).
@@ -156,7 +164,7 @@ pub fn diagnostics(text: &str) -> Vec<Diagnostic> {
 /// loader reports it, or none: read from the edits on where it can be
 /// ([`Reading`]), placed by the text's `lines`.
 pub fn diagnostics_after(reading: &mut Reading, text: &str, lines: &Lines) -> Vec<Diagnostic> {
-    match reading.check(text) {
+    match reading.check(text, Some(lines.starts())) {
         Ok(()) => Vec::new(),
         Err(e) => vec![diagnostic_with(text, Some(lines), &e)],
     }

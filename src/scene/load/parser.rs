@@ -184,6 +184,28 @@ impl Gathered {
     }
 }
 
+/// [`Position::at_offset`] of byte `offset` of `text`, found with the
+/// line starts of the text `bom` bytes longer before it (its byte-order
+/// mark): the same line and column, in a search.
+fn position_by_lines(text: &str, starts: &[usize], bom: usize, offset: usize) -> Position {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let at = offset + bom;
+    let line = starts.partition_point(|&s| s <= at).max(1);
+    let start = starts
+        .get(line - 1)
+        .map_or(0, |&s| s.saturating_sub(bom))
+        .min(offset);
+    // As `at_offset` counts: from the last line break (the CR of a CRLF
+    // included) before the offset.
+    let tail = text.get(start..offset).unwrap_or_default();
+    let from = tail.rfind(['\n', '\r']).map_or(0, |i| i + 1);
+    let column = 1 + tail[from..].chars().count();
+    Position { line, column }
+}
+
 pub(super) struct Parser<'a> {
     /// What is parsed: the file's text, or a piece of it
     /// ([`in_pieces`](super::pieces::in_pieces)).
@@ -227,6 +249,11 @@ pub(super) struct Parser<'a> {
     /// Between two of the root's children at this byte of `text`, the
     /// parse stops ([`Node::Stop`]).
     pub(super) stop: Option<usize>,
+    /// Where the lines of `text` start, `bom` bytes before it (the text
+    /// as an editor holds it, its byte-order mark included), where the
+    /// caller has them: an error's line is found by a search, not by
+    /// counting the lines before it.
+    pub(super) lines: Option<(&'a [usize], usize)>,
 }
 
 impl<'a> Parser<'a> {
@@ -256,6 +283,7 @@ impl<'a> Parser<'a> {
             check_only: false,
             record: false,
             stop: None,
+            lines: None,
         }
     }
 
@@ -268,11 +296,11 @@ impl<'a> Parser<'a> {
     }
 
     fn error_at(&self, offset: usize, kind: LoadErrorKind) -> LoadError {
-        LoadError::new(
-            self.path,
-            Some(Position::at_offset(self.text, offset)),
-            kind,
-        )
+        let position = match self.lines {
+            Some((starts, bom)) => position_by_lines(self.text, starts, bom, offset),
+            None => Position::at_offset(self.text, offset),
+        };
+        LoadError::new(self.path, Some(position), kind)
     }
 
     fn xml_at(&self, offset: usize, message: String) -> LoadError {
