@@ -10,9 +10,11 @@
 //! protocol's default, which the server announces). Documents are synced
 //! incrementally: a change is spliced into the document's text and its
 //! line index is moved, not rebuilt. Errors are found off the message
-//! loop, on a thread of their own that copies the newest text of each
-//! changed document and checks it at most every 100 ms: a big buffer makes
-//! its errors come later, never the typing slower. The same thread hands
+//! loop, on a thread of their own that takes the newest text of each
+//! changed document (shared, not copied) with the edits made since, and
+//! checks it at most every 100 ms, reading only where the edits fall
+//! ([`rayoflight::scene::Reading`]): a big buffer makes its errors come
+//! later, never the typing slower. The same thread hands
 //! each newest text to the user's running apps
 //! ([`rayoflight::desktop::editor_link`]), tells them when the editor saves or
 //! closes the document, and which object the editor's cursor is in (a
@@ -23,7 +25,8 @@
 //! where it is.
 //!
 //! Messages come and go through [`transport`], which bounds a message's
-//! size and memory before taking it. The server ends at the editor's
+//! size and memory before taking it ([`json`] takes a big document's text
+//! out of its message in place). The server ends at the editor's
 //! `exit`, or when the editor's end of stdin closes; every thread sends through one sender, let go then, so
 //! that the thread writing to the editor ends too.
 
