@@ -16,7 +16,6 @@ use super::grammar::{self, Value};
 use super::xml::is_name_char;
 use super::{LoadError, Position, Reading, Shape, layout, names};
 use std::ops::Range;
-use std::path::Path;
 
 /// A place as the protocol counts it: 0-based line, 0-based column in
 /// UTF-16 code units.
@@ -152,12 +151,10 @@ pub struct Diagnostic {
     pub message: String,
 }
 
-/// The first error of `text` as the loader reports it, or none.
+/// The first error of `text` as the loader reports it, or none: a text
+/// read whole ([`diagnostics_after`] with nothing known before).
 pub fn diagnostics(text: &str) -> Vec<Diagnostic> {
-    match super::parse(text, Path::new("")) {
-        Ok(_) => Vec::new(),
-        Err(e) => vec![diagnostic(text, &e)],
-    }
+    diagnostics_after(&mut Reading::default(), text, &Lines::new(text))
 }
 
 /// The first error of `text` after edits `reading` was told of, as the
@@ -166,39 +163,30 @@ pub fn diagnostics(text: &str) -> Vec<Diagnostic> {
 pub fn diagnostics_after(reading: &mut Reading, text: &str, lines: &Lines) -> Vec<Diagnostic> {
     match reading.check(text, Some(lines.starts())) {
         Ok(()) => Vec::new(),
-        Err(e) => vec![diagnostic_with(text, Some(lines), &e)],
+        Err(e) => vec![diagnostic(text, lines, &e)],
     }
 }
 
-fn diagnostic(text: &str, e: &LoadError) -> Diagnostic {
-    diagnostic_with(text, None, e)
-}
-
-/// [`diagnostic`], placed by `lines` (those of `text`) where given.
-fn diagnostic_with(text: &str, lines: Option<&Lines>, e: &LoadError) -> Diagnostic {
+/// The error `e` of `text`, placed by `lines` (those of `text`).
+fn diagnostic(text: &str, lines: &Lines, e: &LoadError) -> Diagnostic {
     let message = e.kind.to_string();
     let range = match e.position {
         Some(position) => {
-            // The loader counts columns without a byte-order mark.
+            // The loader counts columns without a byte-order mark: on the
+            // first line after one, counted from after it.
             let bom = if text.starts_with('\u{feff}') && position.line == 1 {
                 '\u{feff}'.len_utf8()
             } else {
                 0
             };
-            let at = match lines {
-                // On the first line after a byte-order mark: counted from
-                // after it.
-                _ if bom > 0 => {
+            let at = match bom {
+                0 => lines.offset_of_position(text, position),
+                _ => {
                     let column = position.column.saturating_sub(1);
                     bom + text[bom..]
                         .char_indices()
                         .nth(column)
                         .map_or(text.len() - bom, |(i, _)| i)
-                }
-                Some(lines) => lines.offset_of_position(text, position),
-                None => {
-                    let body = &text[bom..];
-                    bom + Lines::new(body).offset_of_position(body, position)
                 }
             };
             at..word_end(text, at)
