@@ -123,6 +123,16 @@ impl<'b> Attrs<'b> {
     }
 }
 
+/// What ends a run of the root's children ([`Parser::root_children`]).
+enum Ended {
+    /// An end tag (the root's, where the reading is right), at its `<`.
+    Close(usize),
+    /// The end of the text.
+    Eof,
+    /// [`Parser::stop`].
+    Stop,
+}
+
 /// Everything a `<scene>` gathers before it is checked for completeness.
 #[derive(Default)]
 pub(super) struct Gathered {
@@ -823,19 +833,10 @@ impl<'a> Parser<'a> {
         mut scene: Gathered,
     ) -> Result<(Gathered, bool), LoadError> {
         if !root.empty {
-            loop {
-                match self.next()? {
-                    Node::Open(child) => {
-                        let (_, name) = self.known_child(&child, "scene", SCENE_CHILDREN)?;
-                        self.scene_child(&child, name, &mut scene)?;
-                    }
-                    Node::Close(at) => {
-                        scene.content_end = Some(at);
-                        break;
-                    }
-                    Node::Eof => return Err(self.unclosed("scene")),
-                    Node::Stop => return Ok((scene, true)),
-                }
+            match self.root_children(&mut scene)? {
+                Ended::Close(at) => scene.content_end = Some(at),
+                Ended::Eof => return Err(self.unclosed("scene")),
+                Ended::Stop => return Ok((scene, true)),
             }
         }
         self.epilogue()?;
@@ -925,16 +926,24 @@ impl<'a> Parser<'a> {
             self.at_start = false;
             self.depth = 1;
         }
+        match self.root_children(&mut scene)? {
+            Ended::Close(at) => Err(self.xml_at(at, "the root ends inside a piece".to_owned())),
+            Ended::Eof | Ended::Stop => Ok(scene),
+        }
+    }
+
+    /// The root's children from here on, each gathered into `scene`, up
+    /// to what ends them.
+    fn root_children(&mut self, scene: &mut Gathered) -> Result<Ended, LoadError> {
         loop {
             match self.next()? {
                 Node::Open(child) => {
                     let (_, name) = self.known_child(&child, "scene", SCENE_CHILDREN)?;
-                    self.scene_child(&child, name, &mut scene)?;
+                    self.scene_child(&child, name, scene)?;
                 }
-                Node::Close(at) => {
-                    return Err(self.xml_at(at, "the root ends inside a piece".to_owned()));
-                }
-                Node::Eof | Node::Stop => return Ok(scene),
+                Node::Close(at) => return Ok(Ended::Close(at)),
+                Node::Eof => return Ok(Ended::Eof),
+                Node::Stop => return Ok(Ended::Stop),
             }
         }
     }
