@@ -326,6 +326,18 @@ fn parse_body(
 mod tests {
     use super::*;
 
+    /// Numbers below the one asked for, the same sequence from `seed` on
+    /// every run (xorshift): where the loader's tests put their edits.
+    pub(super) fn below(seed: u64) -> impl FnMut(usize) -> usize {
+        let mut state = seed;
+        move |n| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        }
+    }
+
     /// The parse in one piece, which gives every error.
     pub(super) fn in_one(text: &str) -> Result<Scene, LoadError> {
         Parser::new(text, Path::new("t.xml")).document()

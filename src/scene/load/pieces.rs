@@ -462,7 +462,7 @@ fn last_cut(body: &[u8], from: usize, end: usize) -> Option<usize> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{in_one, varied};
+    use super::super::tests::{below, in_one, varied};
     use super::*;
     use crate::scene::error::LoadErrorKind;
     use crate::scene::{load, load_packed, load_with_text, parse};
@@ -579,13 +579,7 @@ mod tests {
             "<light x=\"1\" y=\"2\" z=\"3\"/>",
             "\u{feff}",
         ];
-        let mut state = 0x2545_F491_4F6C_DD1Du64;
-        let mut next = move |n: usize| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % n as u64) as usize
-        };
+        let mut next = below(0x2545_F491_4F6C_DD1Du64);
         let mut clean = 0;
         for round in 0..400 {
             let mut text = base.clone();

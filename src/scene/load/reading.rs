@@ -183,10 +183,7 @@ fn again(
     let stop = usize::try_from(stop as isize + dirty.delta).ok()?;
     // What a parse in one has gathered at `from`.
     let mut before = Gathered::default();
-    let mut seen = [0usize; 4];
-    for (_, child) in &known.places[..first] {
-        seen[*child as usize] += 1;
-    }
+    let seen = counts(&known.places[..first]);
     before.unkept_objects = seen[Child::Object as usize];
     before.unkept_lights = seen[Child::Light as usize];
     if seen[Child::Camera as usize] > 0 {
@@ -218,22 +215,12 @@ fn again(
     }
     // Stopped where the old text goes on: what only the whole can tell
     // is read whole.
-    let mut old = [0usize; 4];
-    for (_, child) in &known.places[first..past] {
-        old[*child as usize] += 1;
-    }
-    let mut new = [0usize; 4];
-    for (_, child) in &read.places {
-        new[*child as usize] += 1;
-    }
+    let (old, new) = (counts(&known.places[first..past]), counts(&read.places));
     let (camera, model) = (Child::Camera as usize, Child::Model as usize);
     if old[camera] != new[camera] || old[model] != new[model] {
         return None;
     }
-    let mut rest = [0usize; 4];
-    for (_, child) in &known.places[past..] {
-        rest[*child as usize] += 1;
-    }
+    let rest = counts(&known.places[past..]);
     if read.object_count() + rest[Child::Object as usize] > MAX_OBJECTS
         || read.light_count() + rest[Child::Light as usize] > MAX_LIGHTS
     {
@@ -254,9 +241,18 @@ fn again(
     Some(Ok(()))
 }
 
+/// How many of `places` are of each kind (by [`Child`] as an index).
+fn counts(places: &[(usize, Child)]) -> [usize; 4] {
+    let mut counts = [0; 4];
+    for (_, child) in places {
+        counts[*child as usize] += 1;
+    }
+    counts
+}
+
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{in_one, varied};
+    use super::super::tests::{below, in_one, varied};
     use super::*;
 
     /// Where the lines of `text` start, as an editor's server keeps them.
@@ -302,13 +298,7 @@ mod tests {
             "-",
             "é",
         ];
-        let mut state = 0x9E37_79B9_7F4A_7C15u64;
-        let mut next = move |n: usize| {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            (state % n as u64) as usize
-        };
+        let mut next = below(0x9E37_79B9_7F4A_7C15u64);
         let base = varied(200);
         let (mut incremental, mut valid) = (0, 0);
         for round in 0..60 {
