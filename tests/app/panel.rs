@@ -245,15 +245,7 @@ fn the_object_list_of_a_big_scene_lays_out_only_the_rows_on_screen() {
 /// the list.
 #[test]
 fn the_first_screen_says_where_the_keys_are() {
-    let app = RayOfLightApp::new(
-        &egui::Context::default(),
-        Document::builtin(),
-        Persisted::in_memory(),
-    );
-    let mut harness = egui_kittest::Harness::builder()
-        .with_size(egui::vec2(1400.0, 1000.0))
-        .build_ui_state(|ui, app: &mut RayOfLightApp| app.draw(ui), app);
-    harness.run_steps(2);
+    let mut harness = crate::util::app_on(Document::builtin());
     harness.get_by_label_contains("F1: keys and mouse");
     harness.get_by_label_contains("click an object");
     assert!(harness.query_by_label("Keys and mouse").is_none());

@@ -68,9 +68,17 @@ printf '%s\n' "${{COMPREPLY[@]}}""#,
         .current_dir(dir)
         .output()
         .expect("bash runs");
-    assert!(o.status.success(), "{line:?}: {}", stderr(&o));
-    let mut offered: Vec<String> = stdout(&o)
+    offered(&o, line)
+}
+
+/// What a shell printed of its matches for `line`, one a line (a match's
+/// description after a tab left out), sorted; the shell must have
+/// succeeded.
+fn offered(o: &std::process::Output, line: &[&str]) -> Vec<String> {
+    assert!(o.status.success(), "{line:?}: {}", stderr(o));
+    let mut offered: Vec<String> = stdout(o)
         .lines()
+        .filter_map(|l| l.split('\t').next())
         .filter(|l| !l.is_empty())
         .map(str::to_owned)
         .collect();
@@ -229,13 +237,8 @@ fn zsh_completes(fpath: &Path, dir: &Path, line: &[&str]) -> Vec<String> {
         .env("HOME", dir)
         .output()
         .expect("zsh runs");
-    assert!(o.status.success(), "{line:?}: {}", stderr(&o));
-    let mut offered: Vec<String> = stdout(&o)
-        .lines()
-        .filter(|l| !l.is_empty())
-        .map(str::to_owned)
-        .collect();
-    offered.sort();
+    // A match offered under two tags is printed twice.
+    let mut offered = offered(&o, line);
     offered.dedup();
     offered
 }
@@ -262,14 +265,7 @@ fn fish_completes(script: &Path, dir: &Path, line: &[&str]) -> Vec<String> {
         .env("HOME", dir)
         .output()
         .expect("fish runs");
-    assert!(o.status.success(), "{line:?}: {}", stderr(&o));
-    let mut offered: Vec<String> = stdout(&o)
-        .lines()
-        .filter_map(|l| l.split('\t').next())
-        .filter(|l| !l.is_empty())
-        .map(str::to_owned)
-        .collect();
-    offered.sort();
+    let mut offered = offered(&o, line);
     offered.dedup();
     offered
 }
