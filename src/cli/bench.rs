@@ -138,7 +138,7 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
     let cores_steps = if args.cores_size > 0 { 3 } else { 0 };
     steps.set_total(
         (sets.len()
-            + (sets.len() - 1) * counts.len()
+            + sets.len() * counts.len()
             + sizes.len()
             + 1
             + big_steps
@@ -203,7 +203,7 @@ fn run_bench(args: &BenchArgs, steps: &Steps) -> Result<(), String> {
         ))?;
     }
     out(&format!(" {:>8}\n", "serial"))?;
-    for (name, scene) in sets.iter().skip(1) {
+    for (name, scene) in &sets {
         out(&format!("{name:<14}"))?;
         let mut one = None;
         let mut serial = None;

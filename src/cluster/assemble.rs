@@ -5,11 +5,12 @@
 //! naming the culprit, a file given twice, a file that is not a part, parts of another render
 //! (scene or options) or another version, a part whose pixels are not its
 //! region's size, a region outside the image, two parts that overlap and
-//! pixels no part holds. [`assemble`] then writes the image row by row:
-//! only the parts that cross the current row are open, each decoded a row
-//! at a time on a thread of its own while the other thread compresses, so
-//! memory holds a few rows, never the image (a 16000×16000 image is 768
-//! MB).
+//! pixels no part holds. [`assemble`] then writes the image band by band:
+//! only the parts that cross the current rows are open, each decoding its
+//! columns of a band straight into it, the parts side by side on the
+//! pool's threads while the bands before are compressed
+//! ([`crate::output::write_png`]), so memory holds a few bands, never the
+//! image (a 16000×16000 image is 768 MB).
 //!
 //! Every part crossing a row is open while the row is assembled: the
 //! soft limit of open files is raised to the hard one first, and parts
@@ -379,9 +380,7 @@ pub struct Assembled {
 }
 
 /// Checks the parts ([`check`]) and writes the full image to `out` as a
-/// PNG, atomically. Two threads share the work: one decodes the rows of
-/// the parts crossing each row of the image, the other filters
-/// and compresses them, a bounded queue of rows between them.
+/// PNG, atomically, decoding and compressing on every core.
 pub fn assemble(paths: &[PathBuf], out: &Path) -> Result<Assembled, AssembleError> {
     assemble_until(paths, out, &AtomicBool::new(false))
 }
@@ -406,45 +405,23 @@ pub fn assemble_until(
     let (width, height) = parts[0].part.image;
     output::check_target(out, width, height)?;
     check_open_files(&parts)?;
-    let (send, receive) = crossbeam_channel::bounded::<Result<Vec<u8>, AssembleError>>(QUEUED_ROWS);
+    let mut rows = Rows::new(&parts, width);
     let mut failure: Option<AssembleError> = None;
-    let written = std::thread::scope(|scope| {
-        scope.spawn(|| {
-            let mut rows = Rows::new(&parts, width);
-            for _ in 0..height {
-                let row = if stop.load(Ordering::Relaxed) {
-                    Err(AssembleError::Interrupted {
+    let written = crate::system::files::write_atomic_with(
+        out,
+        |w| {
+            output::write_png(w, width, height, &[], |band| {
+                let filled = match stop.load(Ordering::Relaxed) {
+                    true => Err(AssembleError::Interrupted {
                         path: out.to_owned(),
-                    })
-                } else {
-                    rows.next_row()
+                    }),
+                    false => rows.fill(band),
                 };
-                let failed = row.is_err();
-                // The writer has stopped: nothing more to decode for it.
-                if send.send(row).is_err() || failed {
-                    return;
-                }
-            }
-        });
-        let written = crate::system::files::write_atomic_with(
-            out,
-            |w| {
-                output::write_png(w, width, height, &[], |row| match receive.recv() {
-                    Ok(Ok(decoded)) => {
-                        row.copy_from_slice(&decoded);
-                        Ok(())
-                    }
-                    Ok(Err(e)) => Err(keep(&mut failure, e)),
-                    Err(_) => Err(std::io::Error::other("the decoding thread stopped")),
-                })
-            },
-            |_| Ok::<(), AssembleError>(()),
-        );
-        // A writer that stopped early (a failure, a full disk) lets the
-        // decoding thread's next send fail, and the thread end.
-        drop(receive);
-        written
-    });
+                filled.map_err(|e| keep(&mut failure, e))
+            })
+        },
+        |_| Ok::<(), AssembleError>(()),
+    );
     match (written, failure) {
         (_, Some(e)) => Err(e),
         (Err(e), None) => Err(e),
@@ -502,14 +479,12 @@ fn check_open_files(parts: &[PartFile]) -> Result<(), AssembleError> {
     Ok(())
 }
 
-/// Rows decoded ahead of the writer, at most: a few hundred kilobytes on
-/// a 16000-pixel-wide image.
-const QUEUED_ROWS: usize = 16;
-
 /// The image's rows, top to bottom, from the parts: each part opened as
-/// the rows reach its top, closed after its bottom, read a row at a time.
+/// the rows reach its top, closed after its bottom, read a row at a time
+/// straight into the image's band.
 struct Rows<'a> {
     waiting: std::iter::Peekable<std::slice::Iter<'a, PartFile>>,
+    /// The parts crossing the current row, from left to right.
     open: Vec<(PngReader, &'a PartFile)>,
     width: u32,
     y: u32,
@@ -526,7 +501,50 @@ impl<'a> Rows<'a> {
         }
     }
 
-    fn next_row(&mut self) -> Result<Vec<u8>, AssembleError> {
+    /// Fills `band`, the next rows of the image: a stretch of rows at a
+    /// time that the same parts cross, each part decoding its columns of
+    /// them on a thread of the pool while the others decode theirs.
+    fn fill(&mut self, band: &mut [u8]) -> Result<(), AssembleError> {
+        use rayon::prelude::*;
+        let row_bytes = self.width as usize * 3;
+        let mut rows: Vec<&mut [u8]> = band.chunks_exact_mut(row_bytes).collect();
+        while !rows.is_empty() {
+            self.open_and_close()?;
+            let y = self.y;
+            // Rows until a part ends or another begins.
+            let until = self
+                .open
+                .iter()
+                .map(|(_, p)| p.part.region.y1)
+                .chain(self.waiting.peek().map(|p| p.part.region.y0))
+                .fold(y + rows.len() as u32, u32::min);
+            let mut columns: Vec<Vec<&mut [u8]>> = (0..self.open.len())
+                .map(|_| Vec::with_capacity((until - y) as usize))
+                .collect();
+            for row in rows.drain(..(until - y) as usize) {
+                // The open parts tile the row (`check`), left to right.
+                let mut rest = row;
+                let mut x = 0;
+                for ((_, p), column) in self.open.iter().zip(&mut columns) {
+                    let region = p.part.region;
+                    let (_, at) = rest.split_at_mut((region.x0 - x) as usize * 3);
+                    let (mine, after) = at.split_at_mut(region.width() as usize * 3);
+                    column.push(mine);
+                    (rest, x) = (after, region.x1);
+                }
+            }
+            self.open
+                .par_iter_mut()
+                .zip(columns)
+                .try_for_each(|((reader, p), column)| decode(reader, p, column, until))?;
+            self.y = until;
+        }
+        Ok(())
+    }
+
+    /// Closes the parts that ended above the current row and opens those
+    /// that begin on it.
+    fn open_and_close(&mut self) -> Result<(), AssembleError> {
         let y = self.y;
         self.open.retain(|(_, p)| p.part.region.y1 > y);
         while let Some(p) = self.waiting.next_if(|p| p.part.region.y0 == y) {
@@ -540,28 +558,36 @@ impl<'a> Rows<'a> {
             }
             self.open.push((reader, p));
         }
-        let mut row = vec![0; self.width as usize * 3];
-        for (reader, p) in &mut self.open {
-            let decode_error = |reason: String| AssembleError::Decode {
-                path: p.path.clone(),
-                reason,
-            };
-            let decoded = reader
-                .next_row()
-                .map_err(|e| decode_error(e.to_string()))?
-                .ok_or_else(|| decode_error("ends before its last row".to_owned()))?;
-            let at = p.part.region.x0 as usize * 3;
-            row[at..at + decoded.data().len()].copy_from_slice(decoded.data());
-            if p.part.region.y1 == y + 1 {
-                // Its last row: read to the end of its pixels, so that the
-                // last chunk's CRC and the Adler-32 are checked too.
-                reader.finish().map_err(|e| decode_error(e.to_string()))?;
-                one_record(reader.info(), &p.path)?;
-            }
-        }
-        self.y += 1;
-        Ok(row)
+        self.open.sort_by_key(|(_, p)| p.part.region.x0);
+        Ok(())
     }
+}
+
+/// Decodes the next rows of part `p` into `rows`, its columns of the
+/// image's rows; `until`: the image's row after them.
+fn decode(
+    reader: &mut PngReader,
+    p: &PartFile,
+    rows: Vec<&mut [u8]>,
+    until: u32,
+) -> Result<(), AssembleError> {
+    let decode_error = |reason: String| AssembleError::Decode {
+        path: p.path.clone(),
+        reason,
+    };
+    for row in rows {
+        reader
+            .read_row(row)
+            .map_err(|e| decode_error(e.to_string()))?
+            .ok_or_else(|| decode_error("ends before its last row".to_owned()))?;
+    }
+    if p.part.region.y1 == until {
+        // Its last row: read to the end of its pixels, so that the last
+        // chunk's CRC and the Adler-32 are checked too.
+        reader.finish().map_err(|e| decode_error(e.to_string()))?;
+        one_record(reader.info(), &p.path)?;
+    }
+    Ok(())
 }
 
 /// Keeps `e` to report (the PNG writer only passes I/O errors through)

@@ -267,8 +267,8 @@ fn a_sheet_takes_the_largest_render_and_refuses_what_is_past_its_limits() {
     // the image crate's default limit of 512 MB, which refused it).
     let side = 16384;
     let file = fs::File::create(d.join("huge.png")).unwrap();
-    rayoflight::output::write_png(std::io::BufWriter::new(file), side, side, &[], |row| {
-        row.fill(200);
+    rayoflight::output::write_png(std::io::BufWriter::new(file), side, side, &[], |band| {
+        band.fill(200);
         Ok(())
     })
     .unwrap();
@@ -335,11 +335,13 @@ fn column_parts(dir: &Path, count: u32) -> (Vec<PathBuf>, Vec<u8>) {
             let file = fs::File::create(dir.join(&path)).unwrap();
             let mut y = 0;
             let colour = [x as u8, (x >> 8) as u8, 77];
-            rayoflight::output::write_png(file, 1, 3, &[(part::KEYWORD, &record)], |row| {
-                row.copy_from_slice(&colour);
-                let at = (y * count as usize + x as usize) * 3;
-                whole[at..at + 3].copy_from_slice(&colour);
-                y += 1;
+            rayoflight::output::write_png(file, 1, 3, &[(part::KEYWORD, &record)], |band| {
+                for row in band.chunks_exact_mut(3) {
+                    row.copy_from_slice(&colour);
+                    let at = (y * count as usize + x as usize) * 3;
+                    whole[at..at + 3].copy_from_slice(&colour);
+                    y += 1;
+                }
                 Ok(())
             })
             .unwrap();
