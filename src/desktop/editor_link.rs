@@ -25,12 +25,27 @@
 
 pub use crate::scene::language::Under;
 use std::io::{self, BufRead, Read, Write};
+#[cfg(unix)]
 use std::os::unix::fs::PermissionsExt;
-use std::os::unix::net::{UnixListener, UnixStream};
+#[cfg(unix)]
+use std::os::unix::net::UnixListener;
 use std::path::{Path, PathBuf};
+#[cfg(unix)]
 use std::sync::atomic::{AtomicU64, Ordering};
+#[cfg(unix)]
 use std::sync::{Arc, Mutex, PoisonError};
+#[cfg(unix)]
 use std::time::Duration;
+
+/// Elsewhere (Windows) there is no link ([`folder`] says so): the type a
+/// connection would have, never made.
+#[cfg(not(unix))]
+pub use std::net::TcpStream as Stream;
+/// A connection between a language server and an app: a Unix socket.
+#[cfg(unix)]
+pub use std::os::unix::net::UnixStream as Stream;
+#[cfg(unix)]
+use std::os::unix::net::UnixStream;
 
 /// What goes over the link.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -58,11 +73,17 @@ pub enum LinkError {
     Unsafe(#[from] crate::system::files::OwnFolderError),
     #[error("{}: {source}", path.display())]
     Io { path: PathBuf, source: io::Error },
+    /// The link runs over Unix sockets; this system has none.
+    #[error("the link between an editor and the app needs Unix sockets, which this system lacks")]
+    Unsupported,
 }
 
 /// `$XDG_RUNTIME_DIR/rayoflight`, made if missing (mode 0700), checked to
 /// be the user's own folder that no one else may enter.
 pub fn folder() -> Result<PathBuf, LinkError> {
+    if cfg!(not(unix)) {
+        return Err(LinkError::Unsupported);
+    }
     let runtime = std::env::var_os("XDG_RUNTIME_DIR")
         .map(PathBuf::from)
         .filter(|p| p.is_absolute())
@@ -85,12 +106,25 @@ pub fn folder_in(path: &Path) -> Result<PathBuf, LinkError> {
     Ok(crate::system::files::own_folder(home, &[name], true)?)
 }
 
-/// Whether the process at the other end of `stream` is this user's.
+/// Whether the process at the other end of `stream` is this user's
+/// (Linux: `SO_PEERCRED`). Elsewhere (macOS, the BSDs) the kernel is not
+/// asked: only this user (or root) can reach a socket in the private
+/// folder, whose mode [`folder`] checked.
+#[cfg(unix)]
 pub fn peer_is_us(stream: &UnixStream) -> bool {
-    rustix::net::sockopt::socket_peercred(stream)
-        .is_ok_and(|cred| cred.uid == rustix::process::geteuid())
+    #[cfg(any(target_os = "linux", target_os = "android"))]
+    {
+        rustix::net::sockopt::socket_peercred(stream)
+            .is_ok_and(|cred| cred.uid == rustix::process::geteuid())
+    }
+    #[cfg(not(any(target_os = "linux", target_os = "android")))]
+    {
+        let _ = stream;
+        true
+    }
 }
 
+#[cfg(unix)]
 /// An app's socket: removed when dropped.
 #[derive(Debug)]
 pub struct Listener {
@@ -98,6 +132,7 @@ pub struct Listener {
     path: PathBuf,
 }
 
+#[cfg(unix)]
 impl Listener {
     /// Listens on `app-PID.sock` in `folder`.
     pub fn bind(folder: &Path) -> io::Result<Listener> {
@@ -125,12 +160,14 @@ impl Listener {
     }
 }
 
+#[cfg(unix)]
 impl Drop for Listener {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.path);
     }
 }
 
+#[cfg(unix)]
 /// The editors connected to an app, for the app to write to; each
 /// connection is read on a thread of its own. Cloned, it is the same list.
 #[derive(Debug, Clone, Default)]
@@ -138,10 +175,12 @@ pub struct Peers {
     streams: Arc<Mutex<Vec<(u64, UnixStream)>>>,
 }
 
+#[cfg(unix)]
 /// How long a write to an editor may take before that editor is dropped:
 /// a language server that stops reading never stalls the app's window.
 const WRITE_PATIENCE: Duration = Duration::from_millis(200);
 
+#[cfg(unix)]
 impl Peers {
     fn lock(&self) -> std::sync::MutexGuard<'_, Vec<(u64, UnixStream)>> {
         self.streams.lock().unwrap_or_else(PoisonError::into_inner)
@@ -190,6 +229,14 @@ pub fn apps(folder: &Path) -> Vec<PathBuf> {
 
 /// Connects to the app at `socket`, checking it is this user's; a socket
 /// nobody listens on any more is removed.
+#[cfg(not(unix))]
+pub fn connect(_socket: &Path) -> io::Result<Stream> {
+    Err(io::ErrorKind::Unsupported.into())
+}
+
+/// Connects to the app at `socket`, checking it is this user's; a socket
+/// nobody listens on any more is removed.
+#[cfg(unix)]
 pub fn connect(socket: &Path) -> io::Result<UnixStream> {
     match UnixStream::connect(socket) {
         Ok(stream) if peer_is_us(&stream) => Ok(stream),
@@ -321,8 +368,18 @@ pub fn uri_path(uri: &str) -> Option<PathBuf> {
             i += 1;
         }
     }
-    use std::os::unix::ffi::OsStringExt;
-    Some(PathBuf::from(std::ffi::OsString::from_vec(out)))
+    #[cfg(unix)]
+    {
+        use std::os::unix::ffi::OsStringExt;
+        Some(PathBuf::from(std::ffi::OsString::from_vec(out)))
+    }
+    #[cfg(not(unix))]
+    {
+        // Windows: `file:///C:/scenes/a.xml` names `C:/scenes/a.xml`.
+        let text = String::from_utf8(out).ok()?;
+        let drive = matches!(text.as_bytes(), [b'/', d, b':', ..] if d.is_ascii_alphabetic());
+        Some(PathBuf::from(if drive { &text[1..] } else { &text[..] }))
+    }
 }
 
 #[cfg(test)]

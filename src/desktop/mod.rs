@@ -19,11 +19,11 @@
 //! only for its own type, `application/x-rayoflight-scene`: it never claims
 //! every XML file (other formats use a bare `<scene>` root too).
 //!
-//! The editor link ([`editor_link`], Unix) lives here too: the user's
-//! editor's unsaved text, from `rayoflight lsp` to the app, over a socket
-//! of the user's own.
+//! The editor link ([`editor_link`]) lives here too: the user's editor's
+//! unsaved text, from `rayoflight lsp` to the app, over a socket of the
+//! user's own (Unix only: elsewhere the language server works without
+//! it).
 
-#[cfg(unix)]
 pub mod editor_link;
 
 use std::path::{Path, PathBuf};

@@ -63,7 +63,6 @@ pub fn size(bytes: u64) -> String {
 /// limit less what the group uses, and the system's available memory and
 /// free swap. `None` where none of them can be read (not Linux).
 pub fn available_memory() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
     let kb = |text: &str, key: &str| -> Option<u64> {
         let line = text.lines().find(|l| l.starts_with(key))?;
         let number = line[key.len()..].trim().trim_end_matches("kB").trim();
@@ -74,6 +73,7 @@ pub fn available_memory() -> Option<u64> {
     #[cfg(unix)]
     {
         use rustix::process::{Resource, getrlimit};
+        let status = std::fs::read_to_string("/proc/self/status").unwrap_or_default();
         for (resource, used) in [(Resource::As, "VmSize:"), (Resource::Data, "VmData:")] {
             if let (Some(limit), Some(used)) = (getrlimit(resource).current, kb(&status, used)) {
                 keep(limit.saturating_sub(used));

@@ -604,7 +604,7 @@ fn object_element(documents: &Documents, path: &Path, object: usize) -> Option<(
 /// they come and dropped as they go; what each says is read on a thread of
 /// its own.
 struct Apps {
-    connections: HashMap<PathBuf, std::os::unix::net::UnixStream>,
+    connections: HashMap<PathBuf, editor_link::Stream>,
     /// Those connected since the last batch of changes: they were handed
     /// the newest texts already.
     fresh: Vec<PathBuf>,
@@ -613,7 +613,7 @@ struct Apps {
 
 /// Ends the connection both ways, for the app and for the thread that
 /// reads what it says (which holds a copy of the socket).
-fn hang_up(stream: &std::os::unix::net::UnixStream) {
+fn hang_up(stream: &editor_link::Stream) {
     let _ = stream.shutdown(std::net::Shutdown::Both);
 }
 

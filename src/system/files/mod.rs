@@ -15,9 +15,7 @@ mod place;
 mod rewrite;
 pub mod write;
 
-#[cfg(unix)]
-pub use place::NewFile;
-pub use place::{Kind, Place, PlaceError, make_folders};
+pub use place::{Kind, NewFile, Place, PlaceError, make_folders};
 #[cfg(unix)]
 pub use rewrite::rewrite_in_place;
 pub use rewrite::{Finished, finish, finish_at};
@@ -280,6 +278,9 @@ fn copy_xattrs(old: &std::fs::File, new: &std::fs::File) {
 /// both read the old text and the second write loses the first's edits.
 /// An advisory `flock` on the file itself: a program that takes no lock is
 /// not stopped (the writers re-read the file before renaming instead).
+/// On Windows a file held open cannot be renamed over, and its locks bar
+/// others from reading it: the lock is on a file of its own instead, in
+/// the user's temporary folder, named after the scene's full path.
 #[derive(Debug)]
 pub struct UpdateLock {
     _file: std::fs::File,
@@ -291,6 +292,7 @@ pub struct UpdateLock {
 /// still name the locked file, or the new one is locked instead. `None`
 /// when there is no regular file to lock (it is about to be created, or
 /// is a device).
+#[cfg(unix)]
 pub fn lock_for_update(path: &Path) -> std::io::Result<Option<UpdateLock>> {
     loop {
         // A FIFO is never opened (it would block until a writer came).
@@ -321,6 +323,36 @@ pub fn lock_for_update(path: &Path) -> std::io::Result<Option<UpdateLock>> {
             Err(e) => return Err(e),
         }
     }
+}
+
+/// Locks the scene `path` for an update, waiting for any other holder
+/// (see [`UpdateLock`]: elsewhere than Unix, a lock file of the scene's).
+#[cfg(not(unix))]
+pub fn lock_for_update(path: &Path) -> std::io::Result<Option<UpdateLock>> {
+    match std::fs::metadata(path) {
+        Ok(meta) if meta.is_file() => {}
+        Ok(_) => return Ok(None),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+        Err(e) => return Err(e),
+    }
+    // FNV-1a of the full path: the same name in every process and version.
+    let full = path.canonicalize()?;
+    let hash = full
+        .as_os_str()
+        .as_encoded_bytes()
+        .iter()
+        .fold(0xcbf2_9ce4_8422_2325_u64, |h, &b| {
+            (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+        });
+    let folder = std::env::temp_dir().join("rayoflight-locks");
+    std::fs::create_dir_all(&folder)?;
+    let file = std::fs::OpenOptions::new()
+        .create(true)
+        .truncate(false)
+        .write(true)
+        .open(folder.join(format!("{hash:016x}.lock")))?;
+    file.lock()?;
+    Ok(Some(UpdateLock { _file: file }))
 }
 
 /// Whether two files' metadata are of one file (Unix: the same device

@@ -19,6 +19,12 @@
 //! `pipe:[…]`) names no path: the kernel opens what it stands for, and
 //! the write goes into that open file (a pipe, a terminal, the file the
 //! shell redirected to).
+//!
+//! That is Unix. On Windows (the other `imp`) a place is its folder's
+//! path, names are looked at and opened by path, and a file is told from
+//! another by when it was made and written and its length: the system
+//! has no `openat`, and its links are not planted by other users in a
+//! shared `/tmp`.
 
 use std::ffi::{OsStr, OsString};
 use std::fs::File;
@@ -77,6 +83,7 @@ pub enum Kind {
 }
 
 /// Links followed in one walk at most, as the kernel allows.
+#[cfg(unix)]
 const MAX_LINKS: usize = 40;
 
 impl Place {
@@ -716,31 +723,6 @@ mod imp {
         }
     }
 
-    /// Six letters or digits, different each call (a counter and the
-    /// process's randomly keyed hasher, mixed with the time).
-    fn random_part() -> String {
-        use std::hash::{BuildHasher, Hasher};
-        use std::sync::atomic::{AtomicU64, Ordering};
-        static COUNT: AtomicU64 = AtomicU64::new(0);
-        let mut h = std::collections::hash_map::RandomState::new().build_hasher();
-        h.write_u64(COUNT.fetch_add(1, Ordering::Relaxed));
-        h.write_u128(
-            std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map_or(0, |d| d.as_nanos()),
-        );
-        h.write_u32(std::process::id());
-        let mut n = h.finish();
-        const LETTERS: &[u8] = b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
-        (0..6)
-            .map(|_| {
-                let c = LETTERS[(n % LETTERS.len() as u64) as usize];
-                n /= LETTERS.len() as u64;
-                c as char
-            })
-            .collect()
-    }
-
     /// Makes the folder `path` and any folder above it that is missing
     /// (mode 0777 less the umask), walking it as [`Place::reach`] does:
     /// a link in any part followed only as the rule allows.
@@ -771,14 +753,12 @@ mod imp {
     }
 }
 
-#[cfg(unix)]
-pub use imp::NewFile;
-pub use imp::make_folders;
-
 #[cfg(not(unix))]
 mod imp {
-    //! Elsewhere a place is its folder's path: the system has no
-    //! `openat` to hold it by, nor symbolic links a user plants.
+    //! Elsewhere (Windows) a place is its folder's path: the system has
+    //! no `openat` to hold a folder by, and a file's identity is what its
+    //! metadata says (created, last written, length), not an inode. A
+    //! file of several hard links is replaced, not rewritten in place.
     use super::*;
 
     pub(super) fn reach(path: &Path, _follow_last: bool) -> Result<Place, PlaceError> {
@@ -803,10 +783,218 @@ mod imp {
         })
     }
 
+    /// What tells one file from another here: when it was made and last
+    /// written, and its length.
+    fn identity(
+        meta: &std::fs::Metadata,
+    ) -> (
+        Option<std::time::SystemTime>,
+        Option<std::time::SystemTime>,
+        u64,
+    ) {
+        (meta.created().ok(), meta.modified().ok(), meta.len())
+    }
+
+    impl Place {
+        /// What is at the name now, looked at without following it;
+        /// `None` when nothing is.
+        pub fn look(&self) -> std::io::Result<Option<(Kind, std::fs::Metadata)>> {
+            let meta = match std::fs::symlink_metadata(self.path()) {
+                Ok(meta) => meta,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+                Err(e) => return Err(e),
+            };
+            let t = meta.file_type();
+            let kind = if t.is_symlink() {
+                Kind::Link
+            } else if t.is_file() {
+                Kind::Regular
+            } else if t.is_dir() {
+                Kind::Directory
+            } else {
+                Kind::Special
+            };
+            Ok(Some((kind, meta)))
+        }
+
+        /// Whether the caller may write the file: the open that follows
+        /// says (the read-only attribute is checked before).
+        pub fn may_write(&self) -> bool {
+            true
+        }
+
+        /// Opens the file at the name, which must be of `kind` and look
+        /// as `meta` does (made, written and sized alike): `Ok(None)`
+        /// when another file took the name meanwhile.
+        pub fn open(
+            &self,
+            kind: Kind,
+            meta: &std::fs::Metadata,
+            write: bool,
+        ) -> std::io::Result<Option<File>> {
+            let file = match std::fs::OpenOptions::new()
+                .read(kind != Kind::Special)
+                .write(write || kind == Kind::Special)
+                .open(self.path())
+            {
+                Ok(file) => file,
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+                Err(e) => return Err(e),
+            };
+            if kind == Kind::Regular && identity(&file.metadata()?) != identity(meta) {
+                return Ok(None);
+            }
+            Ok(Some(file))
+        }
+
+        /// Whether the name still names a file that looks as `file` does.
+        pub fn still_names(&self, file: &File) -> std::io::Result<bool> {
+            match std::fs::symlink_metadata(self.path()) {
+                Ok(now) => Ok(now.is_file() && identity(&now) == identity(&file.metadata()?)),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(false),
+                Err(e) => Err(e),
+            }
+        }
+
+        /// A new file in the folder named `PREFIX<random>SUFFIX`, removed
+        /// when the returned value is dropped, unless renamed or kept.
+        pub fn new_file(&self, prefix: &str, suffix: &str) -> std::io::Result<NewFile<'_>> {
+            for _ in 0..128 {
+                let mut name = OsString::from(prefix);
+                name.push(random_part());
+                name.push(suffix);
+                match std::fs::OpenOptions::new()
+                    .read(true)
+                    .write(true)
+                    .create_new(true)
+                    .open(self.folder_path.join(&name))
+                {
+                    Ok(file) => {
+                        return Ok(NewFile {
+                            place: self,
+                            name: Some(name),
+                            file,
+                        });
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => continue,
+                    Err(e) => return Err(e),
+                }
+            }
+            Err(std::io::Error::from(std::io::ErrorKind::AlreadyExists))
+        }
+
+        /// A new file at the name itself, never over anything there:
+        /// `AlreadyExists`.
+        pub fn create_new(&self) -> std::io::Result<NewFile<'_>> {
+            let file = std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(self.path())?;
+            Ok(NewFile {
+                place: self,
+                name: Some(self.name.clone()),
+                file,
+            })
+        }
+
+        /// No unnamed files here.
+        pub fn unnamed_file(&self) -> Option<File> {
+            None
+        }
+    }
+
+    /// A file made in a place's folder, removed when dropped unless
+    /// [`NewFile::rename_over`] or [`NewFile::keep`] took it.
+    #[derive(Debug)]
+    pub struct NewFile<'p> {
+        place: &'p Place,
+        name: Option<OsString>,
+        pub file: File,
+    }
+
+    impl NewFile<'_> {
+        fn path(&self) -> PathBuf {
+            self.place
+                .folder_path
+                .join(self.name.as_deref().unwrap_or_default())
+        }
+
+        /// Its path in the folder, to read it back by.
+        pub fn path_to_read(&self) -> PathBuf {
+            self.path()
+        }
+
+        /// Renames the file over the place's name. With `replace` false,
+        /// nothing may be at the name: `AlreadyExists` (a hard link is
+        /// made, which fails on an existing name, and the temporary name
+        /// removed; where links cannot be made, the name is looked at
+        /// first).
+        pub fn rename_over(mut self, replace: bool) -> std::io::Result<()> {
+            let (from, to) = (self.path(), self.place.path());
+            match replace {
+                true => std::fs::rename(&from, &to)?,
+                false => match std::fs::hard_link(&from, &to) {
+                    Ok(()) => {
+                        let _ = std::fs::remove_file(&from);
+                    }
+                    Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(e),
+                    Err(_) if std::fs::symlink_metadata(&to).is_ok() => {
+                        return Err(std::io::ErrorKind::AlreadyExists.into());
+                    }
+                    Err(_) => std::fs::rename(&from, &to)?,
+                },
+            }
+            self.name = None;
+            Ok(())
+        }
+
+        /// Leaves the file where it is; returns its path (for a message).
+        pub fn keep(mut self) -> PathBuf {
+            let path = self.path();
+            self.name = None;
+            path
+        }
+    }
+
+    impl Drop for NewFile<'_> {
+        fn drop(&mut self) {
+            if self.name.is_some() {
+                let _ = std::fs::remove_file(self.path());
+            }
+        }
+    }
+
     /// Makes the folder `path` and any folder above it that is missing.
     pub fn make_folders(path: &Path) -> Result<(), PlaceError> {
         Ok(std::fs::create_dir_all(path)?)
     }
+}
+
+pub use imp::{NewFile, make_folders};
+
+/// Six letters or digits, different each call (a counter and the
+/// process's randomly keyed hasher, mixed with the time).
+fn random_part() -> String {
+    use std::hash::{BuildHasher, Hasher};
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static COUNT: AtomicU64 = AtomicU64::new(0);
+    let mut h = std::collections::hash_map::RandomState::new().build_hasher();
+    h.write_u64(COUNT.fetch_add(1, Ordering::Relaxed));
+    h.write_u128(
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos()),
+    );
+    h.write_u32(std::process::id());
+    let mut n = h.finish();
+    const LETTERS: &[u8] = b"abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ0123456789";
+    (0..6)
+        .map(|_| {
+            let c = LETTERS[(n % LETTERS.len() as u64) as usize];
+            n /= LETTERS.len() as u64;
+            c as char
+        })
+        .collect()
 }
 
 #[cfg(test)]

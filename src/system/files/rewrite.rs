@@ -20,17 +20,22 @@
 //! the one it names: another user cannot plant one to have their bytes
 //! copied into someone else's file.
 
+#[cfg(unix)]
 use std::ffi::{OsStr, OsString};
+#[cfg(unix)]
 use std::fs::File;
+#[cfg(unix)]
 use std::io::{Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 
 use super::Place;
 
 /// What a record's first line says: the format, for later versions.
+#[cfg(unix)]
 const FORMAT: &str = "rayoflight rewrite 1";
 
 /// The record's name beside the file named `name`.
+#[cfg(unix)]
 fn record_name(name: &OsStr) -> OsString {
     let mut record = OsString::from(".");
     record.push(name);
@@ -49,6 +54,7 @@ pub enum Finished {
 
 /// Copies `from` over `to` from their starts, cuts `to` to that length
 /// and syncs it.
+#[cfg(unix)]
 fn copy_over(from: &mut File, to: &mut File) -> std::io::Result<u64> {
     from.seek(SeekFrom::Start(0))?;
     to.seek(SeekFrom::Start(0))?;
@@ -218,6 +224,7 @@ pub fn finish_at(_place: &Place) -> std::io::Result<Option<Finished>> {
 }
 
 /// What a record says.
+#[cfg(unix)]
 struct Record {
     device: u64,
     inode: u64,
@@ -227,6 +234,7 @@ struct Record {
     backup: OsString,
 }
 
+#[cfg(unix)]
 impl Record {
     fn parse(text: &str) -> Option<Record> {
         let mut lines = text.lines();

@@ -292,15 +292,22 @@ pub fn write_atomic_with<E: From<WriteError>>(
         .into());
     }
     match old {
-        Some((_, meta, mut file)) => {
+        Some((_, meta, file)) => {
             if !place.still_names(&file).map_err(io_error)? {
                 return Err(moved().into());
             }
+            #[cfg(unix)]
             if several_names(&meta) {
+                let mut file = file;
                 super::rewrite_in_place(&place, &mut file, &mut new).map_err(io_error)?;
-            } else {
-                new.rename_over(true).map_err(io_error)?;
+                return Ok(());
             }
+            #[cfg(not(unix))]
+            let _ = meta;
+            // Closed first: Windows renames over no file this process
+            // holds open.
+            drop(file);
+            new.rename_over(true).map_err(io_error)?;
         }
         None => match new.rename_over(false) {
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => return Err(moved().into()),
