@@ -1,8 +1,10 @@
 //! The app on a Linux desktop, for one user: `rayoflight install-desktop`
 //! writes the desktop entry (its `Exec` the running binary's absolute
-//! path), the icons in the hicolor theme and the MIME type of scenes that
-//! name RayOfLight's schema under `$XDG_DATA_HOME` (default
-//! `~/.local/share`), and `--uninstall` removes exactly what it wrote.
+//! path), the icons in the hicolor theme and the MIME type of scenes
+//! (files named `*.rayoflight.xml`, and those naming RayOfLight's schema
+//! that no other pattern claims: a `*.xml` name makes a file plain XML to
+//! gio and xdg-mime) under `$XDG_DATA_HOME` (default `~/.local/share`),
+//! and `--uninstall` removes exactly what it wrote.
 //!
 //! The files are the repository's `assets/linux/`, built in. What was
 //! written (each file with a fingerprint of its bytes), and which folders
@@ -15,9 +17,11 @@
 //! (update-desktop-database, update-mime-database) are installed; when the
 //! last user type or entry goes, the caches they generated go too.
 //!
-//! RayOfLight is offered in "Open with" for XML files and is the default
-//! only for its own type, `application/x-rayoflight-scene`: it never claims
-//! every XML file (other formats use a bare `<scene>` root too).
+//! RayOfLight is offered in "Open with" for XML files and writes itself as
+//! the default only for its own type, `application/x-rayoflight-scene`
+//! (other formats use a bare `<scene>` root too). Where the user has
+//! chosen no default for XML, gio and xdg-mime still take the first
+//! application of the user's own folder, this one.
 //!
 //! The editor link ([`editor_link`]) lives here too: the user's editor's
 //! unsaved text, from `rayoflight lsp` to the app, over a socket of the
