@@ -355,15 +355,26 @@ pub fn lock_for_update(path: &Path) -> std::io::Result<Option<UpdateLock>> {
     Ok(Some(UpdateLock { _file: file }))
 }
 
-/// Whether two files' metadata are of one file (Unix: the same device
-/// and inode; elsewhere always, as [`lock_for_update`] takes it).
+/// Whether two files' metadata are of one file ([`identity_of`]).
 pub fn same_metadata(a: &Metadata, b: &Metadata) -> bool {
     identity_of(a) == identity_of(b)
 }
 
-/// The inode of `meta` (Unix); elsewhere every file is alike, which makes
-/// [`lock_for_update`] take the first file it locks.
-fn identity_of(meta: &Metadata) -> (u64, u64) {
+/// What tells one file from another by its metadata: on Unix its device
+/// and inode; elsewhere, where std gives no file number, when it was made
+/// and last written and its length (a file written between two looks is
+/// taken for another, which makes a check fail, never pass wrongly).
+#[cfg(unix)]
+pub type MetaIdentity = (u64, u64);
+#[cfg(not(unix))]
+pub type MetaIdentity = (
+    Option<std::time::SystemTime>,
+    Option<std::time::SystemTime>,
+    u64,
+);
+
+/// The [`MetaIdentity`] of `meta`.
+pub fn identity_of(meta: &Metadata) -> MetaIdentity {
     #[cfg(unix)]
     {
         use std::os::unix::fs::MetadataExt;
@@ -371,8 +382,7 @@ fn identity_of(meta: &Metadata) -> (u64, u64) {
     }
     #[cfg(not(unix))]
     {
-        let _ = meta;
-        (0, 0)
+        (meta.created().ok(), meta.modified().ok(), meta.len())
     }
 }
 

@@ -82,6 +82,21 @@ pub enum Kind {
     Link,
 }
 
+impl Kind {
+    /// The kind of a file of type `t` (as `lstat` sees it).
+    pub fn of(t: std::fs::FileType) -> Kind {
+        if t.is_symlink() {
+            Kind::Link
+        } else if t.is_file() {
+            Kind::Regular
+        } else if t.is_dir() {
+            Kind::Directory
+        } else {
+            Kind::Special
+        }
+    }
+}
+
 /// Links followed in one walk at most, as the kernel allows.
 #[cfg(unix)]
 const MAX_LINKS: usize = 40;
@@ -349,17 +364,7 @@ mod imp {
                 Err(e) => return Err(e.into()),
             };
             let meta = file.metadata()?;
-            let t = meta.file_type();
-            let kind = if t.is_symlink() {
-                Kind::Link
-            } else if t.is_file() {
-                Kind::Regular
-            } else if t.is_dir() {
-                Kind::Directory
-            } else {
-                Kind::Special
-            };
-            Ok(Some((kind, meta)))
+            Ok(Some((Kind::of(meta.file_type()), meta)))
         }
 
         /// Whether the caller may write the file at the name, as the
@@ -783,17 +788,7 @@ mod imp {
         })
     }
 
-    /// What tells one file from another here: when it was made and last
-    /// written, and its length.
-    fn identity(
-        meta: &std::fs::Metadata,
-    ) -> (
-        Option<std::time::SystemTime>,
-        Option<std::time::SystemTime>,
-        u64,
-    ) {
-        (meta.created().ok(), meta.modified().ok(), meta.len())
-    }
+    use super::super::identity_of as identity;
 
     impl Place {
         /// What is at the name now, looked at without following it;
@@ -804,17 +799,7 @@ mod imp {
                 Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
                 Err(e) => return Err(e),
             };
-            let t = meta.file_type();
-            let kind = if t.is_symlink() {
-                Kind::Link
-            } else if t.is_file() {
-                Kind::Regular
-            } else if t.is_dir() {
-                Kind::Directory
-            } else {
-                Kind::Special
-            };
-            Ok(Some((kind, meta)))
+            Ok(Some((Kind::of(meta.file_type()), meta)))
         }
 
         /// Whether the caller may write the file: the open that follows
