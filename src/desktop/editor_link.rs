@@ -20,8 +20,16 @@
 //! editor hold the same text (the app follows the editor's), so each finds
 //! the element in its own copy, and the app's window never scans a text.
 //!
+//! An edit travels as an edit: an app is handed the whole text of a
+//! document once (when it connects, or when it asks: [`Message::Resend`]),
+//! then each change as the bytes it replaced and the text that replaces
+//! them ([`Message::Change`]), which it applies to its own copy, so a
+//! keystroke in a 200 MB scene sends a few bytes, not the scene. A change
+//! says the length of the text it makes: an app whose copy does not give
+//! that length (it missed a change) asks for the whole text again.
+//!
 //! A message is one line of JSON (`{"kind":"buffer","path":…,"bytes":N}`)
-//! followed by N bytes of text for a buffer.
+//! followed by N bytes of text for a buffer or a change.
 
 pub use crate::scene::language::Under;
 use std::io::{self, BufRead, Read, Write};
@@ -52,6 +60,19 @@ use std::os::unix::net::UnixStream;
 pub enum Message {
     /// The editor's text of `path`, unsaved: the app renders it.
     Buffer { path: PathBuf, text: String },
+    /// The editor's text of `path` changed since the last [`Message::Buffer`]
+    /// or change: the bytes `range` of that text are now `text`, which
+    /// makes the text `length` bytes long.
+    Change {
+        path: PathBuf,
+        range: std::ops::Range<usize>,
+        text: String,
+        length: usize,
+    },
+    /// The app lost track of the editor's text of `path` (it missed a
+    /// change, or opened the file since): the editor's server sends it
+    /// whole again.
+    Resend { path: PathBuf },
     /// The editor saved or closed `path`: the app is back to the file.
     Released { path: PathBuf },
     /// The app asks the editor to show the element of object `object`
@@ -201,6 +222,20 @@ impl Peers {
         self.lock().retain(|(n, _)| *n != id);
     }
 
+    /// Sends `message` to the editor `id` ([`Peers::add`]), dropping it
+    /// where it is not reached; whether it was.
+    pub fn tell_one(&self, id: u64, message: &Message) -> bool {
+        let mut streams = self.lock();
+        let Some(i) = streams.iter().position(|(n, _)| *n == id) else {
+            return false;
+        };
+        let sent = send(&mut streams[i].1, message).is_ok();
+        if !sent {
+            streams.remove(i);
+        }
+        sent
+    }
+
     /// Sends `message` to every editor connected, dropping those it does
     /// not reach; how many it reached.
     pub fn tell(&self, message: &Message) -> usize {
@@ -261,6 +296,20 @@ pub fn send(w: &mut impl Write, message: &Message) -> io::Result<()> {
             serde_json::json!({"kind": "buffer", "path": path(p), "bytes": text.len()}),
             text.as_bytes(),
         ),
+        Message::Change {
+            path: p,
+            range,
+            text,
+            length,
+        } => (
+            serde_json::json!({"kind": "change", "path": path(p), "start": range.start,
+                "end": range.end, "length": length, "bytes": text.len()}),
+            text.as_bytes(),
+        ),
+        Message::Resend { path: p } => (
+            serde_json::json!({"kind": "resend", "path": path(p)}),
+            &[][..],
+        ),
         Message::Released { path: p } => (
             serde_json::json!({"kind": "released", "path": path(p)}),
             &[][..],
@@ -307,20 +356,39 @@ pub fn receive(r: &mut impl BufRead) -> io::Result<Option<Message>> {
             .as_u64()
             .ok_or_else(|| bad("a message without its numbers"))
     };
-    Ok(Some(match header["kind"].as_str() {
-        Some("buffer") => {
-            let bytes = number("bytes")?;
-            if bytes > MAX_BYTES {
-                return Err(bad("a buffer larger than a scene may be"));
-            }
-            let mut text = Vec::with_capacity(usize::try_from(bytes).unwrap_or(0));
-            r.by_ref().take(bytes).read_to_end(&mut text)?;
-            if text.len() as u64 != bytes {
-                return Err(bad("a buffer cut short"));
-            }
-            let text = String::from_utf8(text).map_err(|_| bad("a buffer not in UTF-8"))?;
-            Message::Buffer { path, text }
+    let size = |key: &str| {
+        let n = number(key)?;
+        if n > MAX_BYTES {
+            return Err(bad("a text larger than a scene may be"));
         }
+        usize::try_from(n).map_err(|_| bad("a text larger than a scene may be"))
+    };
+    let mut body = |bytes: usize| -> io::Result<String> {
+        let mut text = Vec::with_capacity(bytes);
+        r.by_ref().take(bytes as u64).read_to_end(&mut text)?;
+        if text.len() != bytes {
+            return Err(bad("a text cut short"));
+        }
+        String::from_utf8(text).map_err(|_| bad("a text not in UTF-8"))
+    };
+    Ok(Some(match header["kind"].as_str() {
+        Some("buffer") => Message::Buffer {
+            path,
+            text: body(size("bytes")?)?,
+        },
+        Some("change") => {
+            let (start, end, length) = (size("start")?, size("end")?, size("length")?);
+            if start > end {
+                return Err(bad("a change that ends before it starts"));
+            }
+            Message::Change {
+                path,
+                range: start..end,
+                text: body(size("bytes")?)?,
+                length,
+            }
+        }
+        Some("resend") => Message::Resend { path },
         Some("released") => Message::Released { path },
         Some("show") => Message::Show {
             path,
@@ -392,6 +460,15 @@ mod tests {
             Message::Buffer {
                 path: "/a b/é.xml".into(),
                 text: "<scene>\n\u{1F600}\n</scene>".into(),
+            },
+            Message::Change {
+                path: "/s.xml".into(),
+                range: 3..5,
+                text: "é\n".into(),
+                length: 40,
+            },
+            Message::Resend {
+                path: "/s.xml".into(),
             },
             Message::Released {
                 path: "/s.xml".into(),

@@ -96,6 +96,13 @@ impl std::fmt::Debug for Source {
     }
 }
 
+impl Default for Source {
+    /// The empty text.
+    fn default() -> Source {
+        Source::new(String::new())
+    }
+}
+
 impl Source {
     /// Holds `text`: packed (on the cores) when it has [`PACK_BYTES`] or
     /// more, its own memory freed.
@@ -182,18 +189,39 @@ impl Source {
 
     /// Whether the text is `text`, compared a block at a time.
     pub fn is(&self, text: &str) -> bool {
+        self.is_near(text, 0)
+    }
+
+    /// [`Source::is`], the block holding byte `at` compared first: where
+    /// a text was just edited there, a packed text is told apart from it
+    /// by unpacking one block, not all before it.
+    pub fn is_near(&self, text: &str, at: usize) -> bool {
         if text.len() != self.len() {
             return false;
         }
         match &*self.0 {
             Held::Whole(own) => own == text,
             Held::Packed { blocks, .. } => {
-                let mut rest = text.as_bytes();
-                blocks.iter().all(|block| {
-                    let (theirs, after) = rest.split_at(block.len.min(rest.len()));
-                    rest = after;
-                    block.unpack() == theirs
-                })
+                let mut start = 0;
+                let pieces: Vec<(&Block, &[u8])> = blocks
+                    .iter()
+                    .map(|block| {
+                        let end = (start + block.len).min(text.len());
+                        let piece = (block, &text.as_bytes()[start..end]);
+                        start = end;
+                        piece
+                    })
+                    .collect();
+                let near = pieces
+                    .iter()
+                    .scan(0, |end, (block, _)| {
+                        *end += block.len;
+                        Some(*end)
+                    })
+                    .position(|end| at < end)
+                    .unwrap_or(0);
+                let same = |(block, theirs): &(&Block, &[u8])| block.unpack() == *theirs;
+                pieces.get(near).is_none_or(same) && pieces.iter().all(same)
             }
         }
     }

@@ -565,6 +565,44 @@ fn the_app_follows_any_editor_that_still_holds_unsaved_text() {
         "the second editor's newer text",
         |app| shown_ka(app) == 0.6,
     );
+    // An edit travels as an edit: the first's change, applied to its text.
+    let first_text = with_ka("0.5");
+    let at = first_text.find("ka=\"0.5\"").unwrap() + 4;
+    let change = |text: &str, length| Message::Change {
+        path: path.clone(),
+        range: at..at + 3,
+        text: text.to_owned(),
+        length,
+    };
+    editor_link::send(&mut first, &change("0.55", first_text.len() + 1)).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the first editor's change",
+        |app| shown_ka(app) == 0.55,
+    );
+    // A change that does not fit what the app holds: it asks again.
+    editor_link::send(&mut first, &change("0.7", first_text.len() + 5)).unwrap();
+    let mut answers = std::io::BufReader::new(first.try_clone().unwrap());
+    let wait = std::time::Instant::now();
+    while wait.elapsed() < Duration::from_secs(5) {
+        harness.run_steps(1);
+        first
+            .set_read_timeout(Some(Duration::from_millis(10)))
+            .unwrap();
+        if let Ok(Some(m)) = editor_link::receive(&mut answers) {
+            assert_eq!(m, Message::Resend { path: path.clone() });
+            break;
+        }
+    }
+    first.set_read_timeout(None).unwrap();
+    editor_link::send(&mut first, &buffer(with_ka("0.5"))).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the first editor's text handed again",
+        |app| shown_ka(app) == 0.5,
+    );
     drop(second);
     step_until(
         &mut harness,
@@ -572,7 +610,7 @@ fn the_app_follows_any_editor_that_still_holds_unsaved_text() {
         "the first editor's text again",
         |app| shown_ka(app) == 0.5 && app.document().is_following(),
     );
-    drop(first);
+    drop((first, answers));
     step_until(
         &mut harness,
         Duration::from_secs(5),

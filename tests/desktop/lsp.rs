@@ -108,8 +108,9 @@ fn listening_app(
 
 /// The editor's unsaved text goes to the user's apps over the link
 /// (`rayoflight::desktop::editor_link`): a listener in a private runtime folder
-/// gets the typed text before any save, then "released" when the editor
-/// saves.
+/// gets the text whole once, then each edit as a change, which applied to
+/// its copy gives the typed text before any save; then "released" when the
+/// editor saves.
 #[test]
 fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
     use rayoflight::desktop::editor_link::{self, Message};
@@ -126,8 +127,38 @@ fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
             return;
         };
         let mut r = std::io::BufReader::new(stream);
+        // The app's copy of the editor's text.
+        let mut held: Option<String> = None;
         while let Ok(Some(m)) = editor_link::receive(&mut r) {
-            let _ = tx.send((m, fs::read_to_string(&scene).unwrap_or_default()));
+            let kind = format!("{m:?}")
+                .split([' ', '{'])
+                .next()
+                .unwrap_or_default()
+                .to_owned();
+            // A change is told as the text it makes.
+            let m = match m {
+                Message::Buffer { path, text } => {
+                    held = Some(text.clone());
+                    Message::Buffer { path, text }
+                }
+                Message::Change {
+                    path,
+                    range,
+                    text,
+                    length,
+                } => {
+                    let copy = held.as_mut().expect("a change after a whole text");
+                    copy.replace_range(range, &text);
+                    assert_eq!(copy.len(), length, "the change fits the copy");
+                    Message::Buffer {
+                        path,
+                        text: copy.clone(),
+                    }
+                }
+                m => m,
+            };
+            let on_disk = fs::read_to_string(&scene).unwrap_or_default();
+            let _ = tx.send((m, on_disk, kind));
         }
     });
     let o = neovim(
@@ -136,7 +167,18 @@ fn the_unsaved_text_reaches_a_listening_app_and_the_save_releases_it() {
         &[("XDG_RUNTIME_DIR", runtime.as_os_str())],
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let got: Vec<(Message, String)> = rx.try_iter().collect();
+    let got: Vec<(Message, String, String)> = rx.try_iter().collect();
+    let kinds: Vec<&str> = got.iter().map(|(_, _, kind)| kind.as_str()).collect();
+    assert_eq!(
+        kinds.iter().filter(|k| **k == "Buffer").count(),
+        1,
+        "{kinds:?}"
+    );
+    assert!(
+        kinds.contains(&"Change"),
+        "edits travel as edits: {kinds:?}"
+    );
+    let got: Vec<(Message, String)> = got.into_iter().map(|(m, d, _)| (m, d)).collect();
     let path = fs::canonicalize(dir.path()).unwrap().join("s.xml");
     let typed = rayoflight::EXAMPLE_SCENE.replacen("ka=\"0.3\"", "ka=\"0.9\"", 1);
     let unsaved = got.iter().position(|(m, on_disk)| {

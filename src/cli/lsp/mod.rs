@@ -14,9 +14,11 @@
 //! changed document (shared, not copied) with the edits made since, and
 //! checks it at most every 100 ms, reading only where the edits fall
 //! ([`rayoflight::scene::Reading`]): a big buffer makes its errors come
-//! later, never the typing slower. The same thread hands
-//! each newest text to the user's running apps
-//! ([`rayoflight::desktop::editor_link`]), tells them when the editor saves or
+//! later, never the typing slower. The same thread hands the user's
+//! running apps ([`rayoflight::desktop::editor_link`]) each text whole once
+//! (an app new, or that lost track of it and asked again), then the edits
+//! since as one change ([`rayoflight::scene::Span`]: the bytes replaced
+//! and what replaces them) before it checks the text, tells them when the editor saves or
 //! closes the document, and which object the editor's cursor is in (a
 //! `textDocument/documentHighlight` request, which editors send as the
 //! cursor moves: the answer highlights that object's start tag). A click
@@ -62,6 +64,7 @@ use lsp_types::{
     WorkspaceSymbolParams, WorkspaceSymbolResponse,
 };
 use rayoflight::desktop::editor_link;
+use rayoflight::scene::Span;
 use rayoflight::scene::language::{self, Lines, Place, Under};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -128,6 +131,9 @@ enum Changed {
     /// The editor's cursor is at this byte of the document: the request
     /// to answer with the object there.
     Cursor(String, Uri, usize, RequestId),
+    /// The app at this socket lost track of a text: it is handed every
+    /// document whole again.
+    Resend(PathBuf),
 }
 
 /// How the server sends a message to the editor, from any thread: false
@@ -217,8 +223,19 @@ fn serve() -> Result<(), String> {
     };
     let documents: Documents = Arc::default();
     let shows = client["capabilities"]["window"]["showDocument"]["support"].as_bool() == Some(true);
-    let from_apps = from_apps(Arc::clone(&documents), Arc::clone(&send), shows);
-    let diagnose = diagnosis_thread(Arc::clone(&documents), Arc::clone(&send), from_apps);
+    let (diagnose, changes) = mpsc::channel::<Changed>();
+    let from_apps = from_apps(
+        Arc::clone(&documents),
+        Arc::clone(&send),
+        shows,
+        diagnose.clone(),
+    );
+    diagnosis_thread(
+        Arc::clone(&documents),
+        Arc::clone(&send),
+        from_apps,
+        changes,
+    );
     let mut shut_down = false;
     for message in &connection.receiver {
         match message {
@@ -388,8 +405,8 @@ fn diagnosis_thread(
     documents: Documents,
     send: Send,
     from_apps: FromApps,
-) -> mpsc::Sender<Changed> {
-    let (tx, rx) = mpsc::channel::<Changed>();
+    rx: mpsc::Receiver<Changed>,
+) {
     std::thread::spawn(move || {
         let mut apps = Apps::new(from_apps);
         // The object or light each document's cursor was last in, told to
@@ -400,17 +417,16 @@ fn diagnosis_thread(
         let mut readings: HashMap<String, rayoflight::scene::Reading> = HashMap::new();
         let mut last = Instant::now() - DIAGNOSE_EVERY;
         loop {
-            let first = match rx.recv_timeout(LOOK_FOR_APPS_EVERY) {
-                Ok(first) => first,
-                Err(mpsc::RecvTimeoutError::Timeout) => {
-                    apps.look(&documents);
-                    apps.fresh.clear();
-                    continue;
+            let mut changed = match rx.recv_timeout(LOOK_FOR_APPS_EVERY) {
+                Ok(first) => {
+                    std::thread::sleep(DIAGNOSE_EVERY.saturating_sub(last.elapsed()));
+                    vec![first]
                 }
+                Err(mpsc::RecvTimeoutError::Timeout) => Vec::new(),
                 Err(mpsc::RecvTimeoutError::Disconnected) => return,
             };
-            std::thread::sleep(DIAGNOSE_EVERY.saturating_sub(last.elapsed()));
-            let mut changed = vec![first];
+            // Only a batch of changes makes the next one wait.
+            let quiet = changed.is_empty();
             for next in rx.try_iter() {
                 // The newest cursor of a document wins; the one it
                 // replaces is answered with no highlight.
@@ -430,9 +446,31 @@ fn diagnosis_thread(
                     changed.push(next);
                 }
             }
-            apps.look(&documents);
+            apps.look();
+            // Apps new, or that lost track, are handed every document
+            // whole, each as it is read next (the others its edits).
+            for change in &changed {
+                if let Changed::Resend(socket) = change
+                    && apps.connections.contains_key(socket)
+                    && !apps.fresh.contains(socket)
+                {
+                    apps.fresh.push(socket.clone());
+                }
+            }
+            if !apps.fresh.is_empty() {
+                let keys: Vec<String> = lock(&documents).keys().cloned().collect();
+                for key in keys {
+                    if let Ok(uri) = key.parse::<Uri>() {
+                        let text = Changed::Text(key, uri);
+                        if !changed.contains(&text) {
+                            changed.push(text);
+                        }
+                    }
+                }
+            }
             for change in changed {
                 let (key, uri) = match change {
+                    Changed::Resend(_) => continue,
                     Changed::Released(uri) => {
                         apps.released(&uri);
                         continue;
@@ -473,16 +511,27 @@ fn diagnosis_thread(
                     let edits = std::mem::take(&mut d.edits);
                     (Arc::clone(&d.text), Arc::clone(&d.lines), edits)
                 });
-                let (text, diagnostics) = match snapshot {
+                let diagnostics = match snapshot {
                     Some((text, lines, edits)) => {
                         let reading = readings.entry(key).or_default();
+                        // The edits as one, for the apps.
+                        let mut told = Some(None);
                         for edit in edits {
                             match edit {
-                                Edit::Spliced(range, inserted) => reading.edited(range, inserted),
-                                Edit::Whole => reading.forget(),
+                                Edit::Spliced(range, inserted) => {
+                                    told = told.map(|span| {
+                                        Some(Span::then(span, range.clone(), inserted))
+                                    });
+                                    reading.edited(range, inserted);
+                                }
+                                Edit::Whole => {
+                                    told = None;
+                                    reading.forget();
+                                }
                             }
                         }
-                        let found = language::diagnostics_after(reading, &text, &lines)
+                        apps.text(&uri, &text, told);
+                        language::diagnostics_after(reading, &text, &lines)
                             .into_iter()
                             .map(|d| Diagnostic {
                                 range: range(&text, &lines, d.range),
@@ -491,14 +540,10 @@ fn diagnosis_thread(
                                 message: d.message,
                                 ..Diagnostic::default()
                             })
-                            .collect();
-                        (Some(text), found)
+                            .collect()
                     }
-                    None => (None, Vec::new()),
+                    None => Vec::new(),
                 };
-                if let Some(text) = text {
-                    apps.buffer(&uri, &text);
-                }
                 let params = PublishDiagnosticsParams {
                     uri,
                     diagnostics,
@@ -510,10 +555,11 @@ fn diagnosis_thread(
                 }
             }
             apps.fresh.clear();
-            last = Instant::now();
+            if !quiet {
+                last = Instant::now();
+            }
         }
     });
-    tx
 }
 
 /// The object whose element holds byte `offset` of the document, and its
@@ -525,17 +571,31 @@ fn under_cursor(documents: &Documents, key: &str, offset: usize) -> Option<(Unde
 }
 
 /// What an app says over the link, handled on that connection's thread.
-type FromApps = Arc<dyn Fn(editor_link::Message) + std::marker::Send + Sync>;
+type FromApps = Arc<dyn Fn(&Path, editor_link::Message) + std::marker::Send + Sync>;
 
 /// What the apps say: a click on an object asks the editor to show its
 /// element (`window/showDocument`, the element selected, the focus left
-/// where it is) if the editor can, else says once that it cannot.
-fn from_apps(documents: Documents, send: Send, shows: bool) -> FromApps {
+/// where it is) if the editor can, else says once that it cannot; an app
+/// that lost track of a text is handed the texts whole again (by the
+/// thread that tells the apps, `diagnose`).
+fn from_apps(
+    documents: Documents,
+    send: Send,
+    shows: bool,
+    diagnose: mpsc::Sender<Changed>,
+) -> FromApps {
     let said_cannot = AtomicBool::new(false);
     let requests = AtomicU64::new(0);
-    Arc::new(move |message| {
-        let editor_link::Message::Show { path, object } = message else {
-            return;
+    let diagnose = Mutex::new(diagnose);
+    Arc::new(move |socket, message| {
+        let (path, object) = match message {
+            editor_link::Message::Show { path, object } => (path, object),
+            editor_link::Message::Resend { .. } => {
+                let diagnose = diagnose.lock().unwrap_or_else(PoisonError::into_inner);
+                let _ = diagnose.send(Changed::Resend(socket.to_owned()));
+                return;
+            }
+            _ => return,
         };
         let Some((uri, selection)) = object_element(&documents, &path, object) else {
             return;
@@ -605,8 +665,8 @@ fn object_element(documents: &Documents, path: &Path, object: usize) -> Option<(
 /// its own.
 struct Apps {
     connections: HashMap<PathBuf, editor_link::Stream>,
-    /// Those connected since the last batch of changes: they were handed
-    /// the newest texts already.
+    /// Those connected since the last batch of changes, or that asked
+    /// for the texts again: they are handed each text whole.
     fresh: Vec<PathBuf>,
     from_apps: FromApps,
 }
@@ -636,9 +696,9 @@ impl Apps {
         }
     }
 
-    /// Connects to the apps started since it last looked, and hands each
-    /// the text of every open document; drops those gone.
-    fn look(&mut self, documents: &Documents) {
+    /// Connects to the apps started since it last looked (each is
+    /// [`Apps::fresh`]: handed every text whole next); drops those gone.
+    fn look(&mut self) {
         let Ok(folder) = editor_link::folder() else {
             return;
         };
@@ -654,48 +714,28 @@ impl Apps {
             if self.connections.contains_key(&socket) {
                 continue;
             }
-            let Ok(mut stream) = editor_link::connect(&socket) else {
+            let Ok(stream) = editor_link::connect(&socket) else {
                 continue;
             };
             let Ok(reader) = stream.try_clone() else {
                 continue;
             };
             let from_apps = Arc::clone(&self.from_apps);
+            let at = socket.clone();
             std::thread::spawn(move || {
                 let mut r = std::io::BufReader::new(reader);
                 while let Ok(Some(message)) = editor_link::receive(&mut r) {
-                    from_apps(message);
+                    from_apps(&at, message);
                 }
             });
-            let texts: Vec<(String, Arc<String>)> = lock(documents)
-                .iter()
-                .map(|(key, d)| (key.clone(), Arc::clone(&d.text)))
-                .collect();
-            let sent = texts.into_iter().all(|(key, text)| {
-                editor_link::uri_path(&key).is_none_or(|path| {
-                    let text = text.as_str().to_owned();
-                    editor_link::send(&mut stream, &editor_link::Message::Buffer { path, text })
-                        .is_ok()
-                })
-            });
-            if sent {
-                self.fresh.push(socket.clone());
-                self.connections.insert(socket, stream);
-            } else {
-                hang_up(&stream);
-            }
+            self.fresh.push(socket.clone());
+            self.connections.insert(socket, stream);
         }
     }
 
-    /// Sends `message` to every app connected (but those just handed the
-    /// newest texts, for a text).
+    /// Sends `message` to every app connected.
     fn tell(&mut self, message: &editor_link::Message) {
-        let text = matches!(message, editor_link::Message::Buffer { .. });
-        let fresh = &self.fresh;
-        self.connections.retain(|socket, stream| {
-            if text && fresh.contains(socket) {
-                return true;
-            }
+        self.connections.retain(|_, stream| {
             let sent = editor_link::send(stream, message).is_ok();
             if !sent {
                 hang_up(stream);
@@ -704,16 +744,47 @@ impl Apps {
         });
     }
 
-    /// Hands every app the newest `text` of `uri` (copied only when an
-    /// app is there to take it).
-    fn buffer(&mut self, uri: &Uri, text: &str) {
+    /// Hands every app the newest `text` of `uri`: whole to those
+    /// [`Apps::fresh`] and where the edits since the last are not known
+    /// (`edits` none), else as the one change they make (nothing where
+    /// there was none).
+    fn text(&mut self, uri: &Uri, text: &str, edits: Option<Option<Span>>) {
         if self.connections.is_empty() {
             return;
         }
-        if let Some(path) = editor_link::uri_path(uri.as_str()) {
-            let text = text.to_owned();
-            self.tell(&editor_link::Message::Buffer { path, text });
-        }
+        let Some(path) = editor_link::uri_path(uri.as_str()) else {
+            return;
+        };
+        let whole = || editor_link::Message::Buffer {
+            path: path.clone(),
+            text: text.to_owned(),
+        };
+        let change = match edits {
+            Some(Some(span)) => Some(editor_link::Message::Change {
+                path: path.clone(),
+                range: span.start..span.end,
+                text: text[span.now()].to_owned(),
+                length: text.len(),
+            }),
+            Some(None) => None,
+            None => Some(whole()),
+        };
+        let fresh = &self.fresh;
+        let mut buffer = None;
+        self.connections.retain(|socket, stream| {
+            let message = match fresh.contains(socket) {
+                true => buffer.get_or_insert_with(whole),
+                false => match &change {
+                    Some(change) => change,
+                    None => return true,
+                },
+            };
+            let sent = editor_link::send(stream, message).is_ok();
+            if !sent {
+                hang_up(stream);
+            }
+            sent
+        });
     }
 
     fn released(&mut self, uri: &Uri) {

@@ -14,7 +14,7 @@ use crate::session::pace::Pace;
 use crate::session::preview::RenderState;
 use crate::session::watcher::FileEvent;
 use crate::session::worker::Event;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -231,22 +231,62 @@ impl RayOfLightApp {
         };
         match message {
             Message::Buffer { path, text } if ours(&path) => {
-                let was = self.doc.is_following();
-                let held = self.keeping_selection(|app| app.doc.follow(text));
-                // This editor's text is the newest: last in the list.
-                self.editors.holding.retain(|(c, _)| *c != connection);
+                self.show_editor_text(connection, text);
+            }
+            Message::Change {
+                path,
+                range,
+                text,
+                length,
+            } if ours(&path) => {
+                let held = self
+                    .editors
+                    .holding
+                    .iter()
+                    .position(|(c, _)| *c == connection);
+                let on_screen = held.is_some_and(|i| i + 1 == self.editors.holding.len())
+                    && self.doc.is_following();
                 match held {
-                    Some(held) => self.editors.holding.push((connection, held)),
-                    // This editor's text is the file's again (it saved):
-                    // another editor's unsaved text, if one holds any.
-                    None => {
-                        self.show_newest_held();
+                    // The text on screen, read again where the edit falls.
+                    Some(_) if on_screen => {
+                        let followed =
+                            self.keeping_selection(|app| app.doc.follow_edit(range, &text, length));
+                        match followed {
+                            Ok(true) => {}
+                            // This editor's text is the file's again.
+                            Ok(false) => {
+                                self.editors.holding.pop();
+                                self.show_newest_held();
+                            }
+                            Err(_) => {
+                                self.editors.holding.pop();
+                                self.ask_again(connection, path);
+                                return;
+                            }
+                        }
+                        self.after_edit();
                     }
+                    // Another editor's text: now the newest, shown.
+                    Some(i) => {
+                        let (_, held) = self.editors.holding.remove(i);
+                        let fits = |t: &String| {
+                            range.end <= t.len()
+                                && t.is_char_boundary(range.start)
+                                && t.is_char_boundary(range.end)
+                                && t.len() - range.len() + text.len() == length
+                        };
+                        match held.filter(fits) {
+                            Some(mut held) => {
+                                held.replace_range(range, &text);
+                                self.show_editor_text(connection, held);
+                            }
+                            None => self.ask_again(connection, path),
+                        }
+                    }
+                    // A change of a text this app was never handed (it
+                    // opened the file since).
+                    None => self.ask_again(connection, path),
                 }
-                if !was && self.doc.is_following() {
-                    self.notify("the panel waits while your editor has unsaved text".into());
-                }
-                self.after_edit();
             }
             Message::Select { path, under } if ours(&path) => match under {
                 // The object as the panel numbers it now (objects added or
@@ -285,15 +325,57 @@ impl RayOfLightApp {
         }
     }
 
+    /// Shows `text`, editor `connection`'s newest text of the open file
+    /// (or, where it is the file's, another editor's unsaved text if one
+    /// holds any); the text on screen before, another editor's, is kept
+    /// for when this one lets go.
+    fn show_editor_text(&mut self, connection: u64, text: String) {
+        let was = self.doc.is_following();
+        if let Some((c, held)) = self.editors.holding.last_mut()
+            && *c != connection
+            && held.is_none()
+        {
+            *held = self.doc.take_editor_text();
+        }
+        self.editors.holding.retain(|(c, _)| *c != connection);
+        // This editor's text is the newest: last in the list.
+        match self.keeping_selection(|app| app.doc.follow(text)) {
+            true => self.editors.holding.push((connection, None)),
+            // This editor's text is the file's again (it saved): another
+            // editor's unsaved text, if one holds any.
+            false => {
+                self.show_newest_held();
+            }
+        }
+        if !was && self.doc.is_following() {
+            self.notify("the panel waits while your editor has unsaved text".into());
+        }
+        self.after_edit();
+    }
+
+    /// Editor `connection`'s text of `path` is not known here (a change
+    /// came of a text this app missed): it is asked for whole again.
+    fn ask_again(&mut self, connection: u64, path: PathBuf) {
+        self.editors.holding.retain(|(c, _)| *c != connection);
+        self.editors.peers.tell_one(
+            connection,
+            &crate::desktop::editor_link::Message::Resend { path },
+        );
+    }
+
     /// Shows again the newest unsaved text an editor still holds of the
     /// open file; false when none does.
     fn show_newest_held(&mut self) -> bool {
         let Some((editor, held)) = self.editors.holding.pop() else {
             return false;
         };
-        let text = held.text().into_owned();
-        if let Some(held) = self.keeping_selection(|app| app.doc.follow(text)) {
-            self.editors.holding.push((editor, held));
+        let Some(text) = held else {
+            // The one on screen: its text is the document's already.
+            self.editors.holding.push((editor, None));
+            return true;
+        };
+        if self.keeping_selection(|app| app.doc.follow(text)) {
+            self.editors.holding.push((editor, None));
         }
         true
     }

@@ -167,10 +167,11 @@ struct EditorLink {
     socket: Option<PathBuf>,
     peers: crate::desktop::editor_link::Peers,
     /// The editors (by connection) that hold unsaved text of the open
-    /// file, the one on screen last, each with its newest text: when it
+    /// file, the one on screen last, each with its newest text (but the
+    /// one on screen, whose text the document holds: `None`): when it
     /// lets go, the one before is shown again, and the file only when none
     /// holds any.
-    holding: Vec<(u64, crate::scene::source::Source)>,
+    holding: Vec<(u64, Option<String>)>,
 }
 
 /// What the app remembers between runs: the recent files, and the window
@@ -277,18 +278,20 @@ impl RayOfLightApp {
         let _ = std::thread::Builder::new()
             .name("editor link".into())
             .spawn(move || {
-                let mut connections = 0u64;
+                let mut unanswered = u64::MAX;
                 while let Ok(stream) = listener.accept() {
-                    connections += 1;
-                    let connection = connections;
                     let (tx, ctx, editors) = (tx.clone(), ctx.clone(), editors.clone());
+                    // An editor this app cannot answer is still followed
+                    // (under a number of its own).
+                    let peer = editors.add(&stream).ok();
+                    let connection = peer.unwrap_or_else(|| {
+                        unanswered -= 1;
+                        unanswered
+                    });
                     let _ = std::thread::Builder::new()
                         .name("editor".into())
                         .spawn(move || {
                             use crate::desktop::editor_link::{Message, receive};
-                            // An editor this app cannot answer is still
-                            // followed.
-                            let peer = editors.add(&stream).ok();
                             let mut r = std::io::BufReader::new(stream);
                             // An editor that goes away (quit, crashed)
                             // lets go of what it sent.

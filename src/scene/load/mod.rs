@@ -32,7 +32,7 @@ mod reading;
 use parser::Parser;
 pub(crate) use parser::{MAX_SIDE, NumberError, parse_integer, parse_number};
 use pieces::{PIECE_BYTES, in_pieces, parsing_threads, streamed};
-pub use reading::Reading;
+pub use reading::{Reading, Reread, Span};
 
 /// Largest scene file [`load`] reads: 1 GiB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;

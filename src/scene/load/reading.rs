@@ -14,27 +14,58 @@
 //! can tell (a camera or model more or less, a count past its limit)
 //! reads the whole text, as does a text never read without error.
 //!
-//! Objects and lights are checked, not kept: a million spheres cost their
-//! places (16 bytes each), not a scene.
+//! A check ([`Reading::default`], the language server's) keeps objects
+//! and lights checked, not kept: a million spheres cost their places (16
+//! bytes each), not a scene. A reading that keeps the scene
+//! ([`Reading::keeping`], the app's, following an editor) replaces only
+//! the objects and lights of the children read again, the others shared
+//! with the scene before ([`Reading::scene`]): an edit of one light leaves
+//! the list of a million objects the same list, and the renderer sees that
+//! at once.
 
 use std::ops::Range;
 use std::path::Path;
 
 use super::parser::{Child, Gathered, Parser};
 use super::{MAX_LIGHTS, MAX_OBJECTS};
-use crate::scene::Camera;
 use crate::scene::error::LoadError;
+use crate::scene::{Camera, Scene};
 use crate::shading::Model;
 
 /// What is known of a text between checks ([`Reading::check`]).
-#[derive(Default)]
+#[derive(Debug, Clone, Default)]
 pub struct Reading {
     known: Option<Known>,
     /// The edits since `known` was read, as one span of that text.
-    dirty: Option<Dirty>,
+    dirty: Option<Span>,
+    /// The scene is kept ([`Reading::keeping`]).
+    keep: bool,
+    /// What the last check read, where it found no error.
+    last: Option<Reread>,
+}
+
+/// What a check read of the text ([`Reading::reread`]), to bring up to
+/// date what follows the text's children (an app's labels of its
+/// objects).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Reread {
+    /// The whole text.
+    Whole,
+    /// The bytes `text` of the new text (after its byte-order mark), from
+    /// the start of a child of the root to the start of the first child
+    /// after the edits (or the root's end), which held `objects_were`
+    /// objects and now hold `objects_now`, the first of them object
+    /// number `first_object`.
+    Children {
+        text: Range<usize>,
+        first_object: usize,
+        objects_were: usize,
+        objects_now: usize,
+    },
 }
 
 /// The text as last found without error.
+#[derive(Debug, Clone)]
 struct Known {
     /// Its byte-order mark's length: places are in the text after it.
     bom: usize,
@@ -46,39 +77,35 @@ struct Known {
     /// when it reads on past them.
     camera: Option<Camera>,
     model: Option<Model>,
+    /// The scene it loads to, where the reading keeps it.
+    scene: Option<Scene>,
 }
 
-/// Edits as one span `start..end` of the known text (after its byte-order
-/// mark), now `delta` bytes longer.
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Dirty {
-    start: usize,
-    end: usize,
-    delta: isize,
+/// Edits of a text, one after another, as one span of it: the bytes
+/// `start..end` of the text before them are now the bytes
+/// [`Span::now`], the text `delta` bytes longer. What a reading reads
+/// again, and what the language server sends an app ([`Span::then`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Span {
+    pub start: usize,
+    pub end: usize,
+    pub delta: isize,
 }
 
-impl Reading {
-    /// The bytes `range` of the text (as it is now) were replaced by
-    /// `inserted` bytes.
-    pub fn edited(&mut self, range: Range<usize>, inserted: usize) {
-        let Some(known) = &self.known else {
-            return;
-        };
-        if range.start < known.bom {
-            self.known = None;
-            self.dirty = None;
-            return;
-        }
-        let (a, b) = (range.start - known.bom, range.end - known.bom);
+impl Span {
+    /// `span` (none: no edit yet), then the bytes `range` of the text as
+    /// it then is replaced by `inserted` bytes.
+    pub fn then(span: Option<Span>, range: Range<usize>, inserted: usize) -> Span {
+        let (a, b) = (range.start, range.end);
         let grown = inserted as isize - (b as isize - a as isize);
-        self.dirty = Some(match self.dirty {
-            None => Dirty {
+        match span {
+            None => Span {
                 start: a,
                 end: b,
                 delta: grown,
             },
             Some(d) => {
-                // `a` and `b` in the known text: before the span as they
+                // `a` and `b` in the text before: before the span as they
                 // are, after it moved back, inside it the span's ends.
                 let now_end = (d.end as isize + d.delta) as usize;
                 let old = |x: usize, inside: usize| match x {
@@ -86,18 +113,63 @@ impl Reading {
                     x if x >= now_end => (x as isize - d.delta) as usize,
                     _ => inside,
                 };
-                Dirty {
+                Span {
                     start: d.start.min(old(a, d.start)),
                     end: d.end.max(old(b, d.end)),
                     delta: d.delta + grown,
                 }
             }
-        });
+        }
+    }
+
+    /// Where the span's bytes are in the text after the edits.
+    pub fn now(&self) -> Range<usize> {
+        self.start..(self.end as isize + self.delta) as usize
+    }
+}
+
+impl Reading {
+    /// A reading that keeps the scene of the text ([`Reading::scene`]),
+    /// each check replacing only the objects and lights it reads again.
+    pub fn keeping() -> Reading {
+        Reading {
+            keep: true,
+            ..Reading::default()
+        }
+    }
+
+    /// The scene of the text as last found without error, where the
+    /// reading keeps it ([`Reading::keeping`]).
+    pub fn scene(&self) -> Option<&Scene> {
+        self.known.as_ref()?.scene.as_ref()
+    }
+
+    /// What the last check read, where it found no error.
+    pub fn reread(&self) -> Option<&Reread> {
+        self.last.as_ref()
+    }
+
+    /// The bytes `range` of the text (as it is now) were replaced by
+    /// `inserted` bytes.
+    pub fn edited(&mut self, range: Range<usize>, inserted: usize) {
+        let Some(known) = &self.known else {
+            return;
+        };
+        if range.start < known.bom {
+            self.forget();
+            return;
+        }
+        let range = range.start - known.bom..range.end - known.bom;
+        self.dirty = Some(Span::then(self.dirty, range, inserted));
     }
 
     /// The text changed in ways not told: it is read whole next time.
     pub fn forget(&mut self) {
-        self.known = None;
+        // A kept scene stays, for its objects to be shared with the next.
+        if let Some(known) = &mut self.known {
+            known.places = Vec::new();
+            known.content = 0..0;
+        }
         self.dirty = None;
     }
 
@@ -107,34 +179,72 @@ impl Reading {
     /// placed by a search instead of a count of the lines before it).
     pub fn check(&mut self, text: &str, lines: Option<&[usize]>) -> Result<(), LoadError> {
         let path = Path::new("");
+        self.last = None;
         if let (Some(known), Some(dirty)) = (&mut self.known, self.dirty)
-            && let Some(found) = again(known, dirty, text, lines, path)
+            && !known.places.is_empty()
+            && let Some(found) = again(known, dirty, text, lines, path, self.keep)
         {
-            if found.is_ok() {
+            if let Ok(reread) = found {
                 self.dirty = None;
+                self.last = Some(reread);
+                return Ok(());
             }
-            return found;
+            return found.map(|_| ());
         }
         self.dirty = None;
-        let (known, found) = whole(text, lines, path);
-        self.known = known;
-        found
+        let like = self
+            .known
+            .as_mut()
+            .and_then(|k| k.scene.take())
+            .map(|scene| scene.objects);
+        let (known, found) = whole(
+            text,
+            lines,
+            path,
+            self.keep,
+            like.as_ref().map(|o| o.as_slice()),
+        );
+        match found {
+            Ok(()) => {
+                self.known = known;
+                self.last = Some(Reread::Whole);
+                Ok(())
+            }
+            Err(e) => {
+                // Nothing known of this text: read whole next time.
+                self.known = None;
+                Err(e)
+            }
+        }
     }
 }
 
-/// The text read whole: what is known of it where it has no error.
+/// The text read whole: what is known of it where it has no error (its
+/// scene too, where `keep`, sharing the objects of `like` that are equal).
 fn whole(
     text: &str,
     lines: Option<&[usize]>,
     path: &Path,
+    keep: bool,
+    like: Option<&[std::sync::Arc<crate::scene::Object>]>,
 ) -> (Option<Known>, Result<(), LoadError>) {
     let body = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut parser = Parser::new(body, path);
     parser.lines = lines.map(|l| (l, text.len() - body.len()));
-    parser.check_only = true;
+    parser.check_only = !keep;
     parser.record = true;
+    if let Some(like) = like {
+        parser.like = like;
+    }
     match parser.gathered() {
-        Ok(g) => {
+        Ok(mut g) => {
+            // (A text read without error has its camera.)
+            let scene = g.camera.clone().filter(|_| keep).map(|camera| Scene {
+                objects: std::mem::take(&mut g.objects).into(),
+                lights: std::mem::take(&mut g.lights),
+                camera,
+                model: g.model.unwrap_or_default(),
+            });
             let known = g
                 .content_start
                 .zip(g.content_end)
@@ -144,6 +254,7 @@ fn whole(
                     content: start..end,
                     camera: g.camera,
                     model: g.model,
+                    scene,
                 });
             (known, Ok(()))
         }
@@ -156,11 +267,12 @@ fn whole(
 /// error.
 fn again(
     known: &mut Known,
-    dirty: Dirty,
+    dirty: Span,
     text: &str,
     lines: Option<&[usize]>,
     path: &Path,
-) -> Option<Result<(), LoadError>> {
+    keep: bool,
+) -> Option<Result<Reread, LoadError>> {
     let body = text.strip_prefix('\u{feff}').unwrap_or(text);
     if text.len() - body.len() != known.bom
         || dirty.start < known.content.start
@@ -192,12 +304,17 @@ fn again(
     if seen[Child::Model as usize] > 0 {
         before.model = Some(known.model?);
     }
+    let first_object = before.unkept_objects;
+    let first_light = before.unkept_lights;
     let mut parser = Parser::new(body, path);
-    parser.check_only = true;
+    parser.check_only = !keep;
     parser.record = true;
     parser.stop = Some(stop);
     parser.lines = lines.map(|l| (l, known.bom));
-    let (read, stopped) = match parser.document_from(from, before)? {
+    if let Some(scene) = &known.scene {
+        parser.like = scene.objects.get(first_object..).unwrap_or_default();
+    }
+    let (mut read, stopped) = match parser.document_from(from, before)? {
         Ok(read) => read,
         Err(e) => return Some(Err(e)),
     };
@@ -206,12 +323,30 @@ fn again(
         let (Some(camera), Some(end)) = (read.camera.clone(), read.content_end) else {
             return None;
         };
+        let objects_were = counts(&known.places[first..])[Child::Object as usize];
+        let objects_now = read.objects.len() + read.unkept_objects - first_object;
+        if let Some(scene) = &mut known.scene {
+            let objects = std::mem::take(&mut read.objects);
+            if objects_were > 0 || !objects.is_empty() {
+                scene.objects.truncate(first_object);
+                scene.objects.extend(objects);
+            }
+            scene.lights.truncate(first_light);
+            scene.lights.append(&mut read.lights);
+            scene.camera = camera.clone();
+            scene.model = read.model.unwrap_or_default();
+        }
         known.places.truncate(first);
         known.places.extend(read.places);
         known.content.end = end;
         known.camera = Some(camera);
         known.model = read.model;
-        return Some(Ok(()));
+        return Some(Ok(Reread::Children {
+            text: from..end,
+            first_object,
+            objects_were,
+            objects_now,
+        }));
     }
     // Stopped where the old text goes on: what only the whole can tell
     // is read whole.
@@ -227,10 +362,31 @@ fn again(
         return None;
     }
     if new[camera] > 0 {
-        known.camera = read.camera;
+        known.camera = read.camera.clone();
     }
     if new[model] > 0 {
         known.model = read.model;
+    }
+    let (objects_were, objects_now) = (old[Child::Object as usize], new[Child::Object as usize]);
+    let lights_were = old[Child::Light as usize];
+    if let Some(scene) = &mut known.scene {
+        // The list is touched (and so copied, where shared) only where
+        // objects were read again.
+        if objects_were > 0 || objects_now > 0 {
+            scene.objects.splice(
+                first_object..first_object + objects_were,
+                std::mem::take(&mut read.objects),
+            );
+        }
+        scene
+            .lights
+            .splice(first_light..first_light + lights_were, read.lights);
+        if let (true, Some(camera)) = (new[camera] > 0, read.camera) {
+            scene.camera = camera;
+        }
+        if let (true, Some(model)) = (new[model] > 0, read.model) {
+            scene.model = model;
+        }
     }
     known.places.splice(first..past, read.places);
     let moved = first + new.iter().sum::<usize>();
@@ -238,7 +394,12 @@ fn again(
         *at = (*at as isize + dirty.delta) as usize;
     }
     known.content.end = (known.content.end as isize + dirty.delta) as usize;
-    Some(Ok(()))
+    Some(Ok(Reread::Children {
+        text: from..stop,
+        first_object,
+        objects_were,
+        objects_now,
+    }))
 }
 
 /// How many of `places` are of each kind (by [`Child`] as an index).
@@ -254,6 +415,7 @@ fn counts(places: &[(usize, Child)]) -> [usize; 4] {
 mod tests {
     use super::super::tests::{below, in_one, varied};
     use super::*;
+    use std::sync::Arc;
 
     /// Where the lines of `text` start, as an editor's server keeps them.
     fn starts(text: &str) -> Vec<usize> {
@@ -313,6 +475,9 @@ mod tests {
                 format!("{:?}", reading.check(&text, Some(&starts(&text)))),
                 one(&text)
             );
+            // The app's reading, keeping the scene, told the same edits.
+            let mut keeping = Reading::keeping();
+            let _ = keeping.check(&text, None);
             for step in 0..12 {
                 let mut at = next(text.len() + 1);
                 while !text.is_char_boundary(at) {
@@ -336,10 +501,23 @@ mod tests {
                     _ => (at..at, snippets[next(snippets.len())].to_owned()),
                 };
                 text.replace_range(range.clone(), &insert);
-                reading.edited(range, insert.len());
+                reading.edited(range.clone(), insert.len());
+                keeping.edited(range, insert.len());
                 let knew = reading.known.is_some() && reading.dirty.is_some();
                 let checked = format!("{:?}", reading.check(&text, Some(&starts(&text))));
                 assert_eq!(checked, one(&text), "round {round}, step {step}:\n{text}");
+                // The kept scene is the one a parse in one gives.
+                let kept = keeping.check(&text, None).map(|()| keeping.scene());
+                let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
+                match (kept, in_one(body)) {
+                    (Ok(kept), Ok(scene)) => assert_eq!(
+                        format!("{:?}", kept.expect("a kept scene")),
+                        format!("{scene:?}"),
+                        "round {round}, step {step}:\n{text}"
+                    ),
+                    (Err(_), Err(_)) => {}
+                    (kept, parsed) => panic!("{kept:?} against {parsed:?}"),
+                }
                 incremental += usize::from(knew);
                 valid += usize::from(checked == "Ok(())");
             }
@@ -378,5 +556,69 @@ mod tests {
         let moved = &reading.known.as_ref().unwrap().places;
         assert_eq!(moved.len(), places.len() + 1);
         assert_eq!(moved.last().unwrap().0, places.last().unwrap().0 + 9);
+    }
+
+    /// A reading that keeps the scene replaces only what it read again:
+    /// a light's edit leaves the objects' list the same list, a sphere's
+    /// shares every other sphere, and says which children it read.
+    #[test]
+    fn a_kept_scene_changes_only_where_the_edit_falls() {
+        let text = varied(2000);
+        let mut reading = Reading::keeping();
+        reading.check(&text, None).unwrap();
+        assert_eq!(reading.reread(), Some(&Reread::Whole));
+        let before = reading.scene().unwrap().clone();
+
+        let at = text.rfind("<light").unwrap() + "<light".len();
+        let x = at + text[at..].find("x=\"").unwrap() + 3;
+        let mut lit = text.clone();
+        lit.insert(x, '7');
+        reading.edited(x..x, 1);
+        reading.check(&lit, None).unwrap();
+        let after = reading.scene().unwrap();
+        assert!(after.objects.same_list(&before.objects));
+        assert_ne!(after.lights, before.lights);
+        assert!(matches!(
+            reading.reread(),
+            Some(Reread::Children {
+                objects_were: 0,
+                objects_now: 0,
+                ..
+            })
+        ));
+
+        let at = text.len() / 2 + text[text.len() / 2..].find("\n  <sphere").unwrap() + 3;
+        let mut grown = lit.clone();
+        grown.insert_str(at, "<sphere/>");
+        reading.edited(at..at, 9);
+        reading.check(&grown, None).unwrap();
+        let after = reading.scene().unwrap();
+        assert_eq!(after.objects.len(), before.objects.len() + 1);
+        let Some(Reread::Children {
+            first_object,
+            objects_were,
+            objects_now,
+            ..
+        }) = reading.reread().cloned()
+        else {
+            panic!("read whole")
+        };
+        // Every object outside the children read again is shared.
+        let same = |a: &[Arc<crate::scene::Object>], b: &[Arc<crate::scene::Object>]| {
+            a.len() == b.len() && a.iter().zip(b).all(|(a, b)| Arc::ptr_eq(a, b))
+        };
+        assert!(same(
+            &after.objects[..first_object],
+            &before.objects[..first_object]
+        ));
+        assert!(same(
+            &after.objects[first_object + objects_now..],
+            &before.objects[first_object + objects_were..]
+        ));
+        assert_eq!(objects_now, objects_were + 1);
+        assert_eq!(
+            format!("{:?}", after.objects[first_object]),
+            format!("{:?}", in_one(&grown).unwrap().objects[first_object])
+        );
     }
 }

@@ -37,12 +37,14 @@
 //! unsaved edits needs in `restore`.
 
 mod disk;
+mod follow;
 mod history;
 mod restore;
 mod save;
 
 pub use disk::{FileRead, FingerprintError, PendingMerge, Reload, SaveError, fingerprint_file};
 use disk::{fingerprint, fingerprint_source};
+pub use follow::Unfit;
 use history::Step;
 pub use restore::{TextWriter, fingerprint_text};
 pub use save::{OwnWrites, SaveJob, SaveOutcome, SaveStep};
@@ -131,7 +133,7 @@ pub struct Document {
     /// The user's editor's unsaved text of this file and its last scene
     /// that loaded, shown instead of `shown` while the editor has it
     /// ([`Document::follow`]); the file and the unsaved panel edits wait.
-    editor: Option<Version>,
+    editor: Option<follow::Following>,
     /// Why the editor's newest text does not load, if it does not.
     editor_error: Option<String>,
     /// Changes with every change of the scene on screen or of the labels
@@ -283,7 +285,7 @@ impl Document {
 
     /// The text on screen is held packed ([`Source`]: a large file's).
     pub fn holds_packed_text(&self) -> bool {
-        self.on_screen().source.is_packed()
+        self.editor.is_none() && self.shown.source.is_packed()
     }
 
     /// The scene on screen.
@@ -293,58 +295,7 @@ impl Document {
 
     /// The version on screen: the editor's while it is followed.
     fn on_screen(&self) -> &Version {
-        self.editor.as_ref().unwrap_or(&self.shown)
-    }
-
-    /// Shows the user's editor's unsaved `text` of this file instead of the
-    /// document (which waits, unsaved edits and all): what `rayoflight lsp`
-    /// hands over as it is typed. A text that does not load keeps the last
-    /// one that did on screen, with its error; the file's own text ends
-    /// the following. Nothing is written. Returns the text as held (shared,
-    /// packed when big: no copy), for a caller that may show it again
-    /// later (another editor's text replaced it meanwhile), or `None` when
-    /// it is the file's.
-    pub fn follow(&mut self, text: String) -> Option<Source> {
-        if self.file.source.is(&text) {
-            self.unfollow();
-            return None;
-        }
-        let path = self.path.clone().unwrap_or_default();
-        let like = &self.on_screen().edited.scene().objects;
-        let held = match scene::parse_sharing(&text, &path, like) {
-            Ok(scene) => {
-                let labels = Arc::new(names::object_labels(&text));
-                let held = Source::new(text);
-                self.editor = Some(Version::new(held.clone(), scene, labels));
-                self.editor_error = None;
-                held
-            }
-            Err(e) => {
-                // The first text that does not load: the document's on
-                // screen until one does.
-                if self.editor.is_none() {
-                    self.editor = Some(self.shown.clone());
-                }
-                self.editor_error = Some(e.to_string());
-                Source::new(text)
-            }
-        };
-        self.generation = next_generation();
-        Some(held)
-    }
-
-    /// Back to the document: the editor saved or closed the file.
-    pub fn unfollow(&mut self) {
-        if self.editor.take().is_some() {
-            self.editor_error = None;
-            self.generation = next_generation();
-        }
-    }
-
-    /// Whether the editor's unsaved text is on screen
-    /// ([`Document::follow`]): the panel is read-only, saving waits.
-    pub fn is_following(&self) -> bool {
-        self.editor.is_some()
+        self.editor.as_ref().map_or(&self.shown, |f| &f.version)
     }
 
     /// A short name for the title bar.
@@ -389,6 +340,9 @@ impl Document {
     pub fn object_position(&self, n: usize) -> Option<scene::Position> {
         let version = self.on_screen();
         let origin = version.edited.object_origin(n)?;
+        if let Some(following) = &self.editor {
+            return scene::layout::object_position(following.text(), origin);
+        }
         // (A packed text is unpacked for it: asked for by a menu, once.)
         scene::layout::object_position(&version.source.text(), origin)
     }

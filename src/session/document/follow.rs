@@ -1,0 +1,172 @@
+//! Following the user's editor: its unsaved text of the file, on screen
+//! instead of the document while it holds one ([`Document::follow`]), kept
+//! up to date an edit at a time ([`Document::follow_edit`]).
+//!
+//! The text is held whole (an edit splices it in place) with a
+//! [`Reading`] that keeps its scene: an edit reads again only the root's
+//! children it touches, and the scene shares every other object and the
+//! list itself where no object was read again, so the renderer sees at
+//! once what stayed (an edit of a light on a million spheres prepares no
+//! geometry). The objects' labels are read again only where an edit can
+//! have changed them: a comment, or objects more or fewer.
+
+use std::ops::Range;
+use std::sync::Arc;
+
+use super::{Document, Version, next_generation};
+use crate::scene::source::Source;
+use crate::scene::{LoadError, Reading, Reread, names};
+
+/// The editor's text being followed, and what shows from it.
+#[derive(Debug, Clone)]
+pub(super) struct Following {
+    /// The editor's newest text.
+    text: String,
+    /// What is known of `text` (its scene as last read without error).
+    reading: Reading,
+    /// The scene of the last text that loaded, on screen.
+    pub(super) version: Version,
+}
+
+impl Following {
+    /// The editor's newest text.
+    pub(super) fn text(&self) -> &str {
+        &self.text
+    }
+}
+
+/// An edit that does not fit the text it is said to change: the app
+/// missed a change (it asks for the whole text again).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("an edit of the editor's text that does not fit the text held")]
+pub struct Unfit;
+
+impl Document {
+    /// Shows the user's editor's unsaved `text` of this file instead of the
+    /// document (which waits, unsaved edits and all): what `rayoflight lsp`
+    /// hands over. A text that does not load keeps the last one that did
+    /// on screen, with its error; the file's own text ends the following.
+    /// Nothing is written. True while following (false: it was the file's
+    /// text).
+    pub fn follow(&mut self, text: String) -> bool {
+        if self.file.source.is(&text) {
+            self.unfollow();
+            return false;
+        }
+        let (reading, version) = match self.editor.take() {
+            Some(mut was) => {
+                // A whole new text: read whole, sharing the objects.
+                was.reading.forget();
+                (was.reading, was.version)
+            }
+            None => (Reading::keeping(), self.shown.clone()),
+        };
+        let mut following = Following {
+            text,
+            reading,
+            version,
+        };
+        self.read_following(&mut following, true);
+        self.editor = Some(following);
+        true
+    }
+
+    /// The editor's text changed: the bytes `range` of the text followed
+    /// are now `inserted`, making it `length` bytes long. Reads again only
+    /// what the edit touches. True while following (false: the text is
+    /// the file's again); [`Unfit`] where the edit does not fit the text
+    /// held, which is left as it was.
+    pub fn follow_edit(
+        &mut self,
+        range: Range<usize>,
+        inserted: &str,
+        length: usize,
+    ) -> Result<bool, Unfit> {
+        let Some(mut following) = self.editor.take() else {
+            return Err(Unfit);
+        };
+        let text = &following.text;
+        let fits = range.end <= text.len()
+            && text.is_char_boundary(range.start)
+            && text.is_char_boundary(range.end)
+            && text.len() - range.len() + inserted.len() == length;
+        if !fits {
+            self.editor = Some(following);
+            return Err(Unfit);
+        }
+        // A comment's marker the edit cuts into or out of: labels change.
+        let bytes = text.as_bytes();
+        let window = &bytes[range.start.saturating_sub(3)..(range.end + 3).min(bytes.len())];
+        let marker =
+            |w: &[u8]| w.windows(4).any(|w| w == b"<!--") || w.windows(3).any(|w| w == b"-->");
+        let cut_marker = marker(window) || marker(inserted.as_bytes());
+        following.text.replace_range(range.clone(), inserted);
+        if self.file.source.is_near(&following.text, range.start) {
+            self.unfollow();
+            return Ok(false);
+        }
+        following.reading.edited(range, inserted.len());
+        self.read_following(&mut following, cut_marker);
+        self.editor = Some(following);
+        Ok(true)
+    }
+
+    /// Reads `following`'s text where its reading needs (whole, or where
+    /// the edits since fall), and puts its scene on screen, or its error
+    /// in the banner over the last scene that loaded. `labels_stale`: a
+    /// comment's marker was edited.
+    fn read_following(&mut self, following: &mut Following, labels_stale: bool) {
+        let reading = &mut following.reading;
+        let found = reading.check(&following.text, None);
+        // (A text read without error has its scene kept.)
+        match found.map(|()| reading.scene().cloned()) {
+            Ok(Some(scene)) => {
+                let stale = labels_stale
+                    || match reading.reread() {
+                        Some(Reread::Children {
+                            text,
+                            objects_were,
+                            objects_now,
+                            ..
+                        }) => {
+                            objects_were != objects_now
+                                || following.text[text.clone()].contains("<!--")
+                        }
+                        _ => true,
+                    };
+                let labels = match stale {
+                    true => Arc::new(names::object_labels(&following.text)),
+                    false => Arc::clone(&following.version.labels),
+                };
+                following.version = Version::new(Source::default(), scene, labels);
+                self.editor_error = None;
+            }
+            Ok(None) => {}
+            Err(e) => {
+                let path = self.path.clone().unwrap_or_default();
+                self.editor_error = Some(LoadError { path, ..e }.to_string());
+            }
+        }
+        self.generation = next_generation();
+    }
+
+    /// The editor's newest text, while it is followed: taken, for a caller
+    /// that shows another editor's text and may show this one again.
+    pub fn take_editor_text(&mut self) -> Option<String> {
+        self.editor.as_mut().map(|f| std::mem::take(&mut f.text))
+    }
+
+    /// Back to the document: the editor saved or closed the file.
+    pub fn unfollow(&mut self) {
+        if self.editor.take().is_some() {
+            self.editor_error = None;
+            self.generation = next_generation();
+        }
+    }
+
+    /// Whether the editor's unsaved text is on screen
+    /// ([`Document::follow`]): the panel is read-only, saving waits.
+    pub fn is_following(&self) -> bool {
+        self.editor.is_some()
+    }
+}
