@@ -162,6 +162,53 @@ impl Bvh {
         Bvh { nodes }
     }
 
+    /// The items at `slots` (leaf order, ascending) have new boxes
+    /// (`own`, as at the build): the leaves holding them and every node
+    /// above take their new bounds, the tree's shape kept. The bounds are
+    /// what a build of this shape gives over the items as they are now,
+    /// so a search finds what it finds in a new build (the nearest hit,
+    /// ties to the smaller rank), in a tree that may be looser where an
+    /// item moved far. The work follows the nodes (a look at each, to
+    /// know parents) and the depth, not the items.
+    pub fn refit<T>(&mut self, items: &[T], slots: &[usize], own: impl Fn(&T) -> Aabb) {
+        let nodes = &mut self.nodes;
+        if nodes.len() < 2 || slots.is_empty() {
+            if let Some(root) = nodes.first_mut() {
+                root.bounds = items
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, i| b.union(&padded(&own(i))));
+            }
+            return;
+        }
+        let mut parent = vec![u32::MAX; nodes.len()];
+        let mut leaves = Vec::new();
+        for (at, node) in nodes.iter().enumerate() {
+            let (first, count) = (node.first as usize, node.count as usize);
+            if count == 0 {
+                parent[first] = at as u32;
+                parent[first + 1] = at as u32;
+            } else {
+                let held = slots.partition_point(|&s| s < first);
+                if slots.get(held).is_some_and(|&s| s < first + count) {
+                    leaves.push(at);
+                }
+            }
+        }
+        for leaf in leaves {
+            let node = &mut nodes[leaf];
+            let (first, count) = (node.first as usize, node.count as usize);
+            node.bounds = items[first..first + count]
+                .iter()
+                .fold(Aabb::EMPTY, |b, i| b.union(&padded(&own(i))));
+            let mut at = leaf;
+            while parent[at] != u32::MAX {
+                at = parent[at] as usize;
+                let left = nodes[at].first as usize;
+                nodes[at].bounds = nodes[left].bounds.union(&nodes[left + 1].bounds);
+            }
+        }
+    }
+
     /// Walks the hierarchy front to back for the `alive` lanes of `ray`,
     /// handing `search` each primitive whose box a lane enters before its
     /// nearest hit so far. A node is entered by the lanes that reach it;
@@ -485,6 +532,48 @@ mod tests {
                 }
             })
             .collect()
+    }
+
+    /// A refit after items moved has the bounds a build of the same shape
+    /// gives over the moved items, and finds what brute force finds.
+    #[test]
+    fn a_refit_holds_the_moved_items() {
+        let boxes = boxes(3000);
+        let (mut bvh, order) = build(&boxes);
+        // Leaf order, then three items moved far and near.
+        let mut placed: Vec<Aabb> = order.iter().map(|&i| boxes[i as usize]).collect();
+        let slots = [5, 1700, 2999];
+        for (k, &slot) in slots.iter().enumerate() {
+            let shift = DVec3::splat([40.0, -3.0, 0.5][k]);
+            placed[slot].min += shift;
+            placed[slot].max += shift;
+        }
+        bvh.refit(&placed, &slots, |b| *b);
+        // Every node holds its items, as a build's nodes do.
+        fn check(bvh: &Bvh, at: usize, items: &[Aabb]) -> Aabb {
+            let node = bvh.nodes[at];
+            let held = if node.count > 0 {
+                let range = node.first as usize..(node.first + node.count) as usize;
+                items[range]
+                    .iter()
+                    .fold(Aabb::EMPTY, |b, i| b.union(&padded(i)))
+            } else {
+                let left = node.first as usize;
+                check(bvh, left, items).union(&check(bvh, left + 1, items))
+            };
+            assert_eq!(node.bounds, held);
+            held
+        }
+        check(&bvh, 0, &placed);
+        for k in 0..200 {
+            let ray = diagonal_ray(k);
+            let mut scan = Scan::new(|_, j| entry(&placed[j], &ray), |j| j);
+            bvh.nearest::<f64>(&ray, true, &mut scan);
+            let brute = (0..placed.len())
+                .filter_map(|j| entry(&placed[j], &ray).map(|t| (t, j)))
+                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            assert_eq!(scan.best[0], brute, "ray {k}");
+        }
     }
 
     #[test]

@@ -25,8 +25,8 @@
 //!   tracer does this for every method, the plan reports it.
 
 use super::RenderOptions;
-use super::prepared::{BVH_THRESHOLD, CULL_LIMIT, TILE_CANDIDATES, max_local_color};
-use crate::geometry::Primitive;
+use super::facts::{self, ObjectFacts};
+use super::prepared::{BVH_THRESHOLD, CULL_LIMIT, TILE_CANDIDATES};
 use crate::scene::{Illumination, Scene};
 
 /// One choice of the plan.
@@ -58,16 +58,14 @@ pub fn auto(scene: &Scene) -> Plan {
         })
     };
 
+    // (What every object says, walked once per list of objects.)
+    let facts = facts::of(&scene.objects);
     let depth = scene.model.reflection_depth();
-    let max_ks = scene
-        .objects
-        .iter()
-        .map(|o| o.material.ks)
-        .fold(0.0, f64::max);
+    let max_ks = facts.max_ks;
     let reflects = depth > 0 && max_ks > 0.0;
 
     // Precision: f64, with the numbers that rule f32 out.
-    let extent = extent(scene);
+    let extent = extent(scene, &facts);
     let spacing = f32_spacing(extent);
     let reason = match spacing {
         None => format!(
@@ -93,11 +91,7 @@ pub fn auto(scene: &Scene) -> Plan {
     decide("precision", "f64".into(), reason);
 
     // Acceleration: what prepare builds for this object count.
-    let bounded = scene
-        .objects
-        .iter()
-        .filter(|o| o.shape.is_bounded())
-        .count();
+    let bounded = facts.bounded;
     let planes = scene.objects.len() - bounded;
     let (choice, reason) = if bounded == 0 && planes == 0 {
         (
@@ -161,7 +155,7 @@ pub fn auto(scene: &Scene) -> Plan {
         // then Σ ks^j ≤ 1/(1 − ks), each hit ≤ the brightest local colour)
         // is below half a level; chains through the most reflective
         // surfaces get there at bounce k. Before that the test only costs.
-        let brightest = max_local_color(scene).max_element();
+        let brightest = facts.max_local_color(scene).max_element();
         let k = first_stoppable_bounce(max_ks, brightest);
         if k < depth {
             (
@@ -194,7 +188,7 @@ pub fn auto(scene: &Scene) -> Plan {
         Illumination::Lambert => "lambert: no specular term, no reflected rays".to_owned(),
         Illumination::Phong => "phong: no reflected rays".to_owned(),
         Illumination::Whitted => {
-            let mirrors = scene.objects.iter().filter(|o| o.material.ks > 0.0).count();
+            let mirrors = facts.mirrors;
             format!(
                 "whitted: reflected rays leave the {mirrors} of {} objects with ks > 0, none the others",
                 scene.objects.len()
@@ -215,7 +209,7 @@ pub fn auto(scene: &Scene) -> Plan {
 
 /// The largest coordinate magnitude in the scene: the camera's eye, the
 /// lights, the spheres' bounding boxes and the planes' anchor points.
-fn extent(scene: &Scene) -> f64 {
+fn extent(scene: &Scene, facts: &ObjectFacts) -> f64 {
     let camera = &scene.camera;
     let eye = camera
         .transform
@@ -228,17 +222,7 @@ fn extent(scene: &Scene) -> f64 {
         .iter()
         .map(|l| l.position.abs().max_element())
         .fold(0.0, f64::max);
-    let objects = scene
-        .objects
-        .iter()
-        .map(|o| {
-            let primitive = Primitive::new(o.shape, &o.transform);
-            match primitive.bounds() {
-                Some(b) => b.min.abs().max(b.max.abs()).max_element(),
-                None => o.transform.to_world().translation.abs().max_element(),
-            }
-        })
-        .fold(0.0, f64::max);
+    let objects = facts.reach;
     eye.max(lights).max(objects)
 }
 

@@ -23,6 +23,7 @@
 mod auto;
 mod camera;
 pub mod explain;
+mod facts;
 mod ids;
 pub mod measure;
 mod method;

@@ -1,7 +1,8 @@
 //! A progressive render, as the app shows one: the scene prepared once
 //! (or the last render's preparation taken again when only the camera or
 //! the anti-aliasing changed, and its geometry when only colours,
-//! materials, lights or the model did, see [`LastPrepared`]), then traced coarse to
+//! materials, lights or the model did, refitted when a few objects moved,
+//! see [`LastPrepared`]), then traced coarse to
 //! fine — 1/8, 1/4, then full size for a large image ([`passes`]) — each
 //! pass through the one tile loop ([`trace_tiles`]) on the pool it is
 //! called in, each finished tile handed on at once.
@@ -36,8 +37,8 @@ pub fn passes(width: u32, height: u32) -> Vec<u32> {
 /// anti-aliasing changed (orbiting a million spheres prepares them once),
 /// and its geometry when only colours, materials, lights or the model
 /// changed (an edit of a value on a million spheres builds no second
-/// hierarchy beside the first); a viewer picks objects in it rather than
-/// preparing again.
+/// hierarchy beside the first), refitted when a few objects moved; a
+/// viewer picks objects in it rather than preparing again.
 #[derive(Default)]
 pub struct LastPrepared {
     last: Mutex<Option<(Arc<Scene>, RenderOptions, Prepared)>>,
@@ -239,8 +240,13 @@ mod tests {
     }
 
     /// Renders `scene` through `last` and checks the image is the one a
-    /// fresh preparation gives; returns the preparation used.
-    fn rendered_as_fresh(last: &LastPrepared, scene: &Scene, options: &RenderOptions) -> Prepared {
+    /// fresh preparation gives; returns the preparation used and the
+    /// image.
+    fn rendered_as_fresh(
+        last: &LastPrepared,
+        scene: &Scene,
+        options: &RenderOptions,
+    ) -> (Prepared, image::RgbImage) {
         let scene = Arc::new(scene.clone());
         let (width, height) = (scene.camera.width, scene.camera.height);
         let image = Mutex::new(image::RgbImage::new(width, height));
@@ -265,7 +271,7 @@ mod tests {
             image.into_inner().unwrap() == fresh,
             "the image of a fresh preparation"
         );
-        last.seen_from(&scene).expect("kept")
+        (last.seen_from(&scene).expect("kept"), fresh)
     }
 
     /// A change to a scene, in the test below.
@@ -274,23 +280,27 @@ mod tests {
     #[test]
     fn an_edit_of_surfaces_keeps_the_geometry_and_the_image_is_the_same() {
         use crate::shading::Illumination;
-        // Enough spheres for a hierarchy, a plane, reflections.
-        let text = crate::scene::generated::spheres_on_floor(40, 64, 48);
-        let mut scene = crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap();
-        scene.model.illumination = Illumination::Whitted;
-        let last = LastPrepared::default();
-        for options in [
-            RenderOptions::default(),
-            RenderOptions {
-                accelerate: false,
-                ..RenderOptions::default()
-            },
-            RenderOptions {
-                precision: crate::render::Precision::F32,
-                ..RenderOptions::default()
-            },
-        ] {
-            let mut before = rendered_as_fresh(&last, &scene, &options);
+        // Enough spheres for a hierarchy, a plane, reflections; few
+        // enough for tiles to cull them one by one, and many more.
+        for (spheres, options) in [40, 300].into_iter().flat_map(|n| {
+            [
+                RenderOptions::default(),
+                RenderOptions {
+                    accelerate: false,
+                    ..RenderOptions::default()
+                },
+                RenderOptions {
+                    precision: crate::render::Precision::F32,
+                    ..RenderOptions::default()
+                },
+            ]
+            .map(|o| (n, o))
+        }) {
+            let text = crate::scene::generated::spheres_on_floor(spheres, 64, 48);
+            let mut scene = crate::scene::parse(&text, std::path::Path::new("s.xml")).unwrap();
+            scene.model.illumination = Illumination::Whitted;
+            let last = LastPrepared::default();
+            let (mut before, mut picture) = rendered_as_fresh(&last, &scene, &options);
             let mut edits: Vec<(&str, Edit, bool)> = vec![
                 (
                     "a material",
@@ -335,6 +345,26 @@ mod tests {
                     false,
                 ),
                 (
+                    "two moves",
+                    // Grown, across the picture, far from where they were
+                    // (and from their leaves' other spheres).
+                    Box::new(move |s| {
+                        let half = 2.0 * (spheres as f64).sqrt();
+                        let r = 0.1 * half;
+                        for (n, x, z) in [(2, 0.0, 0.5 * half), (17, 0.5 * half, 0.3 * half)] {
+                            use crate::math::TransformStep::{Translate, UniformScale};
+                            let at = crate::math::Vec3::new(x, 1.0 - r, z);
+                            Arc::make_mut(&mut s.objects[n]).transform =
+                                crate::math::Transform::from_steps(vec![
+                                    UniformScale(r),
+                                    Translate(at),
+                                ])
+                                .unwrap();
+                        }
+                    }),
+                    false,
+                ),
+                (
                     "one object fewer",
                     Box::new(|s| {
                         s.objects.pop();
@@ -344,8 +374,15 @@ mod tests {
             ];
             for (what, edit, kept) in edits.drain(..) {
                 edit(&mut scene);
-                let after = rendered_as_fresh(&last, &scene, &options);
+                let (after, image) = rendered_as_fresh(&last, &scene, &options);
                 assert_eq!(after.same_shapes(&before), kept, "{what}");
+                // A move refits the hierarchy; one object fewer builds it.
+                let refitted = what == "a move" || what == "two moves";
+                assert_eq!(after.same_hierarchy(&before), kept || refitted, "{what}");
+                if what == "two moves" {
+                    assert!(image != picture, "the moves are seen");
+                }
+                picture = image;
                 assert!(!after.same_world(&before), "{what}");
                 before = after;
             }
@@ -354,7 +391,7 @@ mod tests {
                 accelerate: !options.accelerate,
                 ..options.clone()
             };
-            let again = rendered_as_fresh(&last, &scene, &other);
+            let (again, _) = rendered_as_fresh(&last, &scene, &other);
             assert!(!again.same_shapes(&before));
             rendered_as_fresh(&last, &scene, &options);
         }

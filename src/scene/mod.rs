@@ -94,32 +94,88 @@ pub struct Scene {
 /// makes the list this copy's own ([`Arc::make_mut`]: copied if another
 /// copy shares it), never the objects, which stay shared until each is
 /// changed with [`Arc::make_mut`] in turn.
+///
+/// What a reader works out of every object (the render's largest `ks`,
+/// the scene's reach) is kept with the list ([`Objects::memo`]) until the
+/// list changes: a scene whose lights or camera changed walks no object.
 #[derive(Debug, Clone, Default)]
-pub struct Objects(Arc<Vec<Arc<Object>>>);
+pub struct Objects(Arc<List>);
+
+/// The list behind [`Objects`], with what was worked out of it.
+#[derive(Default)]
+struct List {
+    items: Vec<Arc<Object>>,
+    memo: std::sync::OnceLock<Arc<dyn std::any::Any + Send + Sync>>,
+}
+
+/// A copy is a list of its own: nothing worked out comes with it.
+impl Clone for List {
+    fn clone(&self) -> List {
+        List {
+            items: self.items.clone(),
+            memo: std::sync::OnceLock::new(),
+        }
+    }
+}
+
+impl std::fmt::Debug for List {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.items.fmt(f)
+    }
+}
 
 impl Objects {
     /// Whether both are the one same list (so equal without a look).
     pub fn same_list(&self, other: &Objects) -> bool {
         Arc::ptr_eq(&self.0, &other.0)
     }
+
+    /// What `make` works out of the objects, made once for this list and
+    /// kept with it (shared by its copies) until it changes. One kind of
+    /// thing is kept (the render's: `T`); another is made each time.
+    pub fn memo<T: Send + Sync + 'static>(&self, make: impl FnOnce(&[Arc<Object>]) -> T) -> Arc<T> {
+        if let Some(kept) = self.0.memo.get() {
+            if let Ok(kept) = Arc::clone(kept).downcast::<T>() {
+                return kept;
+            }
+            return Arc::new(make(&self.0.items));
+        }
+        let made = Arc::new(make(&self.0.items));
+        let _ = self
+            .0
+            .memo
+            .set(Arc::clone(&made) as Arc<dyn std::any::Any + Send + Sync>);
+        made
+    }
+
+    /// The list as this copy's own to change: copied where shared, what
+    /// was worked out of it dropped.
+    fn own(&mut self) -> &mut Vec<Arc<Object>> {
+        let list = Arc::make_mut(&mut self.0);
+        list.memo = std::sync::OnceLock::new();
+        &mut list.items
+    }
 }
 
 impl std::ops::Deref for Objects {
     type Target = Vec<Arc<Object>>;
     fn deref(&self) -> &Vec<Arc<Object>> {
-        &self.0
+        &self.0.items
     }
 }
 
 impl std::ops::DerefMut for Objects {
     fn deref_mut(&mut self) -> &mut Vec<Arc<Object>> {
-        Arc::make_mut(&mut self.0)
+        self.own()
     }
 }
 
 impl From<Vec<Arc<Object>>> for Objects {
-    fn from(list: Vec<Arc<Object>>) -> Objects {
-        Objects(Arc::new(list))
+    fn from(items: Vec<Arc<Object>>) -> Objects {
+        Objects(Arc::new(List {
+            items,
+            memo: std::sync::OnceLock::new(),
+        }))
     }
 }
 
@@ -133,7 +189,7 @@ impl<'a> IntoIterator for &'a Objects {
     type Item = &'a Arc<Object>;
     type IntoIter = std::slice::Iter<'a, Arc<Object>>;
     fn into_iter(self) -> Self::IntoIter {
-        self.0.iter()
+        self.0.items.iter()
     }
 }
 
@@ -141,7 +197,7 @@ impl<'a> IntoIterator for &'a mut Objects {
     type Item = &'a mut Arc<Object>;
     type IntoIter = std::slice::IterMut<'a, Arc<Object>>;
     fn into_iter(self) -> Self::IntoIter {
-        Arc::make_mut(&mut self.0).iter_mut()
+        self.own().iter_mut()
     }
 }
 
@@ -198,5 +254,27 @@ mod tests {
         let before = own.objects.as_ptr();
         own.objects.pop();
         assert_eq!(own.objects.as_ptr(), before);
+    }
+
+    /// What is worked out of a list is made once, kept by its copies, and
+    /// made again once the list changes.
+    #[test]
+    fn a_memo_lives_as_long_as_its_list_is_unchanged() {
+        use std::sync::atomic::{AtomicUsize, Ordering};
+        let scene = parse(crate::EXAMPLE_SCENE, std::path::Path::new("example.xml")).unwrap();
+        let made = AtomicUsize::new(0);
+        let count = |objects: &[Arc<Object>]| {
+            made.fetch_add(1, Ordering::Relaxed);
+            objects.len()
+        };
+        let n = scene.objects.len();
+        assert_eq!(*scene.objects.memo(count), n);
+        let mut copy = scene.clone();
+        assert_eq!(*copy.objects.memo(count), n);
+        assert_eq!(made.load(Ordering::Relaxed), 1);
+        copy.objects.pop();
+        assert_eq!(*copy.objects.memo(count), n - 1);
+        assert_eq!(*scene.objects.memo(count), n);
+        assert_eq!(made.load(Ordering::Relaxed), 2);
     }
 }

@@ -17,8 +17,9 @@
 //! at most once a [`FRAME`] so that the window draws only as often as it
 //! can show something new. The next request reuses the prepared scene when
 //! only the camera or the anti-aliasing changed, and its geometry when only
-//! colours, materials, lights or the model changed; the app picks objects
-//! in it ([`Worker::prepared`]).
+//! colours, materials, lights or the model changed (refitted, not built
+//! again, when a few objects moved); the app picks objects in it
+//! ([`Worker::prepared`]).
 //!
 //! A render uses every core ([`Worker::default_threads`]); one asked for
 //! while the user drags ([`Worker::request_while_dragging`]) runs on a pool

@@ -1151,17 +1151,18 @@ fn what_a_killed_write_left_is_removed_by_the_next_write_beside_it() {
     assert_eq!(left.len(), 1, "the killed write's temporary file stays");
 
     let an_hour_ago = std::time::SystemTime::now() - Duration::from_secs(3600);
+    // "Just made" stays so however long the write below takes to start
+    // on a loaded machine (its file younger than the write's 2 s).
+    let just_now = std::time::SystemTime::now() + Duration::from_secs(600);
     let plant = |name: &str, old: bool| {
         let p = dir.path().join(name);
         fs::write(&p, vec![b'x'; 4096]).unwrap();
-        if old {
-            fs::File::options()
-                .write(true)
-                .open(&p)
-                .unwrap()
-                .set_modified(an_hour_ago)
-                .unwrap();
-        }
+        fs::File::options()
+            .write(true)
+            .open(&p)
+            .unwrap()
+            .set_modified(if old { an_hour_ago } else { just_now })
+            .unwrap();
         p
     };
     // The killed write's file, aged as after a restart.

@@ -33,7 +33,10 @@
 //!   pick) prepares nothing again.
 //!   Its geometry (the primitives and their hierarchy, [`Shapes`]) is
 //!   shared in turn with the next version of the scene when only colours,
-//!   materials, lights or the model changed ([`Prepared::with_surfaces`]).
+//!   materials, lights or the model changed, and copied with the
+//!   hierarchy refitted, not built again, when a few objects moved
+//!   ([`Prepared::with_surfaces`]). What the render reads of every object
+//!   is worked out once per list of objects ([`super::facts`]).
 //!
 //! Here: the prepared scene itself and how it is built ([`prepare`],
 //! [`Prepared::with_surfaces`], [`Prepared::with_view`]). The geometry of
@@ -44,7 +47,7 @@
 use super::{CameraRays, Offset, Pass, Precision, RenderOptions, SphereTest};
 use crate::geometry::{Aabb, Bvh, Primitive, Primitive32};
 use crate::scene::{Camera, Scene};
-use crate::shading::{Color, Illumination, Light, Material};
+use crate::shading::{Color, Illumination, Light};
 use glam::DVec3;
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -145,6 +148,9 @@ struct Shapes {
     /// `bounded` and `planes` in f32, built only for [`Precision::F32`].
     bounded32: Vec<Primitive32>,
     planes32: Vec<Primitive32>,
+    /// Which build the hierarchy comes from: kept by a refit
+    /// ([`Shapes::moved`]).
+    hierarchy: u64,
 }
 
 /// Which bounded primitives a primary ray must test.
@@ -154,29 +160,99 @@ enum Candidates<'a> {
     Only(&'a [usize]),
 }
 
-/// Per channel, the most any one hit can add before weighting: the
-/// largest ka C + Σ I (kd + ks) over the objects (the terms the model
-/// uses).
-pub(super) fn max_local_color(scene: &Scene) -> Color {
-    let light_sum = scene.lights.iter().fold(Color::ZERO, |s, l| s + l.color);
-    scene.objects.iter().fold(Color::ZERO, |acc, o| {
-        let Material { ka, kd, ks, .. } = o.material;
-        let direct = match scene.model.illumination {
-            Illumination::Ambient => 0.0,
-            Illumination::Lambert => kd,
-            Illumination::Phong | Illumination::Whitted => kd + ks,
-        };
-        acc.max(ka * o.color + direct * light_sum)
-    })
-}
-
 /// Builds the prepared scene.
 pub fn prepare(scene: &Scene, options: &RenderOptions) -> Prepared {
     let shapes = Arc::new(Shapes::new(scene, options));
     Prepared::over(shapes, scene, options)
 }
 
+/// Bounding sphere (centre, radius) of each of `bounded`, for the tile
+/// frustum test, where tiles cull (`accelerate`) and there are few enough
+/// ([`CULL_LIMIT`]); else none.
+fn cull_spheres(bounded: &[Primitive], accelerate: bool) -> Vec<(DVec3, f64)> {
+    if !accelerate || bounded.len() > CULL_LIMIT {
+        return Vec::new();
+    }
+    bounded
+        .iter()
+        .filter_map(|p| p.bounds())
+        .map(|b| {
+            let (centre, radius) = (b.centroid(), 0.5 * (b.max - b.min).length());
+            // A box that overflows (a sphere stretched by 1e308) has no
+            // finite centre: it may be anywhere, every tile keeps it.
+            if centre.is_finite() && radius.is_finite() {
+                (centre, radius)
+            } else {
+                (DVec3::ZERO, f64::INFINITY)
+            }
+        })
+        .collect()
+}
+
+/// Objects moved at most, of a scene's, for its geometry to be refitted
+/// rather than built again ([`Shapes::moved`]): a hierarchy refitted
+/// after many moves would be looser than a new one.
+const REFIT_MOST: usize = 64;
+
 impl Shapes {
+    /// These shapes with the objects `moved` (their numbers, ascending;
+    /// each bounded or not as it was) made again from `scene`: their
+    /// primitives replaced where they are, the hierarchy refitted
+    /// ([`Bvh::refit`]), not built again. The image is the one a new
+    /// preparation gives.
+    fn moved(&self, scene: &Scene, moved: &[usize]) -> Shapes {
+        let made = |index: u32| {
+            let object = &scene.objects[index as usize];
+            Primitive::new(object.shape, &object.transform)
+        };
+        let slots = |objects: &[u32]| -> Vec<usize> {
+            let mut slots: Vec<usize> = objects
+                .iter()
+                .enumerate()
+                .filter(|(_, o)| moved.binary_search(&(**o as usize)).is_ok())
+                .map(|(slot, _)| slot)
+                .collect();
+            slots.sort_unstable();
+            slots
+        };
+        let mut bounded = self.bounded.clone();
+        let mut bounded32 = self.bounded32.clone();
+        let bounded_slots = slots(&self.bounded_objects);
+        for &slot in &bounded_slots {
+            bounded[slot] = made(self.bounded_objects[slot]);
+            if let Some(p) = bounded32.get_mut(slot) {
+                *p = Primitive32::new(&bounded[slot]);
+            }
+        }
+        let mut planes = self.planes.clone();
+        let mut planes32 = self.planes32.clone();
+        for slot in slots(&self.plane_objects) {
+            planes[slot] = made(self.plane_objects[slot]);
+            if let Some(p) = planes32.get_mut(slot) {
+                *p = Primitive32::new(&planes[slot]);
+            }
+        }
+        let mut bvh = self.bvh.clone();
+        if let Some(bvh) = &mut bvh {
+            bvh.refit(&bounded, &bounded_slots, |p| {
+                p.bounds().unwrap_or(Aabb::EMPTY)
+            });
+        }
+        Shapes {
+            cull_spheres: cull_spheres(&bounded, self.cull),
+            bounded,
+            bounded_objects: self.bounded_objects.clone(),
+            bvh,
+            planes,
+            plane_objects: self.plane_objects.clone(),
+            cull: self.cull,
+            precision: self.precision,
+            bounded32,
+            planes32,
+            hierarchy: self.hierarchy,
+        }
+    }
+
     /// The primitives of `scene`'s objects, their hierarchy and culling.
     fn new(scene: &Scene, options: &RenderOptions) -> Shapes {
         // Spheres are bounded, planes are not.
@@ -222,25 +298,7 @@ impl Shapes {
             placed.into_iter().map(|(primitive, _)| primitive).collect();
         bounded.shrink_to_fit();
 
-        let cull_spheres = if options.accelerate && bounded.len() <= CULL_LIMIT {
-            bounded
-                .iter()
-                .filter_map(|p| p.bounds())
-                .map(|b| {
-                    let (centre, radius) = (b.centroid(), 0.5 * (b.max - b.min).length());
-                    // A box that overflows (a sphere stretched by 1e308)
-                    // has no finite centre: it may be anywhere, every tile
-                    // keeps it.
-                    if centre.is_finite() && radius.is_finite() {
-                        (centre, radius)
-                    } else {
-                        (DVec3::ZERO, f64::INFINITY)
-                    }
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
+        let cull_spheres = cull_spheres(&bounded, options.accelerate);
 
         let (bounded32, planes32) = match options.precision {
             Precision::F64 => (Vec::new(), Vec::new()),
@@ -260,8 +318,15 @@ impl Shapes {
             precision: options.precision,
             bounded32,
             planes32,
+            hierarchy: next_hierarchy(),
         }
     }
+}
+
+/// A number for each hierarchy built ([`Shapes::hierarchy`]).
+fn next_hierarchy() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 impl Prepared {
@@ -269,12 +334,9 @@ impl Prepared {
     /// and transformations with `options`.
     fn over(shapes: Arc<Shapes>, scene: &Scene, options: &RenderOptions) -> Prepared {
         let illumination = scene.model.illumination;
-        let max_local = max_local_color(scene);
-        let max_ks = scene
-            .objects
-            .iter()
-            .map(|o| o.material.ks)
-            .fold(0.0, f64::max);
+        let facts = super::facts::of(&scene.objects);
+        let max_local = facts.max_local_color(scene);
+        let max_ks = facts.max_ks;
         let depth = scene.model.reflection_depth();
         let depth = if options.depth_cut {
             depth.saturating_sub(1)
@@ -320,16 +382,41 @@ impl Prepared {
     /// `scene`'s objects have the shapes and transformations of the scene
     /// this was prepared from, with the same `accelerate` and `precision`
     /// (only colours, materials, lights, the model or the camera changed);
-    /// `None` when they do not. The image is the one [`prepare`] gives.
+    /// over a copy of it with their primitives made again and the
+    /// hierarchy refitted where at most [`REFIT_MOST`] objects moved (each
+    /// bounded, or not, as it was); `None` otherwise. The image is the
+    /// one [`prepare`] gives.
     pub fn with_surfaces(&self, scene: &Scene, options: &RenderOptions) -> Option<Prepared> {
         let world = &self.world;
-        let same = world.shapes.cull == options.accelerate
-            && world.shapes.precision == options.precision
-            && world.objects.len() == scene.objects.len()
-            && world.objects.iter().zip(&scene.objects).all(|(a, b)| {
-                Arc::ptr_eq(a, b) || (a.shape == b.shape && a.transform == b.transform)
-            });
-        same.then(|| Prepared::over(Arc::clone(&world.shapes), scene, options))
+        if world.shapes.cull != options.accelerate
+            || world.shapes.precision != options.precision
+            || world.objects.len() != scene.objects.len()
+        {
+            return None;
+        }
+        let mut moved = Vec::new();
+        if !world.objects.same_list(&scene.objects) {
+            for (n, (a, b)) in world.objects.iter().zip(&scene.objects).enumerate() {
+                if Arc::ptr_eq(a, b) || (a.shape == b.shape && a.transform == b.transform) {
+                    continue;
+                }
+                if a.shape.is_bounded() != b.shape.is_bounded() || moved.len() == REFIT_MOST {
+                    return None;
+                }
+                moved.push(n);
+            }
+        }
+        let shapes = match moved.is_empty() {
+            true => Arc::clone(&world.shapes),
+            false => Arc::new(world.shapes.moved(scene, &moved)),
+        };
+        Some(Prepared::over(shapes, scene, options))
+    }
+
+    /// Both share one hierarchy, built once (the later one's refitted
+    /// from the other's, [`Prepared::with_surfaces`], or the same).
+    pub fn same_hierarchy(&self, other: &Prepared) -> bool {
+        self.world.shapes.hierarchy == other.world.shapes.hierarchy
     }
 
     /// The same scene seen through `camera` (its size may differ from the
