@@ -51,7 +51,7 @@ pub struct Reading {
 pub enum Reread {
     /// The whole text.
     Whole,
-    /// The bytes `text` of the new text (after its byte-order mark), from
+    /// The bytes `text` of the new text (its byte-order mark counted), from
     /// the start of a child of the root to the start of the first child
     /// after the edits (or the root's end), which held `objects_were`
     /// objects and now hold `objects_now`, the first of them object
@@ -342,7 +342,7 @@ fn again(
         known.camera = Some(camera);
         known.model = read.model;
         return Some(Ok(Reread::Children {
-            text: from..end,
+            text: known.bom + from..known.bom + end,
             first_object,
             objects_were,
             objects_now,
@@ -395,7 +395,7 @@ fn again(
     }
     known.content.end = (known.content.end as isize + dirty.delta) as usize;
     Some(Ok(Reread::Children {
-        text: from..stop,
+        text: known.bom + from..known.bom + stop,
         first_object,
         objects_were,
         objects_now,

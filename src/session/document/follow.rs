@@ -102,6 +102,9 @@ impl Document {
         let cut_marker = marker(window) || marker(inserted.as_bytes());
         following.text.replace_range(range.clone(), inserted);
         if self.file.source.is_near(&following.text, range.start) {
+            // Back to the document (its error, if the last text had one,
+            // goes with the text).
+            self.editor = Some(following);
             self.unfollow();
             return Ok(false);
         }
@@ -168,5 +171,73 @@ impl Document {
     /// ([`Document::follow`]): the panel is read-only, saving waits.
     pub fn is_following(&self) -> bool {
         self.editor.is_some()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two spheres after a byte-order mark, a comment with a letter of two
+    /// bytes naming the second.
+    const TEXT: &str = "\u{feff}<scene>\n  <sphere><material ka=\"0.2\"/></sphere>\n  <!-- é ball -->\n  <sphere><material ka=\"0.3\"/></sphere>\n  <light x=\"1\" y=\"2\" z=\"3\"/>\n  <camera width=\"8\" height=\"6\" eyeDistance=\"2\"/>\n</scene>\n";
+
+    fn open() -> (tempfile::TempDir, Document) {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.xml");
+        std::fs::write(&path, TEXT).unwrap();
+        let doc = Document::open(&path).unwrap();
+        (dir, doc)
+    }
+
+    /// Edits after a byte-order mark, one into a comment's label: the
+    /// scene and the labels are those of the text read whole.
+    #[test]
+    fn edits_give_the_scene_and_labels_of_the_text() {
+        let (_dir, mut doc) = open();
+        let mut text = TEXT.replace("ka=\"0.2\"", "ka=\"0.25\"");
+        assert!(doc.follow(text.clone()));
+        assert_eq!(doc.scene().objects[0].material.ka, 0.25);
+        let mut edit = |doc: &mut Document, from: &str, to: &str| {
+            let at = text.find(from).unwrap();
+            text.replace_range(at..at + from.len(), to);
+            doc.follow_edit(at..at + from.len(), to, text.len())
+                .unwrap()
+        };
+        assert!(edit(&mut doc, "ka=\"0.3\"", "ka=\"0.35\""));
+        assert_eq!(doc.scene().objects[1].material.ka, 0.35);
+        assert_eq!(doc.object_label(1), "#2 é ball sphere");
+        assert!(edit(&mut doc, "é ball", "é red ball"));
+        assert_eq!(doc.object_label(1), "#2 é red ball sphere");
+        assert!(edit(&mut doc, "x=\"1\"", "x=\"9\""));
+        assert_eq!(doc.scene().lights[0].position.x, 9.0);
+        assert_eq!(doc.error(), None);
+    }
+
+    /// A text with an error keeps the last good scene with the error; the
+    /// editor's text back to the file's ends the following, and the
+    /// error with it.
+    #[test]
+    fn back_to_the_files_text_ends_the_following_and_its_error() {
+        let (_dir, mut doc) = open();
+        let changed = TEXT.replace("ka=\"0.2\"", "ka=\"0.25\"");
+        assert!(doc.follow(changed.clone()));
+        let at = changed.find("ka=\"0.25\"").unwrap() + 4;
+        // `0.25` → `0.25x`: not a number.
+        assert_eq!(
+            doc.follow_edit(at + 4..at + 4, "x", changed.len() + 1),
+            Ok(true)
+        );
+        assert!(doc.error().is_some());
+        assert_eq!(doc.scene().objects[0].material.ka, 0.25);
+        let generation = doc.generation();
+        // `0.25x` → `0.2`: the file's text.
+        assert_eq!(doc.follow_edit(at..at + 5, "0.2", TEXT.len()), Ok(false));
+        assert!(!doc.is_following());
+        assert_eq!(doc.error(), None);
+        assert_ne!(doc.generation(), generation);
+        // An edit that does not fit what is held is refused.
+        assert!(doc.follow(changed.clone()));
+        assert_eq!(doc.follow_edit(0..1, "x", 5), Err(Unfit));
     }
 }
