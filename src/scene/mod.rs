@@ -39,9 +39,9 @@ mod xml;
 
 pub use error::{LoadError, LoadErrorKind, Position};
 pub use load::{
-    LoadProgress, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, PackedLoad, Reading, Reread,
-    Span, load, load_counting, load_like, load_packed, load_sharing, load_with_text, parse,
-    parse_sharing,
+    Layout, LoadProgress, Loaded, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS, MAX_PIXELS, PackedLoad,
+    Reading, Reread, Span, load, load_counting, load_like, load_packed, load_sharing,
+    load_with_text, parse, parse_sharing,
 };
 
 pub use crate::geometry::Shape;

@@ -3,7 +3,8 @@
 //! compressed on its own (zstd, its fastest level), so that a million
 //! spheres' 214 MB of XML is held in about 21 MB, and read back a block at
 //! a time, in order ([`Source::reader`]) or whole ([`Source::text`]) where
-//! a use needs it.
+//! a use needs it. An editor's text of the file is compared with it a
+//! block at a time, on the cores ([`Source::is`], [`Source::difference`]).
 //!
 //! The text is held, not read again from the file, because the file may
 //! have changed since (another program's save, to be merged with the
@@ -226,6 +227,69 @@ impl Source {
         }
     }
 
+    /// Where `text` differs from this text: the bytes of this text
+    /// between the longest prefix and the longest suffix the two share
+    /// (on characters' boundaries), and the length of what replaces them
+    /// in `text`; `None` where they are the same. A packed text is
+    /// unpacked on the cores, a block at a time.
+    pub fn difference(&self, text: &str) -> Option<(std::ops::Range<usize>, usize)> {
+        let (own_len, len) = (self.len(), text.len());
+        let theirs = text.as_bytes();
+        // `text` against this text's bytes `own`, starting at `start`:
+        // the first that differs, aligned at the start, and the last,
+        // aligned at the end (a byte with nothing across differs).
+        let shift = len as isize - own_len as isize;
+        let compare = |start: usize, own: &[u8]| {
+            let across = theirs
+                .get(start.min(len)..(start + own.len()).min(len))
+                .unwrap_or_default();
+            let front = first_difference(own, across).map(|i| start + i);
+            let lo = usize::try_from(-(start as isize + shift)).unwrap_or(0);
+            let from = (start as isize + shift).max(0) as usize;
+            let window = theirs.get(from..from + own.len().saturating_sub(lo));
+            let back = match own.get(lo..).zip(window) {
+                Some((own_end, window)) => match last_difference(own_end, window) {
+                    Some(j) => Some(lo + j),
+                    None => lo.checked_sub(1),
+                },
+                None => own.len().checked_sub(1),
+            }
+            .map(|j| start + j);
+            (front, back)
+        };
+        let found: Vec<(Option<usize>, Option<usize>)> = match &*self.0 {
+            Held::Whole(own) => vec![compare(0, own.as_bytes())],
+            Held::Packed { blocks, .. } => {
+                let starts = blocks.iter().scan(0, |at, block| {
+                    let start = *at;
+                    *at += block.len;
+                    Some(start)
+                });
+                let pieces: Vec<(usize, &Block)> = starts.zip(blocks).collect();
+                pieces
+                    .par_iter()
+                    .map(|(start, block)| compare(*start, &block.unpack()))
+                    .collect()
+            }
+        };
+        let shortest = own_len.min(len);
+        let mut prefix = found.iter().find_map(|(f, _)| *f).unwrap_or(shortest);
+        let last = found.iter().rev().find_map(|(_, b)| *b);
+        let mut suffix = last.map_or(shortest, |j| own_len - j - 1);
+        if prefix == shortest && suffix == shortest && own_len == len {
+            return None;
+        }
+        prefix = prefix.min(shortest);
+        suffix = suffix.min(shortest - prefix);
+        while !text.is_char_boundary(prefix) {
+            prefix -= 1;
+        }
+        while !text.is_char_boundary(len - suffix) {
+            suffix -= 1;
+        }
+        Some((prefix..own_len - suffix, len - suffix - prefix))
+    }
+
     /// The text's bytes in order, a block unpacked at a time.
     pub fn reader(&self) -> SourceReader<'_> {
         SourceReader {
@@ -235,6 +299,32 @@ impl Source {
             at: 0,
         }
     }
+}
+
+/// Where `a` and `b` first differ (a byte with nothing across differs);
+/// `None` where they are the same. Compared in chunks (memcmp's speed).
+fn first_difference(a: &[u8], b: &[u8]) -> Option<usize> {
+    const CHUNK: usize = 64;
+    let n = a.len().min(b.len());
+    let mut at = 0;
+    while at + CHUNK <= n && a[at..at + CHUNK] == b[at..at + CHUNK] {
+        at += CHUNK;
+    }
+    match a[at..n].iter().zip(&b[at..n]).position(|(x, y)| x != y) {
+        Some(i) => Some(at + i),
+        None => (a.len() != b.len()).then_some(n),
+    }
+}
+
+/// Where `a` and `b`, of one length, last differ; `None` where they are
+/// the same.
+fn last_difference(a: &[u8], b: &[u8]) -> Option<usize> {
+    const CHUNK: usize = 64;
+    let mut end = a.len().min(b.len());
+    while end >= CHUNK && a[end - CHUNK..end] == b[end - CHUNK..end] {
+        end -= CHUNK;
+    }
+    (0..end).rev().find(|&i| a[i] != b[i])
 }
 
 /// A [`Source`]'s bytes in order ([`Source::reader`]).
@@ -350,5 +440,84 @@ mod tests {
         assert!(source.is("<scene/>") && !source.is("<scene />"));
         assert!(source.same(&source.clone()));
         assert!(!source.same(&Source::new("<scene/>".to_owned())));
+    }
+
+    /// What differs between two texts, counted naively: the common
+    /// prefix, then the common suffix of what is left, on characters'
+    /// boundaries.
+    fn naive(own: &str, text: &str) -> Option<(std::ops::Range<usize>, usize)> {
+        if own == text {
+            return None;
+        }
+        let (a, b) = (own.as_bytes(), text.as_bytes());
+        let mut prefix = a.iter().zip(b).take_while(|(x, y)| x == y).count();
+        while !text.is_char_boundary(prefix) {
+            prefix -= 1;
+        }
+        let room = a.len().min(b.len()) - prefix;
+        let mut suffix = (a.iter().rev().zip(b.iter().rev()))
+            .take_while(|(x, y)| x == y)
+            .count()
+            .min(room);
+        while !text.is_char_boundary(b.len() - suffix) {
+            suffix -= 1;
+        }
+        Some((prefix..a.len() - suffix, b.len() - suffix - prefix))
+    }
+
+    /// Edits anywhere (ends, block ends, inside characters of several
+    /// bytes, a text grown or cut short): the difference found a block at a
+    /// time is the one counted naively, held whole or packed.
+    #[test]
+    fn the_difference_is_the_span_between_the_common_ends() {
+        let text = big();
+        // Blocks of odd sizes, so edits fall across their ends.
+        let mut blocks = Vec::new();
+        let mut rest = text.as_str();
+        for n in [1usize, 65_536, 3_000_001, 777].iter().cycle() {
+            if rest.is_empty() {
+                break;
+            }
+            let mut cut = (*n).min(rest.len());
+            while !rest.is_char_boundary(cut) {
+                cut += 1;
+            }
+            blocks.push(Block::pack(&rest.as_bytes()[..cut]));
+            rest = &rest[cut..];
+        }
+        let sources = [Source::from_blocks(blocks), Source::new(text.clone())];
+        let n = text.len();
+        let mut cases: Vec<String> = vec![text.clone(), String::new(), format!("{text}x")];
+        cases.push(format!("x{text}"));
+        cases.push(text[..n / 2].to_owned());
+        cases.push(text[n / 3..].to_owned());
+        for at in [0, 1, 65_536, 65_537, n / 2, n - 9, n - 1, n] {
+            let mut at = at;
+            while !text.is_char_boundary(at) {
+                at -= 1;
+            }
+            for (cut, put) in [(0, "é"), (1, ""), (3, "𝄞𝄞"), (70, "<sphere/>"), (0, "")] {
+                let mut end = (at + cut).min(n);
+                while !text.is_char_boundary(end) {
+                    end += 1;
+                }
+                let mut edited = text.clone();
+                edited.replace_range(at..end, put);
+                cases.push(edited);
+            }
+        }
+        // An edit inside a character: `é` (c3 a9) to `ê` (c3 aa).
+        cases.push(text.replacen("é", "ê", 1));
+        for source in &sources {
+            for case in &cases {
+                let found = source.difference(case);
+                assert_eq!(found, naive(&text, case), "{} bytes", case.len());
+                if let Some((range, put)) = found {
+                    let mut back = text.clone();
+                    back.replace_range(range.clone(), &case[range.start..range.start + put]);
+                    assert_eq!(&back, case);
+                }
+            }
+        }
     }
 }

@@ -377,8 +377,8 @@ pub fn read(path: &Path, like: &[Arc<Object>]) -> FileEvent {
     if !path.exists() {
         return FileEvent::Missing;
     }
-    match scene::load_sharing(path, like) {
-        Ok((text, scene)) => FileEvent::Loaded(Box::new(FileRead::new(text, scene))),
+    match scene::load_counting(path, like, None) {
+        Ok(loaded) => FileEvent::Loaded(Box::new(FileRead::loaded(loaded))),
         Err(e) => FileEvent::Broken(e),
     }
 }

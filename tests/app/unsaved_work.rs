@@ -965,7 +965,7 @@ fn a_load_says_how_far_it_has_got() {
             seen.push(progress.fraction());
             std::thread::sleep(Duration::from_millis(2));
         }
-        assert_eq!(loader.join().unwrap().unwrap().1.objects.len(), 60_000);
+        assert_eq!(loader.join().unwrap().unwrap().scene.objects.len(), 60_000);
         seen
     });
     assert!(seen.windows(2).all(|w| w[0] <= w[1]), "it only goes up");

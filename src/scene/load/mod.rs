@@ -11,8 +11,10 @@
 //! parses a big text on every core: a text held whole cut in pieces, or a
 //! file read and parsed a piece at a time; its guesses are checked, and
 //! any doubt falls back to the parse in one, so what is accepted and every
-//! error are those of a parse in one. [`reading`] checks a text again after
-//! edits, reading only where they fall.
+//! error are those of a parse in one. Every way of reading a file whole
+//! also records where the root's children sit in it ([`Layout`], 16 bytes
+//! a child, the pieces' joined in order). [`reading`] checks a text again
+//! after edits, reading only where they fall.
 //!
 //! Nothing here panics on any input, and every count the file controls is
 //! checked against its limit before anything is allocated for it.
@@ -32,7 +34,7 @@ mod reading;
 use parser::Parser;
 pub(crate) use parser::{MAX_SIDE, NumberError, parse_integer, parse_number};
 use pieces::{PIECE_BYTES, in_pieces, parsing_threads, streamed};
-pub use reading::{Reading, Reread, Span};
+pub use reading::{Layout, Reading, Reread, Span};
 
 /// Largest scene file [`load`] reads: 1 GiB.
 pub const MAX_FILE_BYTES: u64 = 1 << 30;
@@ -94,6 +96,8 @@ pub struct PackedLoad {
     pub text: super::source::Source,
     /// The text has a comment somewhere (none: no object has a label).
     pub comments: bool,
+    /// Where the root's children sit in the text.
+    pub layout: Layout,
 }
 
 /// [`load_counting`] for the app, keeping a large file's text packed
@@ -126,6 +130,7 @@ pub fn load_packed(
         scene: streamed.scene,
         text: super::source::Source::from_blocks(streamed.blocks),
         comments: streamed.comments,
+        layout: streamed.layout,
     }))
 }
 
@@ -138,7 +143,17 @@ pub fn load_with_text(path: &Path) -> Result<(String, Scene), LoadError> {
 /// [`load_with_text`], sharing objects with `like` as [`parse_sharing`]
 /// does (the app reading its file again after a change).
 pub fn load_sharing(path: &Path, like: &[Arc<Object>]) -> Result<(String, Scene), LoadError> {
-    load_counting(path, like, None)
+    load_counting(path, like, None).map(|loaded| (loaded.text, loaded.scene))
+}
+
+/// A file read whole ([`load_counting`]): its text, the scene, and where
+/// the root's children sit in the text (an app following an editor's
+/// unsaved text of the file starts from it).
+#[derive(Debug)]
+pub struct Loaded {
+    pub text: String,
+    pub scene: Scene,
+    pub layout: Layout,
 }
 
 /// How far a load has got, for a progress bar: bytes of the file read and
@@ -188,12 +203,13 @@ impl LoadProgress {
     }
 }
 
-/// [`load_sharing`], saying how far it has got in `progress`.
+/// [`load_sharing`], saying how far it has got in `progress`, and where
+/// the root's children sit in the text.
 pub fn load_counting(
     path: &Path,
     like: &[Arc<Object>],
     progress: Option<&LoadProgress>,
-) -> Result<(String, Scene), LoadError> {
+) -> Result<Loaded, LoadError> {
     // As in [`streamed`]: a crashed rewrite in place is finished first.
     let _ = crate::system::files::finish(path);
     let fail = |kind| LoadError::new(path, None, kind);
@@ -271,12 +287,17 @@ pub fn load_counting(
         )
     })?;
     let body = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    let scene = parse_body(body, path, like, progress)?;
+    let (scene, mut layout) = parse_body(body, path, like, progress)?;
+    layout.bom = text.len() - body.len();
     if let Some(progress) = progress {
         let total = 2 * text.len() as u64;
         progress.set(total, total);
     }
-    Ok((text, scene))
+    Ok(Loaded {
+        text,
+        scene,
+        layout,
+    })
 }
 
 /// Parses a scene from `text`; `path` only names the file in errors.
@@ -291,18 +312,19 @@ pub fn parse(text: &str, path: &Path) -> Result<Scene, LoadError> {
 /// new object, not a million (and compares equal to `like` at once).
 pub fn parse_sharing(text: &str, path: &Path, like: &[Arc<Object>]) -> Result<Scene, LoadError> {
     let body = text.strip_prefix('\u{feff}').unwrap_or(text);
-    parse_body(body, path, like, None)
+    parse_body(body, path, like, None).map(|(scene, _)| scene)
 }
 
 /// Parses `body`, the text after its byte-order mark: in pieces on every
 /// core ([`in_pieces`]) where it is big enough and cuts cleanly, else in
-/// one, which is also what gives any error.
+/// one, which is also what gives any error. Also where the root's
+/// children sit in `body`.
 fn parse_body(
     body: &str,
     path: &Path,
     like: &[Arc<Object>],
     progress: Option<&LoadProgress>,
-) -> Result<Scene, LoadError> {
+) -> Result<(Scene, Layout), LoadError> {
     // One or two pieces per core, none under PIECE_BYTES.
     let threads = parsing_threads(body.len() as u64);
     let pieces = (2 * threads).min(body.len() / PIECE_BYTES);
@@ -319,7 +341,10 @@ fn parse_body(
     let mut parser = Parser::new(body, path);
     parser.like = like;
     parser.progress = progress;
-    parser.document()
+    parser.record = true;
+    let mut gathered = parser.gathered()?;
+    let layout = Layout::take(&mut gathered);
+    Ok((gathered.finish(path)?, layout))
 }
 
 #[cfg(test)]
@@ -341,6 +366,15 @@ mod tests {
     /// The parse in one piece, which gives every error.
     pub(super) fn in_one(text: &str) -> Result<Scene, LoadError> {
         Parser::new(text, Path::new("t.xml")).document()
+    }
+
+    /// [`in_one`], with where the root's children sit.
+    pub(super) fn in_one_laid_out(text: &str) -> Result<(Scene, Layout), LoadError> {
+        let mut parser = Parser::new(text, Path::new("t.xml"));
+        parser.record = true;
+        let mut gathered = parser.gathered()?;
+        let layout = Layout::take(&mut gathered);
+        Ok((gathered.finish(Path::new("t.xml"))?, layout))
     }
 
     /// A scene with every kind of element, spread over lines and nested
@@ -424,7 +458,7 @@ mod tests {
         let stopped_after = start.elapsed();
         let start = std::time::Instant::now();
         let whole = LoadProgress::default();
-        let (_, scene) = load_counting(&path, &[], Some(&whole)).unwrap();
+        let scene = load_counting(&path, &[], Some(&whole)).unwrap().scene;
         assert!(!scene.objects.is_empty());
         assert!(
             stopped_after < start.elapsed(),

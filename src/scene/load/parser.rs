@@ -14,7 +14,7 @@
 //! refused on purpose (scene files declare no entities). A file libxml2
 //! finds not well-formed is refused, with its line and column.
 //!
-//! A [`Parser`] parses a whole text ([`Parser::document`]) or one piece of
+//! A [`Parser`] parses a whole text ([`Parser::gathered`]) or one piece of
 //! it ([`Parser::piece`], for [`super::pieces`]); the format's numbers are
 //! read here too, by the rules the edit engine reads typed values with.
 
@@ -775,12 +775,14 @@ impl<'a> Parser<'a> {
 
     // ----- the grammar -----
 
+    /// The text's scene, parsed in one (the tests' yardstick).
+    #[cfg(test)]
     pub(super) fn document(self) -> Result<Scene, LoadError> {
         let path = self.path;
         self.gathered()?.finish(path)
     }
 
-    /// What [`Parser::document`] gathers, before it makes the scene (a
+    /// What a parse of the whole text gathers, before it makes the scene (a
     /// camera checked for).
     pub(super) fn gathered(mut self) -> Result<Gathered, LoadError> {
         let root = self.root()?;
@@ -796,7 +798,7 @@ impl<'a> Parser<'a> {
         }
     }
 
-    /// [`Parser::document`], the root's children before byte `at` of the
+    /// [`Parser::gathered`], the root's children before byte `at` of the
     /// text not read: `before` is what a parse in one has gathered when it
     /// gets there, and `at` must be a place between two of the root's
     /// children, as a cut that the pieces before it confirmed

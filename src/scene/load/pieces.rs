@@ -1,8 +1,9 @@
 //! A big text parsed on every core (8 MiB or more, on a machine of two
 //! cores or more): a text held whole is cut in pieces ([`in_pieces`]), a
 //! file is read and parsed a piece at a time ([`streamed`]), each piece
-//! parsed at once by a [`Parser`] of its own and the pieces' objects and
-//! lights joined in order ([`join`]).
+//! parsed at once by a [`Parser`] of its own and the pieces' objects,
+//! lights and places (where each child of the root sits, counted in the
+//! whole text) joined in order ([`join`]).
 //!
 //! The cuts fall before the start tags of the root's children; they are
 //! guesses made without reading what comes before, which the pieces' own
@@ -17,6 +18,7 @@ use std::path::Path;
 use std::sync::Arc;
 
 use super::parser::{Gathered, Parser};
+use super::reading::Layout;
 use super::{LoadProgress, MAX_FILE_BYTES, MAX_LIGHTS, MAX_OBJECTS};
 use crate::scene::error::LoadError;
 use crate::scene::grammar::SCENE_CHILDREN;
@@ -97,6 +99,9 @@ pub(super) fn streamed(
     // no cut for megabytes (1 GiB of zeros) is searched once, not once
     // per piece read (which made it quadratic: 107 s for 1 GiB).
     let mut searched: usize = 0;
+    // Where the next piece starts in the file, and the byte-order mark's
+    // length: the pieces' places are in the text after it.
+    let (mut offset, mut bom) = (0, 0);
     loop {
         if progress.is_some_and(LoadProgress::is_stopped) {
             return None;
@@ -137,6 +142,11 @@ pub(super) fn streamed(
         carry = buf.get(end..)?.to_vec();
         searched = 0;
         buf.truncate(end);
+        if first {
+            bom = skip;
+        }
+        let base = offset + skip - bom;
+        offset += buf.len();
         let k = pieces.len();
         pieces.push(None);
         blocks.push(None);
@@ -150,6 +160,8 @@ pub(super) fn streamed(
                 .and_then(|text| {
                     let mut parser = Parser::new(text, &path);
                     parser.whole = None;
+                    parser.record = true;
+                    parser.base = base;
                     let gathered = parser.piece(is_first).ok()?;
                     // The text kept packed (from the byte-order mark on).
                     let kept = pack.then(|| (Block::pack(&buf), text.contains("<!--")));
@@ -216,17 +228,23 @@ pub(super) fn streamed(
         None if count == like.len() => like.clone(),
         None => Objects::from(like.get(..count)?.to_vec()),
     };
+    // The last piece ends at the root's end tag.
+    let (scene, mut layout) = join(pieces, objects, like, &path, offset - bom)?;
+    layout.bom = bom;
     Some(Streamed {
-        scene: join(pieces, objects, like, &path)?,
+        scene,
+        layout,
         blocks,
         comments,
     })
 }
 
-/// What [`streamed`] read: the scene, and when asked for, the text's
-/// pieces packed and whether they have a comment.
+/// What [`streamed`] read: the scene, where the root's children sit in
+/// the text, and when asked for, the text's pieces packed and whether
+/// they have a comment.
 pub(super) struct Streamed {
     pub(super) scene: Scene,
+    pub(super) layout: Layout,
     pub(super) blocks: Vec<Block>,
     pub(super) comments: bool,
 }
@@ -253,14 +271,14 @@ pub(super) const PIECE_BYTES: usize = 1 << 22;
 /// fails, or a second camera in the pieces before), `None`, and the text is
 /// parsed again in one. Either way the error is that of a parse in one,
 /// at its line and column: what is accepted, and what it makes, is what a
-/// parse in one accepts and makes.
+/// parse in one accepts and makes, and where its children sit.
 pub(super) fn in_pieces(
     body: &str,
     path: &Path,
     like: &[Arc<Object>],
     progress: Option<&LoadProgress>,
     count: usize,
-) -> Option<Result<Scene, LoadError>> {
+) -> Option<Result<(Scene, Layout), LoadError>> {
     use rayon::prelude::*;
     let end = root_end(body)?;
     let mut cuts = vec![0];
@@ -283,12 +301,14 @@ pub(super) fn in_pieces(
             let mut parser = Parser::new(text, path);
             parser.whole = Some(body);
             parser.progress = progress;
+            parser.record = true;
+            parser.base = cut[0];
             parser.piece(k == 0).ok()
         })
         .collect();
     let Some(failed) = pieces.iter().position(Option::is_none) else {
         let pieces = pieces.into_iter().flatten().collect();
-        return join(pieces, Objects::default(), like, path).map(Ok);
+        return join(pieces, Objects::default(), like, path, end).map(Ok);
     };
     // The pieces before the first that failed confirmed its cut: the text
     // is read on from there in one, gathered so far what they gathered (an
@@ -307,23 +327,33 @@ pub(super) fn in_pieces(
     let mut parser = Parser::new(body, path);
     parser.like = like;
     parser.progress = progress;
+    parser.record = true;
     parser
         .document_from(*cuts.get(failed)?, before)
-        .map(|read| read.and_then(|(scene, _)| scene.finish(path)))
+        .map(|read| {
+            read.and_then(|(mut scene, _)| {
+                let layout = Layout::take(&mut scene);
+                scene.finish(path).map(|scene| (scene, layout))
+            })
+        })
 }
 
 /// The scene the `pieces` of a text make, joined in order after
-/// `objects` (those of the pieces before them); `None` where
-/// only a parse in one can tell (a second camera or model, objects or
-/// lights over the limit, no camera).
+/// `objects` (those of the pieces before them), and where its children
+/// sit (the root's end tag at `end`); `None` where only a parse in one
+/// can tell (a second camera or model, objects or lights over the limit,
+/// no camera).
 fn join(
     pieces: Vec<Gathered>,
     objects: Objects,
     like: &[Arc<Object>],
     path: &Path,
-) -> Option<Scene> {
-    let (scene, objects) = gather(pieces, objects, like)?;
-    scene.finish_with(objects, path).ok()
+    end: usize,
+) -> Option<(Scene, Layout)> {
+    let (mut scene, objects) = gather(pieces, objects, like)?;
+    scene.content_end = Some(end);
+    let layout = Layout::take(&mut scene);
+    Some((scene.finish_with(objects, path).ok()?, layout))
 }
 
 /// What the `pieces` of a text gather, joined in order after `objects`
@@ -353,6 +383,8 @@ fn gather(
             objects.extend(piece.objects);
         }
         scene.lights.extend(piece.lights);
+        scene.places.extend(piece.places);
+        scene.content_start = scene.content_start.or(piece.content_start);
         for (one, found) in [
             (scene.camera.is_some(), piece.camera.is_some()),
             (scene.model.is_some(), piece.model.is_some()),
@@ -462,10 +494,10 @@ fn last_cut(body: &[u8], from: usize, end: usize) -> Option<usize> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::tests::{below, in_one, varied};
+    use super::super::tests::{below, in_one, in_one_laid_out, varied};
     use super::*;
     use crate::scene::error::LoadErrorKind;
-    use crate::scene::{load, load_packed, load_with_text, parse};
+    use crate::scene::{load, load_counting, load_packed, load_with_text, parse};
 
     /// Each object of `objects` is the one at its place in `like`.
     fn all_shared(objects: &[Arc<Object>], like: &[Arc<Object>]) -> bool {
@@ -475,7 +507,7 @@ mod tests {
     /// A parse in pieces either makes what the parse in one makes, to the
     /// bit, error included, or gives way to it; `Ok(true)` where it made it.
     fn agrees(text: &str, count: usize) -> Result<bool, String> {
-        let one = format!("{:?}", in_one(text));
+        let one = format!("{:?}", in_one_laid_out(text));
         match in_pieces(text, Path::new("t.xml"), &[], None, count) {
             None => Ok(false),
             Some(pieces) if format!("{pieces:?}") == one => Ok(true),
@@ -494,7 +526,7 @@ mod tests {
         let again = in_pieces(&text, Path::new("t.xml"), &like, None, 5)
             .unwrap()
             .unwrap();
-        assert!(all_shared(&again.objects, &like));
+        assert!(all_shared(&again.0.objects, &like));
     }
 
     #[test]
@@ -548,7 +580,7 @@ mod tests {
         let read = in_pieces(&commented, Path::new("t.xml"), &[], None, 7);
         assert_eq!(
             format!("{read:?}"),
-            format!("{:?}", Some(in_one(&commented)))
+            format!("{:?}", Some(in_one_laid_out(&commented)))
         );
         assert!(matches!(read, Some(Ok(_))));
     }
@@ -649,10 +681,19 @@ mod tests {
             );
             assert_eq!(loaded.replace(&path.display().to_string(), "t.xml"), one);
             assert_eq!(loaded, read);
-            let streamed = streamed(&path, &Objects::default(), false, None).map(|s| s.scene);
+            let streamed = streamed(&path, &Objects::default(), false, None);
             assert_eq!(streamed.is_some(), streams, "{}", &text[..60]);
-            if let Some(scene) = streamed {
-                assert_eq!(format!("{:?}", Ok::<_, String>(scene)), one);
+            // Where the children sit, as a parse in one has them, streamed
+            // or read whole.
+            let laid_out = in_one_laid_out(body).ok().map(|(_, mut layout)| {
+                layout.bom = text.len() - body.len();
+                layout
+            });
+            let counted = load_counting(&path, &[], None).ok().map(|l| l.layout);
+            assert_eq!(counted, laid_out);
+            if let Some(streamed) = streamed {
+                assert_eq!(Some(streamed.layout), laid_out);
+                assert_eq!(format!("{:?}", Ok::<_, String>(streamed.scene)), one);
             }
         };
         check(&text, true);

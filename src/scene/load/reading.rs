@@ -14,6 +14,12 @@
 //! can tell (a camera or model more or less, a count past its limit)
 //! reads the whole text, as does a text never read without error.
 //!
+//! A reading can also start from a text it never read: the file the app
+//! loaded, whose [`Layout`] (where its children sit, recorded by the
+//! loader, on every core) and scene make what a whole reading knows
+//! ([`Reading::keeping_from`]); the editor's first text of that file is
+//! then read only where it differs from the file's.
+//!
 //! A check ([`Reading::default`], the language server's) keeps objects
 //! and lights checked, not kept: a million spheres cost their places (16
 //! bytes each), not a scene. A reading that keeps the scene
@@ -62,6 +68,43 @@ pub enum Reread {
         objects_were: usize,
         objects_now: usize,
     },
+}
+
+/// Where each of the root's children sits in a text that loaded, as the
+/// loader found it ([`super::load_counting`], [`super::load_packed`]): a
+/// reading of the text starts from it ([`Reading::keeping_from`]) without
+/// reading the text again. 16 bytes a child.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Layout {
+    /// The text's byte-order mark's length: places are in the text after it.
+    pub(super) bom: usize,
+    /// Where each child of the root starts, and what it is.
+    pub(super) places: Vec<(usize, Child)>,
+    /// The root's content, from after its start tag to its end tag's `<`.
+    pub(super) content: Range<usize>,
+}
+
+impl Layout {
+    /// The layout `gathered` recorded ([`Parser::record`]) of a text
+    /// without a byte-order mark, its places taken; none (a reading
+    /// starting from it reads the text whole) where it has not read the
+    /// whole root.
+    pub(super) fn take(gathered: &mut Gathered) -> Layout {
+        let places = std::mem::take(&mut gathered.places);
+        match (gathered.content_start, gathered.content_end) {
+            (Some(start), Some(end)) => Layout {
+                bom: 0,
+                places,
+                content: start..end,
+            },
+            _ => Layout::default(),
+        }
+    }
+
+    /// How many children of the root it places.
+    pub fn children(&self) -> usize {
+        self.places.len()
+    }
 }
 
 /// The text as last found without error.
@@ -135,6 +178,25 @@ impl Reading {
         Reading {
             keep: true,
             ..Reading::default()
+        }
+    }
+
+    /// A reading that keeps the scene, of the text that `layout` places
+    /// and that loads to `scene`: as if it had read that text whole.
+    pub fn keeping_from(layout: &Layout, scene: Scene) -> Reading {
+        let has_model = layout.places.iter().any(|(_, c)| *c == Child::Model);
+        Reading {
+            known: Some(Known {
+                bom: layout.bom,
+                places: layout.places.clone(),
+                content: layout.content.clone(),
+                camera: Some(scene.camera.clone()),
+                model: has_model.then_some(scene.model),
+                scene: Some(scene),
+            }),
+            dirty: None,
+            keep: true,
+            last: None,
         }
     }
 

@@ -61,6 +61,8 @@ pub struct FileRead {
     pub scene: Scene,
     fingerprint: u64,
     labels: names::Labels,
+    /// Where the root's children sit in `text`, where known.
+    layout: Option<crate::scene::Layout>,
 }
 
 impl FileRead {
@@ -70,6 +72,15 @@ impl FileRead {
             labels: names::object_labels(&text),
             text,
             scene,
+            layout: None,
+        }
+    }
+
+    /// What the loader read of the file ([`crate::scene::load_counting`]).
+    pub fn loaded(loaded: crate::scene::Loaded) -> FileRead {
+        FileRead {
+            layout: Some(loaded.layout),
+            ..FileRead::new(loaded.text, loaded.scene)
         }
     }
 
@@ -235,12 +246,16 @@ impl Document {
             return Reload::Unchanged;
         }
         if self.placeholder {
-            *self = Document::from_text(
+            let doc = Document::from_text(
                 self.path.clone(),
                 read.text,
                 read.scene,
                 FileState::Watching,
             );
+            *self = match read.layout {
+                Some(layout) => doc.laid_out(layout),
+                None => doc,
+            };
             return Reload::Replaced;
         }
         if let Some(PendingMerge {
@@ -352,6 +367,7 @@ impl Document {
             scene,
             fingerprint,
             labels,
+            layout,
         } = read;
         self.disk = Some(fingerprint);
         self.file = Version::new(
@@ -359,6 +375,7 @@ impl Document {
             scene,
             Arc::new(labels),
         );
+        self.file.layout = layout.map(Arc::new);
         self.file.clone()
     }
 

@@ -87,6 +87,9 @@ pub(crate) struct Version {
     edited: Edited,
     /// The first words of the comment above each object of `source`.
     labels: Arc<names::Labels>,
+    /// Where the root's children sit in `source`, where the load said
+    /// (following an editor's text of the file starts from it).
+    layout: Option<Arc<scene::Layout>>,
 }
 
 impl Version {
@@ -96,6 +99,7 @@ impl Version {
             source_scene: scene.clone(),
             edited: Edited::new(scene),
             labels,
+            layout: None,
         }
     }
 
@@ -172,6 +176,7 @@ impl Document {
             disk,
             FileState::Watching,
         )
+        .laid_out(loaded.layout)
     }
 
     fn from_parts(
@@ -199,6 +204,14 @@ impl Document {
             editor_error: None,
             generation: next_generation(),
         }
+    }
+
+    /// The document, the file's text placed by `layout`.
+    fn laid_out(mut self, layout: scene::Layout) -> Document {
+        let layout = Some(Arc::new(layout));
+        self.file.layout = layout.clone();
+        self.shown.layout = layout;
+        self
     }
 
     /// The built-in example scene.
@@ -232,12 +245,13 @@ impl Document {
             Err(e) => Err(e),
         };
         match loaded {
-            Ok((text, scene)) => Ok(Document::from_text(
+            Ok(loaded) => Ok(Document::from_text(
                 Some(path.to_owned()),
-                text,
-                scene,
+                loaded.text,
+                loaded.scene,
                 FileState::Watching,
-            )),
+            )
+            .laid_out(loaded.layout)),
             Err(e) if e.kind == LoadErrorKind::IsDirectory => Err(e),
             Err(e) => {
                 let missing = matches!(

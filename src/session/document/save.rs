@@ -154,8 +154,8 @@ impl SaveJob {
 
     /// The file another program wrote, read for a merge.
     fn read_theirs(&self) -> SaveOutcome {
-        match scene::load_sharing(&self.path, &self.version.edited.scene().objects) {
-            Ok((text, theirs)) => SaveOutcome::FileChanged(Box::new(FileRead::new(text, theirs))),
+        match scene::load_counting(&self.path, &self.version.edited.scene().objects, None) {
+            Ok(loaded) => SaveOutcome::FileChanged(Box::new(FileRead::loaded(loaded))),
             Err(e) => SaveOutcome::Failed(SaveError::DiskBroken(Box::new(e))),
         }
     }
