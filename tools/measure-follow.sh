@@ -13,6 +13,10 @@
 # first; a big scene needs more (the app reads the editor's first text
 # whole). The first change is the one that hands the app the whole text.
 #
+# SAVE=1 (raw client only): after the first change the client writes the
+# text to the file and says so (`didSave`), so the second change is the
+# first after a save.
+#
 # EDITOR=raw puts a raw client (python, the protocol's messages written
 # by hand) in Neovim's place: the time from the change sent to the server
 # to the picture, without the editor's own cost (Neovim 0.7's client does
@@ -91,9 +95,9 @@ while done < changes:
 EOF
 watcher=$!
 if [ "${EDITOR:-}" = raw ]; then
-  python3 - "$bin" "$work/scene.xml" "$line" "$changes" "$pause" "$work/changed" <<'RAW'
+  python3 - "$bin" "$work/scene.xml" "$line" "$changes" "$pause" "$work/changed" "${SAVE:-}" <<'RAW'
 import json, re, subprocess, sys, time
-binary, scene, line, changes, pause, stamp = sys.argv[1:7]
+binary, scene, line, changes, pause, stamp, save = sys.argv[1:8]
 row, changes, pause = int(line) - 1, int(changes), float(pause)
 text = open(scene).read()
 server = subprocess.Popen([binary, "lsp"], stdin=subprocess.PIPE, stdout=subprocess.DEVNULL)
@@ -119,7 +123,15 @@ for k in range(1, changes + 1):
         "contentChanges": [{"range": {
             "start": {"line": row, "character": start},
             "end": {"line": row, "character": start + len(old)}}, "text": new}]}})
+    lines = text.split("\n")
+    lines[row] = lines[row][:start] + new + lines[row][start + len(old):]
+    text = "\n".join(lines)
     old = new
+    if save and k == 1:
+        time.sleep(pause)
+        with open(scene, "w") as f:
+            f.write(text)
+        send({"method": "textDocument/didSave", "params": {"textDocument": {"uri": uri}}})
 time.sleep(pause)
 server.kill()
 RAW

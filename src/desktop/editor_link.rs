@@ -45,6 +45,27 @@ use std::sync::{Arc, Mutex, PoisonError};
 #[cfg(unix)]
 use std::time::Duration;
 
+/// Applies a [`Message::Change`] to `text`, the copy of the editor's text
+/// it was made for: the bytes `range` replaced by `inserted`, making
+/// `length` bytes. False, `text` left as it was, where it does not fit
+/// (the copy missed a change: the whole text is asked for again).
+pub fn apply_change(
+    text: &mut String,
+    range: std::ops::Range<usize>,
+    inserted: &str,
+    length: usize,
+) -> bool {
+    let fits = range.start <= range.end
+        && range.end <= text.len()
+        && text.is_char_boundary(range.start)
+        && text.is_char_boundary(range.end)
+        && text.len() - range.len() + inserted.len() == length;
+    if fits {
+        text.replace_range(range, inserted);
+    }
+    fits
+}
+
 /// Elsewhere (Windows) there is no link ([`folder`] says so): the type a
 /// connection would have, never made.
 #[cfg(not(unix))]

@@ -70,19 +70,27 @@ impl Block {
     }
 
     fn unpack(&self) -> Vec<u8> {
+        let mut text = vec![0; self.len];
+        self.unpack_into(&mut text);
+        text
+    }
+
+    /// Unpacks the block into `text`, as long as its text.
+    fn unpack_into(&self, text: &mut [u8]) {
         thread_local! {
             static UNPACKER: std::cell::RefCell<Option<zstd::bulk::Decompressor<'static>>> =
                 const { std::cell::RefCell::new(None) };
         }
-        UNPACKER
+        let unpacked = UNPACKER
             .with_borrow_mut(|unpacker| {
                 let unpacker = match unpacker {
                     Some(unpacker) => unpacker,
                     None => unpacker.insert(zstd::bulk::Decompressor::new()?),
                 };
-                unpacker.decompress(&self.packed, self.len)
+                unpacker.decompress_to_buffer(&self.packed, text)
             })
-            .expect("a packed block unpacks")
+            .expect("a packed block unpacks");
+        assert_eq!(unpacked, self.len, "a packed block unpacks whole");
     }
 }
 
@@ -172,16 +180,24 @@ impl Source {
         Arc::ptr_eq(&self.0, &other.0)
     }
 
-    /// The whole text: borrowed when held whole, else unpacked (as big as
-    /// the text: for the uses that need it whole, not for a save).
+    /// The whole text: borrowed when held whole, else unpacked, its
+    /// blocks on the cores (as big as the text: for the uses that need it
+    /// whole, not for a save).
     pub fn text(&self) -> Cow<'_, str> {
         match &*self.0 {
             Held::Whole(text) => Cow::Borrowed(text),
-            Held::Packed { len, .. } => {
-                let mut bytes = Vec::with_capacity(*len);
-                self.reader()
-                    .read_to_end(&mut bytes)
-                    .expect("a packed text unpacks");
+            Held::Packed { blocks, len } => {
+                let mut bytes = vec![0; *len];
+                let mut rest = bytes.as_mut_slice();
+                let mut pieces = Vec::with_capacity(blocks.len());
+                for block in blocks {
+                    let (piece, after) = rest.split_at_mut(block.len);
+                    pieces.push((block, piece));
+                    rest = after;
+                }
+                pieces
+                    .into_par_iter()
+                    .for_each(|(block, piece)| block.unpack_into(piece));
                 // It was UTF-8 when packed.
                 Cow::Owned(String::from_utf8(bytes).expect("a packed text is UTF-8"))
             }

@@ -583,19 +583,10 @@ fn the_app_follows_any_editor_that_still_holds_unsaved_text() {
     );
     // A change that does not fit what the app holds: it asks again.
     editor_link::send(&mut first, &change("0.7", first_text.len() + 5)).unwrap();
-    let mut answers = std::io::BufReader::new(first.try_clone().unwrap());
-    let wait = std::time::Instant::now();
-    while wait.elapsed() < Duration::from_secs(5) {
-        harness.run_steps(1);
-        first
-            .set_read_timeout(Some(Duration::from_millis(10)))
-            .unwrap();
-        if let Ok(Some(m)) = editor_link::receive(&mut answers) {
-            assert_eq!(m, Message::Resend { path: path.clone() });
-            break;
-        }
-    }
-    first.set_read_timeout(None).unwrap();
+    assert_eq!(
+        answer_within(&mut harness, &first, Duration::from_secs(5)),
+        Some(Message::Resend { path: path.clone() })
+    );
     editor_link::send(&mut first, &buffer(with_ka("0.5"))).unwrap();
     step_until(
         &mut harness,
@@ -610,7 +601,7 @@ fn the_app_follows_any_editor_that_still_holds_unsaved_text() {
         "the first editor's text again",
         |app| shown_ka(app) == 0.5 && app.document().is_following(),
     );
-    drop((first, answers));
+    drop(first);
     step_until(
         &mut harness,
         Duration::from_secs(5),
@@ -622,6 +613,112 @@ fn the_app_follows_any_editor_that_still_holds_unsaved_text() {
         SCENE,
         "nothing written"
     );
+}
+
+/// What the app says back to an editor within `wait`, the app stepped
+/// meanwhile.
+fn answer_within(
+    harness: &mut Harness<'_, RayOfLightApp>,
+    editor: &std::os::unix::net::UnixStream,
+    wait: Duration,
+) -> Option<rayoflight::desktop::editor_link::Message> {
+    let mut answers = std::io::BufReader::new(editor.try_clone().unwrap());
+    editor
+        .set_read_timeout(Some(Duration::from_millis(10)))
+        .unwrap();
+    let start = std::time::Instant::now();
+    let mut said = None;
+    while said.is_none() && start.elapsed() < wait {
+        harness.run_steps(1);
+        said = rayoflight::desktop::editor_link::receive(&mut answers)
+            .ok()
+            .flatten();
+    }
+    editor.set_read_timeout(None).unwrap();
+    said
+}
+
+/// An editor's text that is the file's (handed whole, or saved): its next
+/// change is taken from the file's text, not asked for whole again; a
+/// change that does not fit it is.
+#[test]
+fn a_change_of_the_files_own_text_is_not_asked_for_again() {
+    use rayoflight::desktop::editor_link::{self, Message};
+    let (dir, path) = common::scene_file("scene.xml", SCENE);
+    let mut harness = app_on(Document::open(&path).unwrap());
+    let folder = editor_link::folder_in(&dir.path().join("run")).unwrap();
+    let listener = editor_link::Listener::bind(&folder).unwrap();
+    let socket = listener.path().to_owned();
+    harness.state_mut().listen_to_editors(listener);
+    let path = std::fs::canonicalize(&path).unwrap();
+    let shown_ka = |app: &RayOfLightApp| app.document().scene().objects[0].material.ka;
+    let mut editor = editor_link::connect(&socket).unwrap();
+    // `ka="0.2"` made `ka` in `text`, as a change.
+    let change = |text: &str, ka: &str| {
+        let at = text.find("ka=\"").unwrap() + 4;
+        let end = at + text[at..].find('"').unwrap();
+        Message::Change {
+            path: path.clone(),
+            range: at..end,
+            text: ka.to_owned(),
+            length: text.len() - (end - at) + ka.len(),
+        }
+    };
+    editor_link::send(
+        &mut editor,
+        &Message::Buffer {
+            path: path.clone(),
+            text: SCENE.to_owned(),
+        },
+    )
+    .unwrap();
+    editor_link::send(&mut editor, &change(SCENE, "0.25")).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the change of the file's text",
+        |app| shown_ka(app) == 0.25 && app.document().is_following(),
+    );
+    assert_eq!(
+        answer_within(&mut harness, &editor, Duration::from_millis(500)),
+        None
+    );
+    // The editor saves: the file read back, its next change taken from it.
+    let saved = SCENE.replacen("ka=\"0.2\"", "ka=\"0.25\"", 1);
+    std::fs::write(&path, &saved).unwrap();
+    editor_link::send(&mut editor, &Message::Released { path: path.clone() }).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(10),
+        "the saved file read back",
+        |app| shown_ka(app) == 0.25 && !app.document().is_following(),
+    );
+    editor_link::send(&mut editor, &change(&saved, "0.3")).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the change of the saved text",
+        |app| shown_ka(app) == 0.3 && app.document().is_following(),
+    );
+    assert_eq!(
+        answer_within(&mut harness, &editor, Duration::from_millis(500)),
+        None
+    );
+    // Back to the saved text, then a change that does not fit it.
+    let now = saved.replacen("ka=\"0.25\"", "ka=\"0.3\"", 1);
+    editor_link::send(&mut editor, &change(&now, "0.25")).unwrap();
+    step_until(
+        &mut harness,
+        Duration::from_secs(5),
+        "the file's text again",
+        |app| shown_ka(app) == 0.25 && !app.document().is_following(),
+    );
+    editor_link::send(&mut editor, &change(&now, "0.35")).unwrap();
+    assert_eq!(
+        answer_within(&mut harness, &editor, Duration::from_secs(5)),
+        Some(Message::Resend { path: path.clone() })
+    );
+    assert_eq!(read(&path), saved, "nothing written");
 }
 
 /// The error banner lies over the picture: breaking the file and fixing

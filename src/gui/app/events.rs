@@ -7,9 +7,10 @@
 //! cursor is in, selected).
 
 use super::{Background, RayOfLightApp};
+use crate::desktop::editor_link::apply_change;
 use crate::gui::panel::Selection;
 use crate::gui::study;
-use crate::session::document::Reload;
+use crate::session::document::{EditorBase, Reload};
 use crate::session::pace::Pace;
 use crate::session::preview::RenderState;
 use crate::session::watcher::FileEvent;
@@ -212,6 +213,7 @@ impl RayOfLightApp {
                 Background::Dialog(kind, path, took) => self.dialog_done(kind, path, took),
                 Background::Opened(id, result) => self.opened(id, *result),
                 Background::Editor(connection, message) => self.editor_said(connection, message),
+                Background::EditorGone(connection) => self.editors.know(connection, None),
                 Background::Explained(id, explanation) => self.explained(id, explanation),
             }
         }
@@ -256,6 +258,8 @@ impl RayOfLightApp {
                             // This editor's text is the file's again.
                             Ok(false) => {
                                 self.editors.holding.pop();
+                                let base = self.doc.file_base();
+                                self.editors.know(connection, Some(base));
                                 self.show_newest_held();
                             }
                             Err(_) => {
@@ -269,23 +273,24 @@ impl RayOfLightApp {
                     // Another editor's text: now the newest, shown.
                     Some(i) => {
                         let (_, held) = self.editors.holding.remove(i);
-                        let fits = |t: &String| {
-                            range.end <= t.len()
-                                && t.is_char_boundary(range.start)
-                                && t.is_char_boundary(range.end)
-                                && t.len() - range.len() + text.len() == length
-                        };
-                        match held.filter(fits) {
-                            Some(mut held) => {
-                                held.replace_range(range, &text);
-                                self.show_editor_text(connection, held);
-                            }
+                        let changed = held.and_then(|mut held| {
+                            apply_change(&mut held, range, &text, length).then_some(held)
+                        });
+                        match changed {
+                            Some(held) => self.show_editor_text(connection, held),
                             None => self.ask_again(connection, path),
                         }
                     }
-                    // A change of a text this app was never handed (it
-                    // opened the file since).
-                    None => self.ask_again(connection, path),
+                    // A text the app knows without holding it (the file's,
+                    // or one the editor saved), or was never handed (it
+                    // opened the file since): asked for whole again.
+                    None => {
+                        let base = self.editors.bases.iter().find(|(c, _)| *c == connection);
+                        match base.and_then(|(_, b)| self.doc.text_from(b, range, &text, length)) {
+                            Some(text) => self.show_editor_text(connection, text),
+                            None => self.ask_again(connection, path),
+                        }
+                    }
                 }
             }
             Message::Select { path, under } if ours(&path) => match under {
@@ -302,6 +307,16 @@ impl RayOfLightApp {
             },
             Message::Released { path } if ours(&path) => {
                 let on_screen = self.editors.holding.last().map(|(c, _)| *c);
+                // Saved (or closed): its next change, if any, is of the
+                // text it saved.
+                let base = match self.editors.holding.iter().find(|(c, _)| *c == connection) {
+                    Some((_, Some(held))) => Some(EditorBase::saved(held)),
+                    Some((_, None)) => self.doc.saved_base(),
+                    None => None,
+                };
+                if base.is_some() {
+                    self.editors.know(connection, base);
+                }
                 self.editors.holding.retain(|(c, _)| *c != connection);
                 if on_screen != Some(connection) && !self.editors.holding.is_empty() {
                     // Another editor's text is on screen: it stays.
@@ -340,10 +355,15 @@ impl RayOfLightApp {
         self.editors.holding.retain(|(c, _)| *c != connection);
         // This editor's text is the newest: last in the list.
         match self.keeping_selection(|app| app.doc.follow(text)) {
-            true => self.editors.holding.push((connection, None)),
+            true => {
+                self.editors.know(connection, None);
+                self.editors.holding.push((connection, None));
+            }
             // This editor's text is the file's again (it saved): another
             // editor's unsaved text, if one holds any.
             false => {
+                let base = self.doc.file_base();
+                self.editors.know(connection, Some(base));
                 self.show_newest_held();
             }
         }
@@ -357,6 +377,7 @@ impl RayOfLightApp {
     /// came of a text this app missed): it is asked for whole again.
     fn ask_again(&mut self, connection: u64, path: PathBuf) {
         self.editors.holding.retain(|(c, _)| *c != connection);
+        self.editors.know(connection, None);
         self.editors.peers.tell_one(
             connection,
             &crate::desktop::editor_link::Message::Resend { path },

@@ -83,6 +83,8 @@ enum Background {
     /// ([`crate::desktop::editor_link`]), on the connection numbered so:
     /// its unsaved text of a file, or that it let go of it.
     Editor(u64, crate::desktop::editor_link::Message),
+    /// The editor on that connection is gone.
+    EditorGone(u64),
 }
 
 /// What the mouse is doing on the picture, or will do at the next click:
@@ -172,6 +174,21 @@ struct EditorLink {
     /// lets go, the one before is shown again, and the file only when none
     /// holds any.
     holding: Vec<(u64, Option<String>)>,
+    /// The editors whose text the app knows without holding it: the
+    /// file's, or the text they saved. A change of it is taken from there,
+    /// not asked for whole again.
+    bases: Vec<(u64, crate::session::document::EditorBase)>,
+}
+
+impl EditorLink {
+    /// What editor `connection`'s text is now known as (`None`: not
+    /// known, or held).
+    fn know(&mut self, connection: u64, base: Option<crate::session::document::EditorBase>) {
+        self.bases.retain(|(c, _)| *c != connection);
+        if let Some(base) = base {
+            self.bases.push((connection, base));
+        }
+    }
 }
 
 /// What the app remembers between runs: the recent files, and the window
@@ -226,6 +243,7 @@ impl RayOfLightApp {
                 socket: None,
                 peers: crate::desktop::editor_link::Peers::default(),
                 holding: Vec::new(),
+                bases: Vec::new(),
             },
             kept: Kept { recent, settings },
             hot_exit: journal.map(hot_exit::HotExit::new),
@@ -316,6 +334,7 @@ impl RayOfLightApp {
                                     Message::Released { path },
                                 ));
                             }
+                            let _ = tx.send(Background::EditorGone(connection));
                             ctx.request_repaint();
                         });
                 }
@@ -373,6 +392,7 @@ impl RayOfLightApp {
         self.doc = doc;
         // Editors' texts were of the other file.
         self.editors.holding.clear();
+        self.editors.bases.clear();
         self.selection = Selection::default();
         self.screen.view = View::default();
         self.restore_journal();

@@ -19,7 +19,9 @@
 use std::ops::Range;
 use std::sync::Arc;
 
+use super::disk::{fingerprint, fingerprint_source};
 use super::{Document, Version, next_generation};
+use crate::desktop::editor_link::apply_change;
 use crate::scene::source::Source;
 use crate::scene::{Layout, LoadError, Reading, Reread, names};
 
@@ -47,7 +49,60 @@ impl Following {
 #[error("an edit of the editor's text that does not fit the text held")]
 pub struct Unfit;
 
+/// What the app knows of an editor's text that is not on screen, to take
+/// an edit of it without being handed it whole again: the text of a
+/// [`Source`] (the file's, when the editor's text was the file's), or a
+/// text the editor saved, known by its fingerprint, found again as the
+/// file's once the file is read back.
+#[derive(Debug, Clone)]
+pub enum EditorBase {
+    Text(Source),
+    Saved(u64),
+}
+
+impl EditorBase {
+    /// A text the editor saved.
+    pub fn saved(text: &str) -> EditorBase {
+        EditorBase::Saved(fingerprint(text.as_bytes()))
+    }
+}
+
 impl Document {
+    /// An editor's text is the file's (its whole text was, or an edit
+    /// took it back there): what its next edit is of.
+    pub fn file_base(&self) -> EditorBase {
+        EditorBase::Text(self.file.source.clone())
+    }
+
+    /// The editor's text on screen, which it saved: what its next edit is
+    /// of. `None` while not following.
+    pub fn saved_base(&self) -> Option<EditorBase> {
+        self.editor.as_ref().map(|f| EditorBase::saved(&f.text))
+    }
+
+    /// An editor's text, `base`'s with a change (the bytes `range`
+    /// replaced by `inserted`, making `length` bytes); `None` where it is
+    /// not at hand (a save not read back yet) or the change does not fit.
+    pub fn text_from(
+        &self,
+        base: &EditorBase,
+        range: Range<usize>,
+        inserted: &str,
+        length: usize,
+    ) -> Option<String> {
+        let source = match base {
+            EditorBase::Text(source) => source,
+            EditorBase::Saved(saved) => {
+                let file = &self.file.source;
+                ((length + range.len()).checked_sub(inserted.len()) == Some(file.len())
+                    && fingerprint_source(file) == *saved)
+                    .then_some(file)?
+            }
+        };
+        let mut text = source.text().into_owned();
+        apply_change(&mut text, range, inserted, length).then_some(text)
+    }
+
     /// Shows the user's editor's unsaved `text` of this file instead of the
     /// document (which waits, unsaved edits and all): what `rayoflight lsp`
     /// hands over. Read where it differs from the file's text. A text that does not load keeps the last one that did
@@ -97,22 +152,18 @@ impl Document {
         let Some(mut following) = self.editor.take() else {
             return Err(Unfit);
         };
-        let text = &following.text;
-        let fits = range.end <= text.len()
-            && text.is_char_boundary(range.start)
-            && text.is_char_boundary(range.end)
-            && text.len() - range.len() + inserted.len() == length;
-        if !fits {
-            self.editor = Some(following);
-            return Err(Unfit);
-        }
         // A comment's marker the edit cuts into or out of: labels change.
-        let bytes = text.as_bytes();
-        let window = &bytes[range.start.saturating_sub(3)..(range.end + 3).min(bytes.len())];
+        let bytes = following.text.as_bytes();
+        let window = bytes
+            .get(range.start.saturating_sub(3)..(range.end + 3).min(bytes.len()))
+            .unwrap_or_default();
         let marker =
             |w: &[u8]| w.windows(4).any(|w| w == b"<!--") || w.windows(3).any(|w| w == b"-->");
         let cut_marker = marker(window) || marker(inserted.as_bytes());
-        following.text.replace_range(range.clone(), inserted);
+        if !apply_change(&mut following.text, range.clone(), inserted, length) {
+            self.editor = Some(following);
+            return Err(Unfit);
+        }
         if self.file.source.is_near(&following.text, range.start) {
             // Back to the document (its error, if the last text had one,
             // goes with the text).
@@ -259,6 +310,31 @@ mod tests {
         assert_eq!(reading.reread(), Some(&Reread::Whole));
         assert_eq!(doc.scene(), &parsed);
         assert!(Arc::ptr_eq(&doc.scene().objects[0], &file[0]));
+    }
+
+    /// An edit of a text the editor saved is taken from the file once the
+    /// file is read back with that text, not before; an edit of the
+    /// file's own text, where it fits.
+    #[test]
+    fn an_edit_of_a_saved_text_waits_for_the_file_read_back() {
+        let (_dir, mut doc) = open();
+        let saved = TEXT.replace("ka=\"0.2\"", "ka=\"0.25\"");
+        assert!(doc.follow(saved.clone()));
+        let base = doc.saved_base().expect("following");
+        let at = saved.find("0.25").unwrap();
+        let edit = |doc: &Document, base: &EditorBase| {
+            doc.text_from(base, at..at + 4, "0.5", saved.len() - 1)
+        };
+        assert_eq!(edit(&doc, &base), None, "the file not read back yet");
+        doc.unfollow();
+        let scene = crate::scene::parse(&saved, std::path::Path::new("s.xml")).unwrap();
+        doc.file_loaded(saved.clone(), scene);
+        assert_eq!(edit(&doc, &base), Some(saved.replace("0.25", "0.5")));
+        assert_eq!(
+            edit(&doc, &doc.file_base()),
+            Some(saved.replace("0.25", "0.5"))
+        );
+        assert_eq!(doc.text_from(&doc.file_base(), at..at + 4, "0.5", 7), None);
     }
 
     /// A text with an error keeps the last good scene with the error; the
