@@ -10,7 +10,7 @@ use super::{Background, RayOfLightApp};
 use crate::desktop::editor_link::apply_change;
 use crate::gui::panel::Selection;
 use crate::gui::study;
-use crate::session::document::{EditorBase, Reload};
+use crate::session::document::{EditorBase, Rebuilt, Reload};
 use crate::session::pace::Pace;
 use crate::session::preview::RenderState;
 use crate::session::watcher::FileEvent;
@@ -233,7 +233,7 @@ impl RayOfLightApp {
         };
         match message {
             Message::Buffer { path, text } if ours(&path) => {
-                self.show_editor_text(connection, text);
+                self.show_editor_text(connection, text.into());
             }
             Message::Change {
                 path,
@@ -277,7 +277,7 @@ impl RayOfLightApp {
                             apply_change(&mut held, range, &text, length).then_some(held)
                         });
                         match changed {
-                            Some(held) => self.show_editor_text(connection, held),
+                            Some(held) => self.show_editor_text(connection, held.into()),
                             None => self.ask_again(connection, path),
                         }
                     }
@@ -344,7 +344,7 @@ impl RayOfLightApp {
     /// (or, where it is the file's, another editor's unsaved text if one
     /// holds any); the text on screen before, another editor's, is kept
     /// for when this one lets go.
-    fn show_editor_text(&mut self, connection: u64, text: String) {
+    fn show_editor_text(&mut self, connection: u64, text: Rebuilt) {
         let was = self.doc.is_following();
         if let Some((c, held)) = self.editors.holding.last_mut()
             && *c != connection
@@ -354,7 +354,7 @@ impl RayOfLightApp {
         }
         self.editors.holding.retain(|(c, _)| *c != connection);
         // This editor's text is the newest: last in the list.
-        match self.keeping_selection(|app| app.doc.follow(text)) {
+        match self.keeping_selection(|app| app.doc.follow_rebuilt(text)) {
             true => {
                 self.editors.know(connection, None);
                 self.editors.holding.push((connection, None));

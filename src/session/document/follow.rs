@@ -60,6 +60,26 @@ pub enum EditorBase {
     Saved(u64),
 }
 
+/// An editor's text made from what the app knew of it
+/// ([`Document::text_from`]).
+#[derive(Debug)]
+pub struct Rebuilt {
+    text: String,
+    /// The bytes of the file's text it replaced, and how many replace
+    /// them, where it is an edit of the file's text that changes it.
+    of_file: Option<(Range<usize>, usize)>,
+}
+
+impl From<String> for Rebuilt {
+    /// A text handed whole: where it differs from the file's is not known.
+    fn from(text: String) -> Rebuilt {
+        Rebuilt {
+            text,
+            of_file: None,
+        }
+    }
+}
+
 impl EditorBase {
     /// A text the editor saved.
     pub fn saved(text: &str) -> EditorBase {
@@ -81,26 +101,28 @@ impl Document {
     }
 
     /// An editor's text, `base`'s with a change (the bytes `range`
-    /// replaced by `inserted`, making `length` bytes); `None` where it is
-    /// not at hand (a save not read back yet) or the change does not fit.
+    /// replaced by `inserted`, making `length` bytes), to follow
+    /// ([`Document::follow_rebuilt`]); `None` where it is not at hand (a
+    /// save not read back yet) or the change does not fit.
     pub fn text_from(
         &self,
         base: &EditorBase,
         range: Range<usize>,
         inserted: &str,
         length: usize,
-    ) -> Option<String> {
+    ) -> Option<Rebuilt> {
+        let file = &self.file.source;
         let source = match base {
             EditorBase::Text(source) => source,
-            EditorBase::Saved(saved) => {
-                let file = &self.file.source;
-                ((length + range.len()).checked_sub(inserted.len()) == Some(file.len())
-                    && fingerprint_source(file) == *saved)
-                    .then_some(file)?
-            }
+            EditorBase::Saved(saved) => ((length + range.len()).checked_sub(inserted.len())
+                == Some(file.len())
+                && fingerprint_source(file) == *saved)
+                .then_some(file)?,
         };
         let mut text = source.text().into_owned();
-        apply_change(&mut text, range, inserted, length).then_some(text)
+        let same = text.get(range.clone()) == Some(inserted);
+        let of_file = (source.same(file) && !same).then(|| (range.clone(), inserted.len()));
+        apply_change(&mut text, range, inserted, length).then_some(Rebuilt { text, of_file })
     }
 
     /// Shows the user's editor's unsaved `text` of this file instead of the
@@ -110,9 +132,32 @@ impl Document {
     /// Nothing is written. True while following (false: it was the file's
     /// text).
     pub fn follow(&mut self, text: String) -> bool {
+        let difference = self.file.source.difference(&text);
+        self.follow_differing(text, difference)
+    }
+
+    /// [`Document::follow`], the editor's text made from what the app
+    /// knew of it ([`Document::text_from`]) or handed whole: where it is
+    /// an edit of the file's text, that edit is where it differs, not
+    /// compared again.
+    pub fn follow_rebuilt(&mut self, rebuilt: Rebuilt) -> bool {
+        match rebuilt.of_file {
+            Some(edit) => self.follow_differing(rebuilt.text, Some(edit)),
+            None => self.follow(rebuilt.text),
+        }
+    }
+
+    /// [`Document::follow`], `difference` the bytes of the file's text
+    /// that `text` replaces and how many replace them (`None`: none, it
+    /// is the file's text).
+    fn follow_differing(
+        &mut self,
+        text: String,
+        difference: Option<(Range<usize>, usize)>,
+    ) -> bool {
         // What differs from the file's text (the editor opened the file,
         // then typed): read from the file's layout, only there.
-        let Some((range, inserted)) = self.file.source.difference(&text) else {
+        let Some((range, inserted)) = difference else {
             self.unfollow();
             return false;
         };
@@ -325,6 +370,7 @@ mod tests {
         let edit = |doc: &Document, base: &EditorBase| {
             doc.text_from(base, at..at + 4, "0.5", saved.len() - 1)
         };
+        let edit = |doc: &Document, base: &EditorBase| edit(doc, base).map(|r| r.text);
         assert_eq!(edit(&doc, &base), None, "the file not read back yet");
         doc.unfollow();
         let scene = crate::scene::parse(&saved, std::path::Path::new("s.xml")).unwrap();
@@ -334,7 +380,23 @@ mod tests {
             edit(&doc, &doc.file_base()),
             Some(saved.replace("0.25", "0.5"))
         );
-        assert_eq!(doc.text_from(&doc.file_base(), at..at + 4, "0.5", 7), None);
+        assert!(
+            doc.text_from(&doc.file_base(), at..at + 4, "0.5", 7)
+                .is_none()
+        );
+        // Followed where the edit falls, not compared whole.
+        let rebuilt = doc.text_from(&doc.file_base(), at..at + 4, "0.5", saved.len() - 1);
+        assert_eq!(
+            rebuilt.as_ref().and_then(|r| r.of_file.clone()),
+            Some((at..at + 4, 3))
+        );
+        assert!(doc.follow_rebuilt(rebuilt.unwrap()));
+        assert_eq!(doc.scene().objects[0].material.ka, 0.5);
+        // An edit that changes nothing: the file's text.
+        let same = doc.text_from(&doc.file_base(), at..at + 4, "0.25", saved.len());
+        assert_eq!(same.as_ref().map(|r| &r.of_file), Some(&None));
+        assert!(!doc.follow_rebuilt(same.unwrap()));
+        assert!(!doc.is_following());
     }
 
     /// A text with an error keeps the last good scene with the error; the

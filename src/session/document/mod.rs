@@ -44,7 +44,7 @@ mod save;
 
 pub use disk::{FileRead, FingerprintError, PendingMerge, Reload, SaveError, fingerprint_file};
 use disk::{fingerprint, fingerprint_source};
-pub use follow::{EditorBase, Unfit};
+pub use follow::{EditorBase, Rebuilt, Unfit};
 use history::Step;
 pub use restore::{TextWriter, fingerprint_text};
 pub use save::{OwnWrites, SaveJob, SaveOutcome, SaveStep};
