@@ -127,10 +127,10 @@ impl Document {
 
     /// Shows the user's editor's unsaved `text` of this file instead of the
     /// document (which waits, unsaved edits and all): what `rayoflight lsp`
-    /// hands over. Read where it differs from the file's text. A text that does not load keeps the last one that did
-    /// on screen, with its error; the file's own text ends the following.
-    /// Nothing is written. True while following (false: it was the file's
-    /// text).
+    /// hands over, read where it differs from the file's text. A text
+    /// that does not load keeps the last one that did on screen, with its
+    /// error; the file's own text ends the following. Nothing is written.
+    /// True while following (false: it was the file's text).
     pub fn follow(&mut self, text: String) -> bool {
         let difference = self.file.source.difference(&text);
         self.follow_differing(text, difference)
