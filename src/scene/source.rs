@@ -4,7 +4,7 @@
 //! spheres' 214 MB of XML is held in about 21 MB, and read back a block at
 //! a time, in order ([`Source::reader`]) or whole ([`Source::text`]) where
 //! a use needs it. An editor's text of the file is compared with it a
-//! block at a time, on the cores ([`Source::is`], [`Source::difference`]).
+//! block at a time, on the cores ([`Source::is_near`], [`Source::difference`]).
 //!
 //! The text is held, not read again from the file, because the file may
 //! have changed since (another program's save, to be merged with the
@@ -204,14 +204,10 @@ impl Source {
         }
     }
 
-    /// Whether the text is `text`, compared a block at a time.
-    pub fn is(&self, text: &str) -> bool {
-        self.is_near(text, 0)
-    }
-
-    /// [`Source::is`], the block holding byte `at` compared first: where
-    /// a text was just edited there, a packed text is told apart from it
-    /// by unpacking one block, not all before it.
+    /// Whether the text is `text`, compared a block at a time, the block
+    /// holding byte `at` first: where a text was just edited there, a
+    /// packed text is told apart from it by unpacking one block, not all
+    /// before it.
     pub fn is_near(&self, text: &str, at: usize) -> bool {
         if text.len() != self.len() {
             return false;
@@ -239,6 +235,32 @@ impl Source {
                     .unwrap_or(0);
                 let same = |(block, theirs): &(&Block, &[u8])| block.unpack() == *theirs;
                 pieces.get(near).is_none_or(same) && pieces.iter().all(same)
+            }
+        }
+    }
+
+    /// The text's bytes `range` (cut to the text's end), unpacking only
+    /// the blocks that hold them.
+    pub fn bytes(&self, range: std::ops::Range<usize>) -> Cow<'_, [u8]> {
+        let end = range.end.min(self.len());
+        let start = range.start.min(end);
+        match &*self.0 {
+            Held::Whole(text) => Cow::Borrowed(&text.as_bytes()[start..end]),
+            Held::Packed { blocks, .. } => {
+                let mut bytes = Vec::with_capacity(end - start);
+                let mut at = 0;
+                for block in blocks {
+                    let next = at + block.len;
+                    if next > start && at < end {
+                        let text = block.unpack();
+                        bytes.extend_from_slice(&text[start.max(at) - at..end.min(next) - at]);
+                    }
+                    if next >= end {
+                        break;
+                    }
+                    at = next;
+                }
+                Cow::Owned(bytes)
             }
         }
     }
@@ -394,6 +416,30 @@ mod tests {
         text
     }
 
+    /// `text` packed in blocks of `sizes` bytes in turn (moved on to a
+    /// character's end), so that edits fall across their ends.
+    fn packed_in(text: &str, sizes: &[usize]) -> Source {
+        let mut blocks = Vec::new();
+        let mut rest = text;
+        for n in sizes.iter().cycle() {
+            if rest.is_empty() {
+                break;
+            }
+            let mut cut = (*n).min(rest.len());
+            while !rest.is_char_boundary(cut) {
+                cut += 1;
+            }
+            blocks.push(Block::pack(&rest.as_bytes()[..cut]));
+            rest = &rest[cut..];
+        }
+        Source::from_blocks(blocks)
+    }
+
+    /// Whether `source` holds `text`.
+    fn holds(source: &Source, text: &str) -> bool {
+        source.is_near(text, 0)
+    }
+
     #[test]
     fn a_large_text_is_packed_and_reads_back_the_same() {
         let text = big();
@@ -402,12 +448,12 @@ mod tests {
         assert!(source.held_bytes() < text.len() / 4, "{source:?}");
         assert_eq!(source.len(), text.len());
         assert_eq!(source.text(), text);
-        assert!(source.is(&text));
+        assert!(holds(&source, &text));
         let mut other = text.clone().into_bytes();
         let last = other.len() - 2;
         other[last] = b'X';
-        assert!(!source.is(std::str::from_utf8(&other).unwrap()));
-        assert!(!source.is(&text[1..]));
+        assert!(!holds(&source, std::str::from_utf8(&other).unwrap()));
+        assert!(!holds(&source, &text[1..]));
         // Read in odd sizes.
         let mut reader = source.reader();
         let mut back = Vec::new();
@@ -425,24 +471,27 @@ mod tests {
     #[test]
     fn blocks_of_any_size_make_the_text_they_packed() {
         let text = big();
-        let mut blocks = Vec::new();
-        let mut rest = text.as_str();
-        for n in [1usize, 17, 0, 65_536, 3_000_001].iter().cycle() {
-            if rest.is_empty() {
-                break;
-            }
-            let mut cut = (*n).min(rest.len());
-            while !rest.is_char_boundary(cut) {
-                cut += 1;
-            }
-            blocks.push(Block::pack(&rest.as_bytes()[..cut]));
-            rest = &rest[cut..];
+        let source = packed_in(&text, &[1, 17, 0, 65_536, 3_000_001]);
+        // Any piece, across blocks' ends or past the text's.
+        let n = text.len();
+        for range in [
+            0..0,
+            0..1,
+            1..19,
+            17..70_000,
+            n / 2..n / 2 + 5_000_000,
+            n - 3..n + 9,
+        ] {
+            let want = &text.as_bytes()[range.start.min(n)..range.end.min(n)];
+            assert_eq!(&*source.bytes(range.clone()), want, "{range:?}");
         }
-        let source = Source::from_blocks(blocks);
         assert_eq!(source.len(), text.len());
-        assert!(source.is(&text));
+        assert!(holds(&source, &text));
         assert_eq!(source.text(), text);
-        assert!(!source.is(&text.replace("<sphere/>\n</scene>", "<sphere/>\n</scenE>")));
+        assert!(!holds(
+            &source,
+            &text.replace("<sphere/>\n</scene>", "<sphere/>\n</scenE>")
+        ));
     }
 
     #[test]
@@ -453,7 +502,7 @@ mod tests {
         let mut back = String::new();
         source.reader().read_to_string(&mut back).unwrap();
         assert_eq!(back, "<scene/>");
-        assert!(source.is("<scene/>") && !source.is("<scene />"));
+        assert!(holds(&source, "<scene/>") && !holds(&source, "<scene />"));
         assert!(source.same(&source.clone()));
         assert!(!source.same(&Source::new("<scene/>".to_owned())));
     }
@@ -487,21 +536,8 @@ mod tests {
     #[test]
     fn the_difference_is_the_span_between_the_common_ends() {
         let text = big();
-        // Blocks of odd sizes, so edits fall across their ends.
-        let mut blocks = Vec::new();
-        let mut rest = text.as_str();
-        for n in [1usize, 65_536, 3_000_001, 777].iter().cycle() {
-            if rest.is_empty() {
-                break;
-            }
-            let mut cut = (*n).min(rest.len());
-            while !rest.is_char_boundary(cut) {
-                cut += 1;
-            }
-            blocks.push(Block::pack(&rest.as_bytes()[..cut]));
-            rest = &rest[cut..];
-        }
-        let sources = [Source::from_blocks(blocks), Source::new(text.clone())];
+        let packed = packed_in(&text, &[1, 65_536, 3_000_001, 777]);
+        let sources = [packed, Source::new(text.clone())];
         let n = text.len();
         let mut cases: Vec<String> = vec![text.clone(), String::new(), format!("{text}x")];
         cases.push(format!("x{text}"));

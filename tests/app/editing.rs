@@ -638,9 +638,9 @@ fn answer_within(
     said
 }
 
-/// An editor's text that is the file's (handed whole, or saved): its next
-/// change is taken from the file's text, not asked for whole again; a
-/// change that does not fit it is.
+/// An editor's text that is the file's (handed whole, or saved, read
+/// back or not yet): its next change is applied to the text kept, not
+/// asked for whole again; a change that does not fit it is.
 #[test]
 fn a_change_of_the_files_own_text_is_not_asked_for_again() {
     use rayoflight::desktop::editor_link::{self, Message};
@@ -664,24 +664,18 @@ fn a_change_of_the_files_own_text_is_not_asked_for_again() {
             length: text.len() - (end - at) + ka.len(),
         }
     };
-    editor_link::send(
-        &mut editor,
-        &Message::Buffer {
-            path: path.clone(),
-            text: SCENE.to_owned(),
-        },
-    )
-    .unwrap();
-    editor_link::send(&mut editor, &change(SCENE, "0.25")).unwrap();
-    step_until(
+    let buffer = Message::Buffer {
+        path: path.clone(),
+        text: SCENE.to_owned(),
+    };
+    editor_link::send(&mut editor, &buffer).unwrap();
+    let what = "the change of the file's text";
+    change_taken(
         &mut harness,
-        Duration::from_secs(5),
-        "the change of the file's text",
+        &mut editor,
+        &change(SCENE, "0.25"),
+        what,
         |app| shown_ka(app) == 0.25 && app.document().is_following(),
-    );
-    assert_eq!(
-        answer_within(&mut harness, &editor, Duration::from_millis(500)),
-        None
     );
     // The editor saves: the file read back, its next change taken from it.
     let saved = SCENE.replacen("ka=\"0.2\"", "ka=\"0.25\"", 1);
@@ -693,32 +687,67 @@ fn a_change_of_the_files_own_text_is_not_asked_for_again() {
         "the saved file read back",
         |app| shown_ka(app) == 0.25 && !app.document().is_following(),
     );
-    editor_link::send(&mut editor, &change(&saved, "0.3")).unwrap();
-    step_until(
+    let what = "the change of the saved text";
+    change_taken(
         &mut harness,
-        Duration::from_secs(5),
-        "the change of the saved text",
+        &mut editor,
+        &change(&saved, "0.3"),
+        what,
         |app| shown_ka(app) == 0.3 && app.document().is_following(),
     );
-    assert_eq!(
-        answer_within(&mut harness, &editor, Duration::from_millis(500)),
-        None
+    // Saved again and changed at once, before the file is read back: the
+    // change is applied to the text it saved.
+    let saved = saved.replacen("ka=\"0.25\"", "ka=\"0.3\"", 1);
+    std::fs::write(&path, &saved).unwrap();
+    editor_link::send(&mut editor, &Message::Released { path: path.clone() }).unwrap();
+    let what = "the change of the text saved, not read back";
+    change_taken(
+        &mut harness,
+        &mut editor,
+        &change(&saved, "0.4"),
+        what,
+        |app| shown_ka(app) == 0.4 && app.document().is_following(),
     );
-    // Back to the saved text, then a change that does not fit it.
-    let now = saved.replacen("ka=\"0.25\"", "ka=\"0.3\"", 1);
-    editor_link::send(&mut editor, &change(&now, "0.25")).unwrap();
+    let on_disk = rayoflight::session::document::fingerprint_file(&path).ok();
     step_until(
         &mut harness,
-        Duration::from_secs(5),
-        "the file's text again",
-        |app| shown_ka(app) == 0.25 && !app.document().is_following(),
+        Duration::from_secs(10),
+        "the file read back",
+        |app| app.document().disk_fingerprint() == on_disk,
     );
-    editor_link::send(&mut editor, &change(&now, "0.35")).unwrap();
+    // Back to the saved text, then a change of a text the app never had.
+    let now = saved.replacen("ka=\"0.3\"", "ka=\"0.4\"", 1);
+    let what = "the file's text again";
+    change_taken(
+        &mut harness,
+        &mut editor,
+        &change(&now, "0.3"),
+        what,
+        |app| shown_ka(app) == 0.3 && !app.document().is_following(),
+    );
+    let missed = saved.replacen("ka=\"0.3\"", "ka=\"0.375\"", 1);
+    editor_link::send(&mut editor, &change(&missed, "0.35")).unwrap();
     assert_eq!(
         answer_within(&mut harness, &editor, Duration::from_secs(5)),
         Some(Message::Resend { path: path.clone() })
     );
     assert_eq!(read(&path), saved, "nothing written");
+}
+
+/// Sends the editor's `change` and steps until the app `shows` it: the
+/// change applied to the text the app kept, the whole text not asked
+/// for.
+fn change_taken(
+    harness: &mut Harness<'_, RayOfLightApp>,
+    editor: &mut std::os::unix::net::UnixStream,
+    change: &rayoflight::desktop::editor_link::Message,
+    what: &str,
+    shows: impl Fn(&RayOfLightApp) -> bool,
+) {
+    rayoflight::desktop::editor_link::send(editor, change).unwrap();
+    step_until(harness, Duration::from_secs(5), what, shows);
+    let asked = answer_within(harness, editor, Duration::from_millis(500));
+    assert_eq!(asked, None, "{what}: the whole text asked for again");
 }
 
 /// The error banner lies over the picture: breaking the file and fixing

@@ -10,7 +10,7 @@ use super::{Background, RayOfLightApp};
 use crate::desktop::editor_link::apply_change;
 use crate::gui::panel::Selection;
 use crate::gui::study;
-use crate::session::document::{EditorBase, Rebuilt, Reload};
+use crate::session::document::{EditorBase, Followed, Rebuilt, Reload};
 use crate::session::pace::Pace;
 use crate::session::preview::RenderState;
 use crate::session::watcher::FileEvent;
@@ -254,11 +254,10 @@ impl RayOfLightApp {
                         let followed =
                             self.keeping_selection(|app| app.doc.follow_edit(range, &text, length));
                         match followed {
-                            Ok(true) => {}
+                            Ok(Followed::Shown) => {}
                             // This editor's text is the file's again.
-                            Ok(false) => {
+                            Ok(Followed::File(base)) => {
                                 self.editors.holding.pop();
-                                let base = self.doc.file_base();
                                 self.editors.know(connection, Some(base));
                                 self.show_newest_held();
                             }
@@ -281,12 +280,12 @@ impl RayOfLightApp {
                             None => self.ask_again(connection, path),
                         }
                     }
-                    // A text the app knows without holding it (the file's,
-                    // or one the editor saved), or was never handed (it
-                    // opened the file since): asked for whole again.
+                    // A text the app keeps off screen (the file's, or one
+                    // the editor saved), or was never handed (it opened
+                    // the file since): asked for whole again.
                     None => {
-                        let base = self.editors.bases.iter().find(|(c, _)| *c == connection);
-                        match base.and_then(|(_, b)| self.doc.text_from(b, range, &text, length)) {
+                        let base = self.editors.take(connection);
+                        match base.and_then(|b| self.doc.text_from(b, range, &text, length)) {
                             Some(text) => self.show_editor_text(connection, text),
                             None => self.ask_again(connection, path),
                         }
@@ -309,9 +308,14 @@ impl RayOfLightApp {
                 let on_screen = self.editors.holding.last().map(|(c, _)| *c);
                 // Saved (or closed): its next change, if any, is of the
                 // text it saved.
-                let base = match self.editors.holding.iter().find(|(c, _)| *c == connection) {
-                    Some((_, Some(held))) => Some(EditorBase::saved(held)),
-                    Some((_, None)) => self.doc.saved_base(),
+                let held = self
+                    .editors
+                    .holding
+                    .iter_mut()
+                    .find(|(c, _)| *c == connection);
+                let base = match held {
+                    Some((_, held @ Some(_))) => held.take().map(EditorBase::saved),
+                    Some((_, None)) => self.doc.take_saved_base(),
                     None => None,
                 };
                 if base.is_some() {
@@ -355,14 +359,13 @@ impl RayOfLightApp {
         self.editors.holding.retain(|(c, _)| *c != connection);
         // This editor's text is the newest: last in the list.
         match self.keeping_selection(|app| app.doc.follow_rebuilt(text)) {
-            true => {
+            Followed::Shown => {
                 self.editors.know(connection, None);
                 self.editors.holding.push((connection, None));
             }
             // This editor's text is the file's again (it saved): another
             // editor's unsaved text, if one holds any.
-            false => {
-                let base = self.doc.file_base();
+            Followed::File(base) => {
                 self.editors.know(connection, Some(base));
                 self.show_newest_held();
             }
@@ -395,8 +398,10 @@ impl RayOfLightApp {
             self.editors.holding.push((editor, None));
             return true;
         };
-        if self.keeping_selection(|app| app.doc.follow(text)) {
-            self.editors.holding.push((editor, None));
+        match self.keeping_selection(|app| app.doc.follow(text)) {
+            Followed::Shown => self.editors.holding.push((editor, None)),
+            // Its text is the file's after all.
+            Followed::File(base) => self.editors.know(editor, Some(base)),
         }
         true
     }

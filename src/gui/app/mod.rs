@@ -174,9 +174,9 @@ struct EditorLink {
     /// lets go, the one before is shown again, and the file only when none
     /// holds any.
     holding: Vec<(u64, Option<String>)>,
-    /// The editors whose text the app knows without holding it: the
-    /// file's, or the text they saved. A change of it is taken from there,
-    /// not asked for whole again.
+    /// The editors whose text is off screen and not unsaved: the file's,
+    /// or the text they saved, kept whole. A change of it is applied
+    /// there, not asked for whole again.
     bases: Vec<(u64, crate::session::document::EditorBase)>,
 }
 
@@ -188,6 +188,13 @@ impl EditorLink {
         if let Some(base) = base {
             self.bases.push((connection, base));
         }
+    }
+
+    /// What editor `connection`'s text is known as, taken (for a change
+    /// to be applied to it).
+    fn take(&mut self, connection: u64) -> Option<crate::session::document::EditorBase> {
+        let i = self.bases.iter().position(|(c, _)| *c == connection)?;
+        Some(self.bases.swap_remove(i).1)
     }
 }
 

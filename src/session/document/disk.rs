@@ -376,6 +376,7 @@ impl Document {
             Arc::new(labels),
         );
         self.file.layout = layout.map(Arc::new);
+        self.file.fingerprint = Some(fingerprint);
         self.file.clone()
     }
 

@@ -15,11 +15,18 @@
 //! read from where the file's load placed its children (its
 //! [`Layout`]), the rest of the scene the file's own
 //! (a million spheres: 70 ms, where reading the text whole took 2.6 s).
+//!
+//! An editor's text that is not on screen because it is the file's (handed
+//! whole, or an edit took it back there) or one it saved is kept whole, as
+//! it was when followed ([`EditorBase`]): its next change is applied there,
+//! not asked for whole again nor unpacked from the file's packed text, and
+//! where that text is known to be the file's, the change is read where it
+//! falls without comparing the two ([`Document::text_from`]).
 
 use std::ops::Range;
 use std::sync::Arc;
 
-use super::disk::{fingerprint, fingerprint_source};
+use super::disk::fingerprint;
 use super::{Document, Version, next_generation};
 use crate::desktop::editor_link::apply_change;
 use crate::scene::source::Source;
@@ -32,6 +39,11 @@ pub(super) struct Following {
     text: String,
     /// What is known of `text` (its scene as last read without error).
     reading: Reading,
+    /// The objects' labels of the text the reading last read without
+    /// error (or of the file's text it starts from)...
+    labels: Arc<names::Labels>,
+    /// ...unless a comment's marker was edited since.
+    labels_stale: bool,
     /// The scene of the last text that loaded, on screen.
     pub(super) version: Version,
 }
@@ -49,14 +61,24 @@ impl Following {
 #[error("an edit of the editor's text that does not fit the text held")]
 pub struct Unfit;
 
-/// What the app knows of an editor's text that is not on screen, to take
-/// an edit of it without being handed it whole again: the text of a
-/// [`Source`] (the file's, when the editor's text was the file's), or a
-/// text the editor saved, known by its fingerprint, found again as the
-/// file's once the file is read back.
-#[derive(Debug, Clone)]
-pub enum EditorBase {
-    Text(Source),
+/// An editor's text that is not on screen, held whole so that its next
+/// change is applied to it (not asked for whole again, nor unpacked from
+/// the file's), with what tells whether it is the file's text: then the
+/// change is read where it falls, without comparing the two.
+#[derive(Debug)]
+pub struct EditorBase {
+    text: String,
+    of: BaseOf,
+}
+
+/// What an [`EditorBase`]'s text is known to be.
+#[derive(Debug)]
+enum BaseOf {
+    /// The text of this [`Source`] (the file's, when the editor's text
+    /// was found equal to it).
+    Source(Source),
+    /// A text the editor saved, by its fingerprint: the file's once the
+    /// file is read back with it.
     Saved(u64),
 }
 
@@ -80,48 +102,65 @@ impl From<String> for Rebuilt {
     }
 }
 
+/// What following an editor's text came to ([`Document::follow`]).
+#[derive(Debug)]
+pub enum Followed {
+    /// Its text is on screen.
+    Shown,
+    /// It is the file's text: the document is on screen, and this is
+    /// what the editor's next change is of.
+    File(EditorBase),
+}
+
+impl Followed {
+    /// Whether the editor's text is on screen.
+    pub fn is_shown(&self) -> bool {
+        matches!(self, Followed::Shown)
+    }
+}
+
 impl EditorBase {
-    /// A text the editor saved.
-    pub fn saved(text: &str) -> EditorBase {
-        EditorBase::Saved(fingerprint(text.as_bytes()))
+    /// A text the editor saved (its fingerprint made here, once).
+    pub fn saved(text: String) -> EditorBase {
+        let of = BaseOf::Saved(fingerprint(text.as_bytes()));
+        EditorBase { text, of }
     }
 }
 
 impl Document {
-    /// An editor's text is the file's (its whole text was, or an edit
-    /// took it back there): what its next edit is of.
-    pub fn file_base(&self) -> EditorBase {
-        EditorBase::Text(self.file.source.clone())
+    /// An editor's `text`, which is the file's (its whole text was, or an
+    /// edit took it back there): what its next edit is of.
+    fn file_base(&self, text: String) -> EditorBase {
+        let of = BaseOf::Source(self.file.source.clone());
+        EditorBase { text, of }
     }
 
-    /// The editor's text on screen, which it saved: what its next edit is
-    /// of. `None` while not following.
-    pub fn saved_base(&self) -> Option<EditorBase> {
-        self.editor.as_ref().map(|f| EditorBase::saved(&f.text))
+    /// The editor's text on screen, which it saved, taken (the document
+    /// goes on following it, empty, until told otherwise): what its next
+    /// edit is of. `None` while not following.
+    pub fn take_saved_base(&mut self) -> Option<EditorBase> {
+        self.take_editor_text().map(EditorBase::saved)
     }
 
     /// An editor's text, `base`'s with a change (the bytes `range`
     /// replaced by `inserted`, making `length` bytes), to follow
-    /// ([`Document::follow_rebuilt`]); `None` where it is not at hand (a
-    /// save not read back yet) or the change does not fit.
+    /// ([`Document::follow_rebuilt`]); `None` where the change does not
+    /// fit. Where `base` is known to be the file's text, the change is
+    /// said to be an edit of it.
     pub fn text_from(
         &self,
-        base: &EditorBase,
+        base: EditorBase,
         range: Range<usize>,
         inserted: &str,
         length: usize,
     ) -> Option<Rebuilt> {
-        let file = &self.file.source;
-        let source = match base {
-            EditorBase::Text(source) => source,
-            EditorBase::Saved(saved) => ((length + range.len()).checked_sub(inserted.len())
-                == Some(file.len())
-                && fingerprint_source(file) == *saved)
-                .then_some(file)?,
+        let EditorBase { mut text, of } = base;
+        let is_file = match of {
+            BaseOf::Source(source) => source.same(&self.file.source),
+            BaseOf::Saved(saved) => self.file.fingerprint == Some(saved),
         };
-        let mut text = source.text().into_owned();
         let same = text.get(range.clone()) == Some(inserted);
-        let of_file = (source.same(file) && !same).then(|| (range.clone(), inserted.len()));
+        let of_file = (is_file && !same).then(|| (range.clone(), inserted.len()));
         apply_change(&mut text, range, inserted, length).then_some(Rebuilt { text, of_file })
     }
 
@@ -130,8 +169,7 @@ impl Document {
     /// hands over, read where it differs from the file's text. A text
     /// that does not load keeps the last one that did on screen, with its
     /// error; the file's own text ends the following. Nothing is written.
-    /// True while following (false: it was the file's text).
-    pub fn follow(&mut self, text: String) -> bool {
+    pub fn follow(&mut self, text: String) -> Followed {
         let difference = self.file.source.difference(&text);
         self.follow_differing(text, difference)
     }
@@ -140,7 +178,7 @@ impl Document {
     /// knew of it ([`Document::text_from`]) or handed whole: where it is
     /// an edit of the file's text, that edit is where it differs, not
     /// compared again.
-    pub fn follow_rebuilt(&mut self, rebuilt: Rebuilt) -> bool {
+    pub fn follow_rebuilt(&mut self, rebuilt: Rebuilt) -> Followed {
         match rebuilt.of_file {
             Some(edit) => self.follow_differing(rebuilt.text, Some(edit)),
             None => self.follow(rebuilt.text),
@@ -154,12 +192,12 @@ impl Document {
         &mut self,
         text: String,
         difference: Option<(Range<usize>, usize)>,
-    ) -> bool {
+    ) -> Followed {
         // What differs from the file's text (the editor opened the file,
         // then typed): read from the file's layout, only there.
         let Some((range, inserted)) = difference else {
             self.unfollow();
-            return false;
+            return Followed::File(self.file_base(text));
         };
         let version = match self.editor.take() {
             Some(was) => was.version,
@@ -172,28 +210,36 @@ impl Document {
             layout.unwrap_or(&Layout::default()),
             self.file.source_scene.clone(),
         );
+        // The file's labels, unless the file's bytes it replaces touch a
+        // comment's marker.
+        let near = range.start.saturating_sub(3)..range.end + 3;
+        let replaced = self.file.source.bytes(near);
+        let labels_stale =
+            has_marker(&replaced) || has_marker(&text.as_bytes()[range.start..][..inserted]);
         reading.edited(range, inserted);
         let mut following = Following {
             text,
             reading,
+            labels: Arc::clone(&self.file.labels),
+            labels_stale,
             version,
         };
-        self.read_following(&mut following, true);
+        self.read_following(&mut following);
         self.editor = Some(following);
-        true
+        Followed::Shown
     }
 
     /// The editor's text changed: the bytes `range` of the text followed
     /// are now `inserted`, making it `length` bytes long. Reads again only
-    /// what the edit touches. True while following (false: the text is
-    /// the file's again); [`Unfit`] where the edit does not fit the text
-    /// held, which is left as it was.
+    /// what the edit touches ([`Followed::File`]: the text is the file's
+    /// again); [`Unfit`] where the edit does not fit the text held, which
+    /// is left as it was.
     pub fn follow_edit(
         &mut self,
         range: Range<usize>,
         inserted: &str,
         length: usize,
-    ) -> Result<bool, Unfit> {
+    ) -> Result<Followed, Unfit> {
         let Some(mut following) = self.editor.take() else {
             return Err(Unfit);
         };
@@ -202,9 +248,7 @@ impl Document {
         let window = bytes
             .get(range.start.saturating_sub(3)..(range.end + 3).min(bytes.len()))
             .unwrap_or_default();
-        let marker =
-            |w: &[u8]| w.windows(4).any(|w| w == b"<!--") || w.windows(3).any(|w| w == b"-->");
-        let cut_marker = marker(window) || marker(inserted.as_bytes());
+        let cut_marker = has_marker(window) || has_marker(inserted.as_bytes());
         if !apply_change(&mut following.text, range.clone(), inserted, length) {
             self.editor = Some(following);
             return Err(Unfit);
@@ -212,27 +256,28 @@ impl Document {
         if self.file.source.is_near(&following.text, range.start) {
             // Back to the document (its error, if the last text had one,
             // goes with the text).
+            let text = std::mem::take(&mut following.text);
             self.editor = Some(following);
             self.unfollow();
-            return Ok(false);
+            return Ok(Followed::File(self.file_base(text)));
         }
         following.reading.edited(range, inserted.len());
-        self.read_following(&mut following, cut_marker);
+        following.labels_stale |= cut_marker;
+        self.read_following(&mut following);
         self.editor = Some(following);
-        Ok(true)
+        Ok(Followed::Shown)
     }
 
     /// Reads `following`'s text where its reading needs (whole, or where
     /// the edits since fall), and puts its scene on screen, or its error
-    /// in the banner over the last scene that loaded. `labels_stale`: a
-    /// comment's marker was edited.
-    fn read_following(&mut self, following: &mut Following, labels_stale: bool) {
+    /// in the banner over the last scene that loaded.
+    fn read_following(&mut self, following: &mut Following) {
         let reading = &mut following.reading;
         let found = reading.check(&following.text, None);
         // (A text read without error has its scene kept.)
         match found.map(|()| reading.scene().cloned()) {
             Ok(Some(scene)) => {
-                let stale = labels_stale
+                let stale = following.labels_stale
                     || match reading.reread() {
                         Some(Reread::Children {
                             text,
@@ -245,10 +290,11 @@ impl Document {
                         }
                         _ => true,
                     };
-                let labels = match stale {
-                    true => Arc::new(names::object_labels(&following.text)),
-                    false => Arc::clone(&following.version.labels),
-                };
+                if stale {
+                    following.labels = Arc::new(names::object_labels(&following.text));
+                    following.labels_stale = false;
+                }
+                let labels = Arc::clone(&following.labels);
                 following.version = Version::new(Source::default(), scene, labels);
                 self.editor_error = None;
             }
@@ -282,6 +328,11 @@ impl Document {
     }
 }
 
+/// Whether `bytes` hold a comment's marker, opening or closing.
+fn has_marker(bytes: &[u8]) -> bool {
+    bytes.windows(4).any(|w| w == b"<!--") || bytes.windows(3).any(|w| w == b"-->")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -304,13 +355,14 @@ mod tests {
     fn edits_give_the_scene_and_labels_of_the_text() {
         let (_dir, mut doc) = open();
         let mut text = TEXT.replace("ka=\"0.2\"", "ka=\"0.25\"");
-        assert!(doc.follow(text.clone()));
+        assert!(doc.follow(text.clone()).is_shown());
         assert_eq!(doc.scene().objects[0].material.ka, 0.25);
         let mut edit = |doc: &mut Document, from: &str, to: &str| {
             let at = text.find(from).unwrap();
             text.replace_range(at..at + from.len(), to);
             doc.follow_edit(at..at + from.len(), to, text.len())
                 .unwrap()
+                .is_shown()
         };
         assert!(edit(&mut doc, "ka=\"0.3\"", "ka=\"0.35\""));
         assert_eq!(doc.scene().objects[1].material.ka, 0.35);
@@ -320,6 +372,43 @@ mod tests {
         assert!(edit(&mut doc, "x=\"1\"", "x=\"9\""));
         assert_eq!(doc.scene().lights[0].position.x, 9.0);
         assert_eq!(doc.error(), None);
+    }
+
+    /// A comment cut by an edit whose text has an error: once an edit
+    /// elsewhere fixes the error, the labels are read again, the comment
+    /// gone. A first text that cuts the file's comment likewise.
+    #[test]
+    fn a_comment_cut_while_the_text_has_an_error_still_changes_the_labels() {
+        let (_dir, mut doc) = open();
+        let mut text = TEXT.to_owned();
+        let cut = "<!-- é ball -->\n  <sphere><material ka=\"0.3\"";
+        let at = text.find(cut).unwrap();
+        let put = "<sphere><material ka=\"0.3x\"";
+        text.replace_range(at..at + cut.len(), put);
+        // The first text: the file's, with the comment cut and an error.
+        assert!(doc.follow(text.clone()).is_shown());
+        assert!(doc.error().is_some());
+        assert_eq!(doc.object_label(1), "#2 é ball sphere");
+        let x = at + put.find('x').unwrap();
+        let fixed = doc.follow_edit(x..x + 1, "", text.len() - 1);
+        assert!(fixed.unwrap().is_shown());
+        assert_eq!(doc.error(), None);
+        assert_eq!(doc.scene().objects[1].material.ka, 0.3);
+        assert!(
+            !doc.object_label(1).contains("ball"),
+            "{}",
+            doc.object_label(1)
+        );
+        // Followed from the file's text again, the comment cut and no
+        // error: the labels without it at once.
+        doc.unfollow();
+        text.replace_range(x..x + 1, "");
+        assert!(doc.follow(text).is_shown());
+        assert!(
+            !doc.object_label(1).contains("ball"),
+            "{}",
+            doc.object_label(1)
+        );
     }
 
     /// The editor's first text, the file's with an edit, is read from
@@ -332,7 +421,7 @@ mod tests {
         let (_dir, mut doc) = open();
         assert!(doc.file.layout.as_ref().is_some_and(|l| l.children() == 4));
         let text = TEXT.replace("ka=\"0.3\"", "ka=\"0.35\"");
-        assert!(doc.follow(text.clone()));
+        assert!(doc.follow(text.clone()).is_shown());
         let reading = &doc.editor.as_ref().unwrap().reading;
         assert!(matches!(
             reading.reread(),
@@ -350,52 +439,57 @@ mod tests {
         assert_eq!(doc.object_label(1), "#2 é ball sphere");
         // Whole, without the mark.
         let bare = text.strip_prefix('\u{feff}').unwrap().to_owned();
-        assert!(doc.follow(bare));
+        assert!(doc.follow(bare).is_shown());
         let reading = &doc.editor.as_ref().unwrap().reading;
         assert_eq!(reading.reread(), Some(&Reread::Whole));
         assert_eq!(doc.scene(), &parsed);
         assert!(Arc::ptr_eq(&doc.scene().objects[0], &file[0]));
     }
 
-    /// An edit of a text the editor saved is taken from the file once the
-    /// file is read back with that text, not before; an edit of the
-    /// file's own text, where it fits.
+    /// An edit of a text the editor saved is applied to the text kept:
+    /// compared with the file's before the file is read back with it,
+    /// read where it falls after; so is an edit of the file's own text.
     #[test]
-    fn an_edit_of_a_saved_text_waits_for_the_file_read_back() {
+    fn an_edit_of_a_saved_text_is_the_files_once_read_back() {
         let (_dir, mut doc) = open();
         let saved = TEXT.replace("ka=\"0.2\"", "ka=\"0.25\"");
-        assert!(doc.follow(saved.clone()));
-        let base = doc.saved_base().expect("following");
+        assert!(doc.follow(saved.clone()).is_shown());
         let at = saved.find("0.25").unwrap();
-        let edit = |doc: &Document, base: &EditorBase| {
-            doc.text_from(base, at..at + 4, "0.5", saved.len() - 1)
+        let edited = saved.replace("0.25", "0.5");
+        let edit = |doc: &Document, base| {
+            let rebuilt = doc.text_from(base, at..at + 4, "0.5", saved.len() - 1);
+            rebuilt.map(|r: Rebuilt| (r.text, r.of_file))
         };
-        let edit = |doc: &Document, base: &EditorBase| edit(doc, base).map(|r| r.text);
-        assert_eq!(edit(&doc, &base), None, "the file not read back yet");
+        // Not read back yet: where it differs is not known.
+        let base = doc.take_saved_base().expect("following");
+        assert_eq!(edit(&doc, base), Some((edited.clone(), None)));
         doc.unfollow();
         let scene = crate::scene::parse(&saved, std::path::Path::new("s.xml")).unwrap();
         doc.file_loaded(saved.clone(), scene);
-        assert_eq!(edit(&doc, &base), Some(saved.replace("0.25", "0.5")));
+        let base = EditorBase::saved(saved.clone());
         assert_eq!(
-            edit(&doc, &doc.file_base()),
-            Some(saved.replace("0.25", "0.5"))
+            edit(&doc, base),
+            Some((edited.clone(), Some((at..at + 4, 3))))
         );
-        assert!(
-            doc.text_from(&doc.file_base(), at..at + 4, "0.5", 7)
-                .is_none()
-        );
+        let base = doc.file_base(saved.clone());
+        assert_eq!(edit(&doc, base), Some((edited, Some((at..at + 4, 3)))));
+        // A change that does not fit is refused.
+        let base = doc.file_base(saved.clone());
+        assert!(doc.text_from(base, at..at + 4, "0.5", 7).is_none());
         // Followed where the edit falls, not compared whole.
-        let rebuilt = doc.text_from(&doc.file_base(), at..at + 4, "0.5", saved.len() - 1);
-        assert_eq!(
-            rebuilt.as_ref().and_then(|r| r.of_file.clone()),
-            Some((at..at + 4, 3))
-        );
-        assert!(doc.follow_rebuilt(rebuilt.unwrap()));
+        let base = doc.file_base(saved.clone());
+        let rebuilt = doc.text_from(base, at..at + 4, "0.5", saved.len() - 1);
+        assert!(doc.follow_rebuilt(rebuilt.unwrap()).is_shown());
         assert_eq!(doc.scene().objects[0].material.ka, 0.5);
-        // An edit that changes nothing: the file's text.
-        let same = doc.text_from(&doc.file_base(), at..at + 4, "0.25", saved.len());
+        // A change that changes nothing: the file's text, kept for the
+        // next change.
+        let base = doc.file_base(saved.clone());
+        let same = doc.text_from(base, at..at + 4, "0.25", saved.len());
         assert_eq!(same.as_ref().map(|r| &r.of_file), Some(&None));
-        assert!(!doc.follow_rebuilt(same.unwrap()));
+        match doc.follow_rebuilt(same.unwrap()) {
+            Followed::File(base) => assert_eq!(base.text, saved),
+            Followed::Shown => panic!("the file's own text is not followed"),
+        }
         assert!(!doc.is_following());
     }
 
@@ -406,23 +500,25 @@ mod tests {
     fn back_to_the_files_text_ends_the_following_and_its_error() {
         let (_dir, mut doc) = open();
         let changed = TEXT.replace("ka=\"0.2\"", "ka=\"0.25\"");
-        assert!(doc.follow(changed.clone()));
+        assert!(doc.follow(changed.clone()).is_shown());
         let at = changed.find("ka=\"0.25\"").unwrap() + 4;
         // `0.25` → `0.25x`: not a number.
         assert_eq!(
-            doc.follow_edit(at + 4..at + 4, "x", changed.len() + 1),
+            doc.follow_edit(at + 4..at + 4, "x", changed.len() + 1)
+                .map(|f| f.is_shown()),
             Ok(true)
         );
         assert!(doc.error().is_some());
         assert_eq!(doc.scene().objects[0].material.ka, 0.25);
         let generation = doc.generation();
         // `0.25x` → `0.2`: the file's text.
-        assert_eq!(doc.follow_edit(at..at + 5, "0.2", TEXT.len()), Ok(false));
+        let back = doc.follow_edit(at..at + 5, "0.2", TEXT.len());
+        assert!(matches!(back, Ok(Followed::File(base)) if base.text == TEXT));
         assert!(!doc.is_following());
         assert_eq!(doc.error(), None);
         assert_ne!(doc.generation(), generation);
         // An edit that does not fit what is held is refused.
-        assert!(doc.follow(changed.clone()));
-        assert_eq!(doc.follow_edit(0..1, "x", 5), Err(Unfit));
+        assert!(doc.follow(changed.clone()).is_shown());
+        assert!(matches!(doc.follow_edit(0..1, "x", 5), Err(Unfit)));
     }
 }

@@ -44,7 +44,7 @@ mod save;
 
 pub use disk::{FileRead, FingerprintError, PendingMerge, Reload, SaveError, fingerprint_file};
 use disk::{fingerprint, fingerprint_source};
-pub use follow::{EditorBase, Rebuilt, Unfit};
+pub use follow::{EditorBase, Followed, Rebuilt, Unfit};
 use history::Step;
 pub use restore::{TextWriter, fingerprint_text};
 pub use save::{OwnWrites, SaveJob, SaveOutcome, SaveStep};
@@ -90,6 +90,9 @@ pub(crate) struct Version {
     /// Where the root's children sit in `source`, where the load said
     /// (following an editor's text of the file starts from it).
     layout: Option<Arc<scene::Layout>>,
+    /// The fingerprint of `source`'s text, where it was read from a file
+    /// (an editor's saved text is known again as the file's by it).
+    fingerprint: Option<u64>,
 }
 
 impl Version {
@@ -100,6 +103,7 @@ impl Version {
             edited: Edited::new(scene),
             labels,
             layout: None,
+            fingerprint: None,
         }
     }
 
@@ -187,7 +191,10 @@ impl Document {
         disk: u64,
         state: FileState,
     ) -> Document {
-        let file = Version::new(text, scene, Arc::new(labels));
+        let file = Version {
+            fingerprint: Some(disk),
+            ..Version::new(text, scene, Arc::new(labels))
+        };
         Document {
             path,
             disk: Some(disk),
