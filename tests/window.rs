@@ -15,8 +15,12 @@
 //! the CLI renders to what the screen shows, and the idle app uses under
 //! 5 % of a core.
 //!
+//! Under Wayland (weston, nested in an Xvfb of its own, the app's X display
+//! unset): the app renders, follows a save, and draws its title on the
+//! title bar it draws itself.
+//!
 //! Needs Xvfb, ImageMagick and xdotool (`apt-get install xvfb imagemagick
-//! xdotool libgl1-mesa-dri`); `.ci/run` installs them. Fails, never skips,
+//! xdotool libgl1-mesa-dri weston`); `.ci/run` installs them. Fails, never skips,
 //! when they are missing.
 #![cfg(feature = "gui")]
 
@@ -146,6 +150,17 @@ fn start_app(path: &Path, display: &str, home: &Path) -> Killed {
 }
 
 fn start_app_with(path: &Path, display: &str, home: &Path, vars: &[(&str, &str)]) -> Killed {
+    start_app_on(path, Screen::X(display), home, vars)
+}
+
+/// Where the app opens its window: an X display, or a Wayland compositor
+/// (the app's X display then unset).
+enum Screen<'a> {
+    X(&'a str),
+    Wayland(&'a Weston),
+}
+
+fn start_app_on(path: &Path, screen: Screen<'_>, home: &Path, vars: &[(&str, &str)]) -> Killed {
     // What the app says goes beside the screenshots (`SCENE.stderr`, each
     // start appended), for a test that fails to be read.
     let shots = shots_folder();
@@ -164,11 +179,17 @@ fn start_app_with(path: &Path, display: &str, home: &Path, vars: &[(&str, &str)]
         format!("== started at {} s (Unix time)\n", since_epoch.as_secs()).as_bytes(),
     )
     .unwrap();
-    let app = Command::new(env!("CARGO_BIN_EXE_rayoflight"))
+    let mut app = Command::new(env!("CARGO_BIN_EXE_rayoflight"));
+    match screen {
+        Screen::X(display) => app.env("DISPLAY", display).env_remove("WAYLAND_DISPLAY"),
+        Screen::Wayland(weston) => app
+            .env("WAYLAND_DISPLAY", &weston.socket)
+            .env("XDG_RUNTIME_DIR", weston.runtime.path())
+            .env_remove("DISPLAY"),
+    };
+    let app = app
         .arg(path)
         .envs(vars.iter().copied())
-        .env("DISPLAY", display)
-        .env_remove("WAYLAND_DISPLAY")
         .env("XDG_CONFIG_HOME", home)
         .env("XDG_STATE_HOME", home.join("state"))
         .env("LIBGL_ALWAYS_SOFTWARE", "1")
@@ -276,9 +297,20 @@ fn wait_for(
     what: &str,
     ok: impl Fn(&image::RgbImage) -> bool,
 ) -> Duration {
+    wait_for_shots(&|at| screenshot(display, at), shot, limit, what, ok)
+}
+
+/// [`wait_for`], the screenshots taken by `shoot` (saved where it is told).
+fn wait_for_shots(
+    shoot: &dyn Fn(&Path) -> image::RgbImage,
+    shot: &Path,
+    limit: Duration,
+    what: &str,
+    ok: impl Fn(&image::RgbImage) -> bool,
+) -> Duration {
     let start = Instant::now();
     loop {
-        let image = screenshot(display, shot);
+        let image = shoot(shot);
         if ok(&image) {
             return start.elapsed();
         }
@@ -290,6 +322,166 @@ fn wait_for(
         );
         std::thread::sleep(Duration::from_millis(50));
     }
+}
+
+/// A weston of its own, on an Xvfb of its own (weston's X11 back end: the
+/// app sees only Wayland, and the screen is the X server's, for `import`
+/// to take and, later, xdotool to type into), drawing with its GL
+/// renderer on Mesa's software OpenGL, on a socket in a runtime folder of
+/// its own; no panel, a plain background. Not weston's headless back
+/// end: it has no seat (nothing could type), its pixman renderer crashes
+/// on winit's Adwaita title bar (in `pixman_image_composite32`: weston
+/// 10's bug), and its GL renderer's screenshots (`weston-screenshooter`)
+/// were not made reliable here.
+struct Weston {
+    runtime: tempfile::TempDir,
+    socket: String,
+    display: String,
+    _weston: Killed,
+    _xvfb: Killed,
+}
+
+/// The background's colour (`weston.ini`).
+const BACKGROUND: [u8; 3] = [0x20, 0x40, 0x80];
+
+impl Weston {
+    fn start() -> Weston {
+        let (xvfb, display) = start_xvfb();
+        let runtime = tempfile::tempdir().unwrap();
+        let ini = runtime.path().join("weston.ini");
+        std::fs::write(
+            &ini,
+            "[core]\nidle-time=0\n[shell]\nbackground-color=0xff204080\npanel-position=none\nlocking=false\n",
+        )
+        .unwrap();
+        let socket = "rayoflight-test".to_owned();
+        // Beside the screenshots, for a test that fails to be read.
+        let log = shots_folder().join("weston.log");
+        std::fs::create_dir_all(shots_folder()).unwrap();
+        let child = Command::new("weston")
+            .args(["--backend=x11-backend.so", "--width=1280", "--height=900"])
+            .arg(format!("--socket={socket}"))
+            .arg(format!("--config={}", ini.display()))
+            .env("DISPLAY", &display)
+            .env("XDG_RUNTIME_DIR", runtime.path())
+            .env("LIBGL_ALWAYS_SOFTWARE", "1")
+            .env_remove("WAYLAND_DISPLAY")
+            .stdout(Stdio::null())
+            .stderr(Stdio::from(std::fs::File::create(&log).unwrap()))
+            .spawn()
+            .expect("weston runs (apt-get install weston)");
+        let mut weston = Killed(child);
+        let start = Instant::now();
+        while !runtime.path().join(&socket).exists() {
+            let ended = weston.0.try_wait().ok().flatten();
+            if ended.is_some() || start.elapsed() > Duration::from_secs(20) {
+                panic!(
+                    "weston did not start ({ended:?}): {}",
+                    std::fs::read_to_string(&log).unwrap_or_default()
+                );
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        // Its window shows what its buffers held before the shell's
+        // background is drawn (all red, at times).
+        let shot = shots_folder().join("weston.png");
+        let ok = |image: &image::RgbImage| count(image, BACKGROUND) > 100_000;
+        wait_for(
+            &display,
+            &shot,
+            Duration::from_secs(20),
+            "weston's background",
+            ok,
+        );
+        Weston {
+            runtime,
+            socket,
+            display,
+            _weston: weston,
+            _xvfb: xvfb,
+        }
+    }
+}
+
+/// The pixels of the title bar's middle third that stand out from the
+/// bar's own colour: its title's, where it has one. The bar is the band
+/// just above the app's first row (the menu bar, egui's dark panel
+/// colour), as wide as the window. (On winit's plain bar, 0; on
+/// Adwaita's with the title, about 1300.)
+fn title_pixels(image: &image::RgbImage) -> usize {
+    let panel = |p: &image::Rgb<u8>| p.0.iter().all(|&c| c.abs_diff(27) <= 3);
+    let (mut left, mut right, mut top) = (u32::MAX, 0, u32::MAX);
+    for (x, y, p) in image.enumerate_pixels() {
+        if panel(p) {
+            (left, right, top) = (left.min(x), right.max(x), top.min(y));
+        }
+    }
+    if right <= left || top < 40 {
+        return 0;
+    }
+    // The bar's middle rows, where a title's letters sit (Adwaita's bar
+    // is 35 pixels high, winit's plain one 26).
+    let rows = top - 22..top - 8;
+    let columns = left + (right - left) / 3..left + 2 * (right - left) / 3;
+    let band: Vec<[u8; 3]> = rows
+        .flat_map(|y| columns.clone().map(move |x| (x, y)))
+        .map(|(x, y)| image.get_pixel(x, y).0)
+        .collect();
+    let mut counts = std::collections::HashMap::new();
+    for p in &band {
+        *counts.entry(*p).or_insert(0usize) += 1;
+    }
+    let Some((bar, _)) = counts.into_iter().max_by_key(|(_, n)| *n) else {
+        return 0;
+    };
+    band.iter()
+        .filter(|p| (0..3).any(|c| p[c].abs_diff(bar[c]) > 60))
+        .count()
+}
+
+/// Under Wayland, where weston (like GNOME) draws no title bars: the app,
+/// its X display unset, opens its window, renders the scene, follows a
+/// save of the file from outside, shows its title on the bar it draws
+/// itself, and ends cleanly on SIGTERM.
+#[test]
+fn under_wayland_the_window_renders_follows_the_file_and_shows_its_title() {
+    if !common::tool("weston", "weston") {
+        return;
+    }
+    let _one = ONE_AT_A_TIME
+        .lock()
+        .unwrap_or_else(std::sync::PoisonError::into_inner);
+    let weston = Weston::start();
+    let home = tempfile::tempdir().unwrap();
+    let path = home.path().join("wayland.xml");
+    std::fs::write(&path, scene(RED)).unwrap();
+    let mut app = start_app_on(&path, Screen::Wayland(&weston), home.path(), &[]);
+    let shots = shots_folder();
+    let shoot = |at: &Path| screenshot(&weston.display, at);
+    let shot = shots.join("wayland-red.png");
+    let what = "the red sphere, under weston";
+    wait_for_shots(&shoot, &shot, Duration::from_secs(30), what, |image| {
+        count(image, RED) > 20_000
+    });
+    let image = shoot(&shot);
+    let title = title_pixels(&image);
+    assert!(
+        title > 100,
+        "the title bar shows a title ({title} pixels stand out in its middle); see {}",
+        shot.display()
+    );
+    // A save from outside, by rename: the new colour within 2 s (3x
+    // allowed).
+    atomic_save(&path, &scene(GREEN));
+    let shot = shots.join("wayland-green.png");
+    let what = "the green sphere after the save, under weston";
+    let took = wait_for_shots(&shoot, &shot, Duration::from_secs(6), what, |image| {
+        count(image, GREEN) > 20_000 && count(image, RED) == 0
+    });
+    eprintln!("save to screen under weston: {took:?}");
+    let (status, took) = app.terminate(Duration::from_secs(3));
+    eprintln!("SIGTERM to exit under weston: {took:?}");
+    assert!(status.success(), "a clean exit: {status:?}");
 }
 
 #[test]
