@@ -17,7 +17,9 @@
 //!
 //! Under Wayland (weston, nested in an Xvfb of its own, the app's X display
 //! unset): the app renders, follows a save, and draws its title on the
-//! title bar it draws itself.
+//! title bar it draws itself. Under X11 the window names its class and
+//! its title as window managers read them (`WM_CLASS`, `WM_NAME` in
+//! Latin-1, `_NET_WM_NAME` in UTF-8).
 //!
 //! Needs Xvfb, ImageMagick and xdotool (`apt-get install xvfb imagemagick
 //! xdotool libgl1-mesa-dri weston`); `.ci/run` installs them. Fails, never skips,
@@ -922,21 +924,6 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
     );
     let window = app_window(&xdotool);
     xdotool(&["windowfocus", "--sync", &window]);
-    // The window has the app's icon and the desktop entry's class (an
-    // icon of 256 × 256 overflowed a request: the property came empty).
-    if common::tool("xprop", "x11-utils") {
-        let props = Command::new("xprop")
-            .args(["-id", &window, "WM_CLASS", "_NET_WM_ICON"])
-            .env("DISPLAY", display)
-            .output()
-            .unwrap();
-        let props = String::from_utf8_lossy(&props.stdout);
-        assert!(
-            props.contains("\"io.github.rayoflight.RayOfLight\""),
-            "{props:.200}"
-        );
-        assert!(props.contains("Icon (128 x 128)"), "{props:.200}");
-    }
     let recorded = |what: &str| -> Vec<String> {
         let start = Instant::now();
         loop {
@@ -972,6 +959,90 @@ fn open_in_editor_starts_the_editor_at_the_selected_objects_line() {
         [file, line.to_string(), column.to_string()]
     );
     screenshot(display, &shots.join("editor-2.png"));
+}
+
+/// A property of an X window as its bytes (`xprop`'s hexadecimal format,
+/// for the bytes themselves and not a rendering of them).
+fn x_property(display: &str, window: &str, name: &str) -> Vec<u8> {
+    let out = Command::new("xprop")
+        .args(["-id", window, "-f", name, "8x", " $0+\n", name])
+        .env("DISPLAY", display)
+        .output()
+        .expect("xprop runs (apt-get install x11-utils)");
+    let out = String::from_utf8_lossy(&out.stdout);
+    out.split_once(' ')
+        .map(|(_, bytes)| bytes)
+        .unwrap_or_default()
+        .split(", ")
+        .filter_map(|b| u8::from_str_radix(b.trim().trim_start_matches("0x"), 16).ok())
+        .collect()
+}
+
+/// What a window manager reads on X11: the app's icon; `WM_CLASS` with
+/// the program's name as instance and the desktop entry's id as class
+/// (the instance was empty); the title as UTF-8 in `_NET_WM_NAME` and in
+/// Latin-1 in `WM_NAME` (it held the UTF-8 bytes, shown as `â€”`), also
+/// once the title changes (an edit adds " •").
+#[test]
+fn on_x11_the_window_has_its_icon_its_class_and_its_title_in_both_encodings() {
+    if !common::tool("xprop", "x11-utils") {
+        return;
+    }
+    let opened = Window::open("scène.xml", TWO_SPHERES);
+    let (shots, display) = (&opened.shots, &opened.display);
+    let xdotool = |args: &[&str]| xdotool_on(display, args);
+    wait_for(
+        display,
+        &shots.join("names-0.png"),
+        Duration::from_secs(60),
+        "the first render",
+        |s| centroid(s, GREEN).1 > 500,
+    );
+    let window = app_window(&xdotool);
+    // An icon of 256 × 256 overflowed a request: the property came empty.
+    let props = Command::new("xprop")
+        .args(["-id", &window, "WM_CLASS", "_NET_WM_ICON"])
+        .env("DISPLAY", display)
+        .output()
+        .unwrap();
+    let props = String::from_utf8_lossy(&props.stdout);
+    assert!(
+        props.contains("WM_CLASS(STRING) = \"rayoflight\", \"io.github.rayoflight.RayOfLight\""),
+        "{props:.200}"
+    );
+    assert!(props.contains("Icon (128 x 128)"), "{props:.200}");
+    let names = |wanted: &str| {
+        let start = Instant::now();
+        loop {
+            let utf8 = x_property(display, &window, "_NET_WM_NAME");
+            let latin1 = x_property(display, &window, "WM_NAME");
+            let expected: Vec<u8> = wanted
+                .chars()
+                .map(|c| match c {
+                    '—' => b'-',
+                    '•' => b'*',
+                    c => u8::try_from(u32::from(c)).unwrap(),
+                })
+                .collect();
+            if utf8 == wanted.as_bytes() && latin1 == expected {
+                return;
+            }
+            assert!(
+                start.elapsed() < Duration::from_secs(5),
+                "title {wanted:?}: _NET_WM_NAME {:?}, WM_NAME {latin1:x?}",
+                String::from_utf8_lossy(&utf8)
+            );
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    };
+    let title = format!("RayOfLight — {}", opened.path.display());
+    names(&title);
+
+    // An edit: the title changes, both properties with it.
+    xdotool(&["windowfocus", "--sync", &window]);
+    let shot = screenshot(display, &shots.join("names-1.png"));
+    orbit(&xdotool, middle(&shot, GREEN), 4);
+    names(&format!("{title} •"));
 }
 
 /// Waits until the app listens for editors in `folder`

@@ -8,6 +8,8 @@
 //! - [`texture`]: the preview's picture on the GPU, uploaded a changed
 //!   tile (or a band of rows) at a time.
 //! - [`study`]: the Study window and the live preview's choice of method.
+//! - `x11_names`: the window's class and Latin-1 title under X11, which
+//!   eframe and winit write wrong.
 //!
 //! What the window shows and changes is the app's model,
 //! [`crate::session`]: the document and its undo, the journal, the
@@ -20,6 +22,8 @@ pub mod app;
 mod panel;
 pub mod study;
 pub mod texture;
+#[cfg(all(unix, not(target_os = "macos")))]
+mod x11_names;
 
 use crate::session::{document, settings};
 use std::path::Path;
@@ -121,6 +125,12 @@ pub fn run(scene: Option<&Path>) -> Result<(), GuiError> {
         "RayOfLight",
         options,
         Box::new(move |cc| {
+            #[cfg(all(unix, not(target_os = "macos")))]
+            x11_names::watch(
+                cc,
+                &x11_names::instance_name("rayoflight"),
+                crate::desktop::APP_ID,
+            );
             let mut app = app::RayOfLightApp::new(&cc.egui_ctx, doc, persisted);
             app.end_on_signals();
             // The user's editors' unsaved text, where a private runtime
