@@ -15,8 +15,11 @@ use rayoflight::desktop;
 /// name rayoflight.xsd under $XDG_DATA_HOME (default ~/.local/share),
 /// and updates the desktop's databases when their tools are installed.
 /// RayOfLight is the default for its own type only, never for every
-/// XML file. Never over a file it did not write; --uninstall removes
-/// exactly what it wrote.
+/// XML file: where you chose no default for XML, the application that
+/// opens XML files until then is written as your choice into
+/// $XDG_CONFIG_HOME/mimeapps.list (default ~/.config). Never over a file
+/// it did not write; --uninstall removes exactly what it wrote, those
+/// lines included unless you changed them since.
 #[derive(clap::Args, Debug, Clone, PartialEq)]
 #[command(override_usage = "rayoflight install-desktop [--uninstall]")]
 pub(super) struct InstallDesktopFlags {
@@ -46,6 +49,9 @@ impl Subcommand for InstallDesktopFlags {
             ));
         }
         let home = desktop::data_home().map_err(fail)?;
+        let places = desktop::defaults::Places::from_env(&home)
+            .ok_or(desktop::DesktopError::NoConfigHome)
+            .map_err(fail)?;
         let done = match uninstall {
             false => {
                 let exec = std::env::current_exe()
@@ -53,17 +59,25 @@ impl Subcommand for InstallDesktopFlags {
                     .map_err(|e| {
                         Failure::Error(format!("rayoflight: where is this binary? {e}"))
                     })?;
-                let done = desktop::install(&home, &exec).map_err(fail)?;
+                let done = desktop::install(&places, &exec).map_err(fail)?;
                 eprintln!(
                     "installed under {}: the desktop entry (running {}), {} icons and the scene type",
                     home.display(),
                     exec.display(),
                     desktop::ICON_PNGS.len() + 1
                 );
+                for line in &done.defaults {
+                    let (mime, id) = line.split_once('=').unwrap_or((line, ""));
+                    eprintln!(
+                        "{} stays the default for {mime}, as your choice in {}",
+                        id.trim_end_matches(';'),
+                        places.user_list().display()
+                    );
+                }
                 done
             }
             true => {
-                let done = desktop::uninstall(&home).map_err(fail)?;
+                let done = desktop::uninstall(&places).map_err(fail)?;
                 match done.files.len() {
                     0 => eprintln!(
                         "nothing to remove: install-desktop wrote nothing under {}",
@@ -73,6 +87,18 @@ impl Subcommand for InstallDesktopFlags {
                         "removed the {n} files install-desktop wrote under {}",
                         home.display()
                     ),
+                }
+                for line in &done.defaults {
+                    eprintln!(
+                        "removed the default install-desktop wrote from {}: {line}",
+                        places.user_list().display()
+                    );
+                }
+                for line in &done.kept_defaults {
+                    eprintln!(
+                        "left the default {line} out of {}: it changed since install-desktop wrote it",
+                        places.user_list().display()
+                    );
                 }
                 for kept in &done.kept {
                     eprintln!(

@@ -17,17 +17,20 @@
 //! (update-desktop-database, update-mime-database) are installed; when the
 //! last user type or entry goes, the caches they generated go too.
 //!
-//! RayOfLight is offered in "Open with" for XML files and writes itself as
-//! the default only for its own type, `application/x-rayoflight-scene`
-//! (other formats use a bare `<scene>` root too). Where the user has
-//! chosen no default for XML, gio and xdg-mime still take the first
-//! application of the user's own folder, this one.
+//! RayOfLight is offered in "Open with" for XML files and is the default
+//! only for its own type, `application/x-rayoflight-scene` (other formats
+//! use a bare `<scene>` root too). Where the user has chosen no default
+//! for XML, gio and xdg-mime would take the first application of the
+//! user's own folder, this one: the install writes the application that
+//! opened XML until then into the user's `mimeapps.list` ([`defaults`]),
+//! recorded with the files, taken out again by the uninstall.
 //!
 //! The editor link ([`editor_link`]) lives here too: the user's editor's
 //! unsaved text, from `rayoflight lsp` to the app, over a socket of the
 //! user's own (Unix only: elsewhere the language server works without
 //! it).
 
+pub mod defaults;
 pub mod editor_link;
 
 use std::path::{Path, PathBuf};
@@ -109,7 +112,20 @@ pub enum DesktopError {
         path.display()
     )]
     Link { path: PathBuf },
+    #[error(
+        "installed, but the application that opens XML files could not be kept as the default: {source}; choose it in \"Open with\", or run install-desktop --uninstall"
+    )]
+    Default { source: Box<DesktopError> },
+    #[error(
+        "no folder for your settings (mimeapps.list): set XDG_CONFIG_HOME or HOME to an absolute path"
+    )]
+    NoConfigHome,
+    #[error("{}: another program kept changing it; the default applications were left as they were", path.display())]
+    Busy { path: PathBuf },
 }
+
+/// The types of XML files the desktop entry lists, for "Open with".
+const XML_TYPES: &[&str] = &["application/xml", "text/xml"];
 
 /// What an install or an uninstall did.
 #[derive(Debug, Default)]
@@ -123,6 +139,11 @@ pub struct Done {
     /// Files an uninstall left: changed since they were written (another
     /// program's now, or the user's).
     pub kept: Vec<PathBuf>,
+    /// The defaults written into (or taken out of) the user's
+    /// `mimeapps.list` (`application/xml=editor.desktop;`).
+    pub defaults: Vec<String>,
+    /// Defaults an uninstall left: changed since (the user's choice now).
+    pub kept_defaults: Vec<String>,
 }
 
 /// A fingerprint of bytes written (64-bit FNV-1a: the same in every
@@ -256,10 +277,13 @@ struct Manifest {
     files: Vec<(PathBuf, Option<u64>)>,
     folders: Vec<PathBuf>,
     made: Vec<PathBuf>,
+    /// What was added to the user's `mimeapps.list`.
+    pinned: defaults::Pinned,
 }
 
 impl Manifest {
-    fn read(home: &Path) -> Result<Option<Manifest>, DesktopError> {
+    fn read(places: &defaults::Places) -> Result<Option<Manifest>, DesktopError> {
+        let home = places.data_home.as_path();
         let path = home.join(MANIFEST);
         let text = match std::fs::read_to_string(&path) {
             Ok(text) => text,
@@ -282,10 +306,31 @@ impl Manifest {
                 print = Some(p);
                 relative = rest;
             }
+            match (kind, relative) {
+                ("default", line) if line.contains('=') => {
+                    manifest.pinned.lines.push(line.to_owned());
+                    continue;
+                }
+                ("default-group", n) => {
+                    let n = n.parse().ok().filter(|&n| n <= 2).ok_or_else(damaged)?;
+                    manifest.pinned.group_after = Some(n);
+                    continue;
+                }
+                ("default-file", "made") => {
+                    manifest.pinned.made_file = true;
+                    continue;
+                }
+                ("default-header", "newline") => {
+                    manifest.pinned.header_newline = true;
+                    continue;
+                }
+                _ => {}
+            }
             let relative = PathBuf::from(relative);
             if kind == "made" {
-                // Only the data folder and folders above it.
-                if !(relative.is_absolute() && home.starts_with(&relative)) {
+                // Only the data or config folder and folders above them.
+                let above = |f: &Path| relative.is_absolute() && f.starts_with(&relative);
+                if !(above(home) || above(&places.config_home)) {
                     return Err(damaged());
                 }
                 manifest.made.push(relative);
@@ -322,6 +367,19 @@ impl Manifest {
         for d in &self.made {
             text.push_str(&format!("made {}\n", d.display()));
         }
+        let pinned = &self.pinned;
+        for line in &pinned.lines {
+            text.push_str(&format!("default {line}\n"));
+        }
+        if let Some(n) = pinned.group_after {
+            text.push_str(&format!("default-group {n}\n"));
+        }
+        if pinned.made_file {
+            text.push_str("default-file made\n");
+        }
+        if pinned.header_newline {
+            text.push_str("default-header newline\n");
+        }
         text
     }
 }
@@ -330,10 +388,13 @@ impl Manifest {
 /// under the data folder `home`, made if missing. An earlier install is
 /// replaced; a file in the way that it did not write, or that changed
 /// since, and a symbolic link in the way (the file's or a folder's), are
-/// refused before anything is written.
-pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
+/// refused before anything is written. Where the entry would become the
+/// default for XML files, the application that is the default until then
+/// is written as the user's choice ([`defaults`]).
+pub fn install(places: &defaults::Places, exec: &Path) -> Result<Done, DesktopError> {
+    let home = places.data_home.as_path();
     let mut done = Done::default();
-    let earlier = Manifest::read(home)?.unwrap_or_default();
+    let earlier = Manifest::read(places)?.unwrap_or_default();
     let files = files(exec);
     let io = |path: &Path| {
         let path = path.to_owned();
@@ -373,10 +434,21 @@ pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
             return Err(DesktopError::NotOurs { path });
         }
     }
+    // Who opens XML now, before the entry is there (a reinstall's own
+    // entry not counted): where nobody chose it, that choice made.
+    let ours = format!("{APP_ID}.desktop");
+    let pins: Vec<String> = XML_TYPES
+        .iter()
+        .filter_map(|mime| match defaults::default_for(places, mime, &ours) {
+            defaults::Default::Preferred(id) => Some(format!("{mime}={id};")),
+            defaults::Default::Chosen(_) | defaults::Default::Nobody => None,
+        })
+        .collect();
     let mut manifest = Manifest {
         files: Vec::new(),
         folders: earlier.folders,
         made: earlier.made,
+        pinned: earlier.pinned,
     };
     // A fresh home: the data folder and those above it, made and recorded.
     let mut missing = Vec::new();
@@ -414,18 +486,162 @@ pub fn install(home: &Path, exec: &Path) -> Result<Done, DesktopError> {
             .push((relative.clone(), Some(fingerprint(bytes))));
         done.files.push(path);
     }
+    // The pin last: a failure leaves the files recorded.
+    let pinned = match pins.is_empty() {
+        true => Ok(()),
+        false => pin_defaults(places, &pins, &mut manifest),
+    };
     crate::system::files::write_atomic(&home.join(MANIFEST), manifest.text().as_bytes())?;
+    pinned.map_err(|e| DesktopError::Default {
+        source: Box::new(e),
+    })?;
+    done.defaults = pins;
     refresh(home, &mut done);
     Ok(done)
 }
 
-/// Removes what [`install`] wrote under `home`, and the folders it
-/// created once they are empty. Nothing installed: nothing done.
-pub fn uninstall(home: &Path) -> Result<Done, DesktopError> {
+/// Adds `pins` to the user's `mimeapps.list`, recorded in `manifest`
+/// (with the folders and the file, where it made them).
+fn pin_defaults(
+    places: &defaults::Places,
+    pins: &[String],
+    manifest: &mut Manifest,
+) -> Result<(), DesktopError> {
+    let list = places.user_list();
+    let io = |path: &Path| {
+        let path = path.to_owned();
+        move |source| DesktopError::Io { path, source }
+    };
+    let mut missing = Vec::new();
+    let mut up = Some(places.config_home.as_path());
+    while let Some(f) = up.filter(|f| !f.as_os_str().is_empty() && !f.exists()) {
+        missing.push(f.to_owned());
+        up = f.parent();
+    }
+    for f in missing.into_iter().rev() {
+        std::fs::create_dir(&f).map_err(io(&f))?;
+        manifest.made.push(f);
+    }
+    let mut added = None;
+    rewrite_list(&list, |text| {
+        let (new, pinned) = defaults::pin(text.unwrap_or(""), pins);
+        added = Some(defaults::Pinned {
+            made_file: text.is_none(),
+            ..pinned
+        });
+        Some(new)
+    })?;
+    if let Some(added) = added {
+        let pinned = &mut manifest.pinned;
+        pinned.lines.extend(added.lines);
+        pinned.group_after = pinned.group_after.or(added.group_after);
+        pinned.made_file |= added.made_file;
+        pinned.header_newline |= added.header_newline;
+    }
+    Ok(())
+}
+
+/// Replaces the user's list at `path` by `change` of its text (`None`:
+/// there is none), written only if the file still holds the text read
+/// (read again just before the rename; another program's change meanwhile
+/// is read and `change` applied again). `change` returning `None` leaves
+/// the file as it is.
+fn rewrite_list(
+    path: &Path,
+    mut change: impl FnMut(Option<&str>) -> Option<String>,
+) -> Result<(), DesktopError> {
+    use crate::system::files::{WriteError, write_atomic_with, write_new};
+    #[derive(Debug)]
+    enum Rewrite {
+        Write(WriteError),
+        Changed,
+    }
+    impl From<WriteError> for Rewrite {
+        fn from(e: WriteError) -> Rewrite {
+            Rewrite::Write(e)
+        }
+    }
+    for _ in 0..8 {
+        let old = match std::fs::read(path) {
+            Ok(bytes) => Some(bytes),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => None,
+            Err(source) => {
+                return Err(DesktopError::Io {
+                    path: path.to_owned(),
+                    source,
+                });
+            }
+        };
+        let text = old.as_deref().map(String::from_utf8_lossy);
+        let Some(new) = change(text.as_deref()) else {
+            return Ok(());
+        };
+        let written = match &old {
+            // A link to nothing (dotfiles not in place): not made here.
+            None if std::fs::symlink_metadata(path).is_ok() => {
+                return Err(DesktopError::Io {
+                    path: path.to_owned(),
+                    source: std::io::Error::other("a symbolic link to nothing"),
+                });
+            }
+            None => write_new(path, new.as_bytes()).map_err(Rewrite::Write),
+            Some(old) => write_atomic_with(
+                path,
+                |w| w.write_all(new.as_bytes()),
+                |_| match std::fs::read(path) {
+                    Ok(now) if &now == old => Ok(()),
+                    _ => Err(Rewrite::Changed),
+                },
+            ),
+        };
+        match written {
+            Ok(()) => return Ok(()),
+            Err(
+                Rewrite::Changed
+                | Rewrite::Write(WriteError::Moved { .. } | WriteError::Exists { .. }),
+            ) => {}
+            Err(Rewrite::Write(e)) => return Err(e.into()),
+        }
+    }
+    Err(DesktopError::Busy {
+        path: path.to_owned(),
+    })
+}
+
+/// Removes what [`install`] wrote under the data folder, and the folders
+/// it created once they are empty; the defaults it wrote into the user's
+/// `mimeapps.list` where they are still as written. Nothing installed:
+/// nothing done.
+pub fn uninstall(places: &defaults::Places) -> Result<Done, DesktopError> {
+    let home = places.data_home.as_path();
     let mut done = Done::default();
-    let Some(manifest) = Manifest::read(home)? else {
+    let Some(manifest) = Manifest::read(places)? else {
         return Ok(done);
     };
+    if !manifest.pinned.lines.is_empty() {
+        let pinned = &manifest.pinned;
+        let list = places.user_list();
+        let mut kept = Vec::new();
+        rewrite_list(&list, |text| {
+            let Some(text) = text else {
+                kept.clone_from(&pinned.lines);
+                return None;
+            };
+            let (new, missing) = defaults::unpin(text, pinned);
+            kept = missing;
+            (new != text).then_some(new)
+        })?;
+        if pinned.made_file && std::fs::read(&list).is_ok_and(|b| b.is_empty()) {
+            let _ = std::fs::remove_file(&list);
+        }
+        done.defaults = pinned
+            .lines
+            .iter()
+            .filter(|l| !kept.contains(l))
+            .cloned()
+            .collect();
+        done.kept_defaults = kept;
+    }
     // What this version writes: the bytes of files an earlier version
     // recorded without a fingerprint are compared with them.
     let exec = std::env::current_exe()

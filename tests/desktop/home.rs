@@ -760,12 +760,31 @@ fn tree(dir: &Path) -> Vec<String> {
     out
 }
 
+/// `install-desktop` with `home` as the data folder, a config folder
+/// beside it and no system folders (none of this machine's applications).
 #[cfg(feature = "gui")]
 fn install_desktop(home: &Path, args: &[&str]) -> std::process::Output {
+    let beside = |name| home.with_file_name(name).into_os_string();
+    let places = [
+        ("XDG_DATA_HOME", home.as_os_str().to_owned()),
+        ("XDG_CONFIG_HOME", beside("config")),
+        ("XDG_DATA_DIRS", beside("no-system-data")),
+        ("XDG_CONFIG_DIRS", beside("no-system-config")),
+    ];
+    install_desktop_in(&places, args)
+}
+
+/// `install-desktop` with these XDG folders and no desktop named.
+#[cfg(feature = "gui")]
+fn install_desktop_in(
+    places: &[(&str, std::ffi::OsString)],
+    args: &[&str],
+) -> std::process::Output {
     Command::new(BIN)
         .arg("install-desktop")
         .args(args)
-        .env("XDG_DATA_HOME", home)
+        .envs(places.iter().map(|(k, v)| (k, v)))
+        .env_remove("XDG_CURRENT_DESKTOP")
         .output()
         .unwrap()
 }
@@ -1045,4 +1064,182 @@ fn install_desktop_writes_and_removes_only_what_it_owns() {
     );
     assert_eq!(tree(&elsewhere), Vec::<String>::new());
     assert_eq!(tree(&home), ["icons"]);
+}
+
+/// An XML editor is installed for the system and nobody chose a default
+/// for XML: gio and xdg-mime named RayOfLight the default for every XML
+/// file once it was installed (they prefer the user's own folder). Now the
+/// editor stays the default (written as the user's choice, in the user's
+/// `mimeapps.list`, a file of theirs or none yet), RayOfLight is offered
+/// for XML and is the default for scenes; the uninstall gives the list
+/// back byte for byte. A default the user chose is left alone; a pinned
+/// line the user changed since stays.
+#[cfg(all(feature = "gui", unix))]
+#[test]
+fn install_desktop_leaves_xml_to_the_editor_that_had_it() {
+    if !(tool("gio", "libglib2.0-bin")
+        && tool("xdg-mime", "xdg-utils")
+        && tool("update-desktop-database", "desktop-file-utils"))
+    {
+        return;
+    }
+    let id = rayoflight::desktop::APP_ID;
+    let ours = format!("{id}.desktop");
+    for user_list in [
+        None,
+        Some("[Added Associations]\ntext/plain=xmleditor.desktop;"),
+        Some(
+            "# mine\n[Default Applications]\ntext/plain=xmleditor.desktop;\n\n[Added Associations]\n",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let system = dir.path().join("system");
+        fs::create_dir_all(system.join("applications")).unwrap();
+        // gio lists an entry only if its program is there: cat is.
+        for (name, types) in [
+            ("xmleditor", "application/xml;text/xml;"),
+            ("other", "text/xml;"),
+        ] {
+            fs::write(
+                system.join(format!("applications/{name}.desktop")),
+                format!("[Desktop Entry]\nType=Application\nName={name}\nExec=cat %f\nMimeType={types}\n"),
+            )
+            .unwrap();
+        }
+        let o = Command::new("update-desktop-database")
+            .arg(system.join("applications"))
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        let config = dir.path().join("config");
+        let list = config.join("mimeapps.list");
+        if let Some(text) = user_list {
+            fs::create_dir(&config).unwrap();
+            fs::write(&list, text).unwrap();
+        }
+        let home = dir.path().join("share");
+        let places = [
+            ("XDG_DATA_HOME", home.clone().into_os_string()),
+            ("XDG_CONFIG_HOME", config.clone().into_os_string()),
+            ("XDG_DATA_DIRS", system.clone().into_os_string()),
+            ("XDG_CONFIG_DIRS", dir.path().join("etc").into_os_string()),
+        ];
+        let defaults = |mime: &str| -> (String, String, String) {
+            let gio = Command::new("gio")
+                .args(["mime", mime])
+                .envs(places.iter().map(|(k, v)| (k, v)))
+                .env_remove("XDG_CURRENT_DESKTOP")
+                .output()
+                .unwrap();
+            let gio = stdout(&gio);
+            let xdg = Command::new("xdg-mime")
+                .args(["query", "default", mime])
+                .envs(places.iter().map(|(k, v)| (k, v)))
+                .env_remove("XDG_CURRENT_DESKTOP")
+                .env_remove("DESKTOP_SESSION")
+                .output()
+                .unwrap();
+            let first = gio.lines().next().unwrap_or_default();
+            let default = first.rsplit(": ").next().unwrap_or_default().to_owned();
+            let recommended = gio
+                .split("Recommended applications:")
+                .nth(1)
+                .unwrap_or_default();
+            (
+                default,
+                stdout(&xdg).trim().to_owned(),
+                recommended.to_owned(),
+            )
+        };
+        // Who opens XML before: the same for both tools, one of the two.
+        let had: Vec<String> = ["application/xml", "text/xml"]
+            .iter()
+            .map(|mime| {
+                let (gio, xdg, _) = defaults(mime);
+                assert_eq!(gio, xdg, "{mime} before");
+                assert!(
+                    gio == "xmleditor.desktop" || gio == "other.desktop",
+                    "{gio}"
+                );
+                gio
+            })
+            .collect();
+        let before = tree(dir.path());
+
+        let o = install_desktop_in(&places, &[]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!(
+                "{} stays the default for application/xml, as your choice in",
+                had[0]
+            )),
+            "{}",
+            stderr(&o)
+        );
+        for (mime, had) in ["application/xml", "text/xml"].iter().zip(&had) {
+            let (gio, xdg, recommended) = defaults(mime);
+            assert_eq!((&gio, &xdg), (had, had), "{mime} after");
+            assert!(recommended.contains(&ours), "{mime}: {recommended}");
+        }
+        let (gio, _, _) = defaults("application/x-rayoflight-scene");
+        assert_eq!(gio, ours);
+        let pinned = fs::read_to_string(&list).unwrap();
+        assert!(
+            pinned.contains(&format!(
+                "[Default Applications]\napplication/xml={}\ntext/xml={}\n",
+                had[0].clone() + ";",
+                had[1].clone() + ";"
+            )),
+            "{pinned}"
+        );
+        // Installed again: nothing more written into the list.
+        assert!(install_desktop_in(&places, &[]).status.success());
+        assert_eq!(fs::read_to_string(&list).unwrap(), pinned);
+
+        let o = install_desktop_in(&places, &["--uninstall"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let after: Vec<String> = tree(dir.path())
+            .into_iter()
+            .filter(|p| p != "share/applications/mimeinfo.cache")
+            .collect();
+        assert_eq!(after, before);
+        match user_list {
+            Some(text) => assert_eq!(fs::read_to_string(&list).unwrap(), text),
+            None => assert!(!config.exists()),
+        }
+
+        // The user's own choice of default: not written over, nor added to.
+        fs::create_dir_all(&config).unwrap();
+        let chosen =
+            "[Default Applications]\napplication/xml=other.desktop;\ntext/xml=other.desktop;\n";
+        fs::write(&list, chosen).unwrap();
+        assert!(install_desktop_in(&places, &[]).status.success());
+        assert_eq!(fs::read_to_string(&list).unwrap(), chosen);
+        assert_eq!(defaults("application/xml").0, "other.desktop");
+        assert!(
+            install_desktop_in(&places, &["--uninstall"])
+                .status
+                .success()
+        );
+        assert_eq!(fs::read_to_string(&list).unwrap(), chosen);
+
+        // A pinned line the user changed since is theirs: it stays.
+        fs::remove_file(&list).unwrap();
+        assert!(install_desktop_in(&places, &[]).status.success());
+        let pinned = fs::read_to_string(&list).unwrap();
+        let line = format!("application/xml={};", had[0]);
+        let changed = pinned.replace(&line, "application/xml=cat.desktop;");
+        fs::write(&list, &changed).unwrap();
+        let o = install_desktop_in(&places, &["--uninstall"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(
+            stderr(&o).contains(&format!("left the default {line} out of")),
+            "{}",
+            stderr(&o)
+        );
+        assert_eq!(
+            fs::read_to_string(&list).unwrap(),
+            "[Default Applications]\napplication/xml=cat.desktop;\n"
+        );
+    }
 }
