@@ -16,8 +16,9 @@
 //! 5 % of a core.
 //!
 //! Under Wayland (weston, nested in an Xvfb of its own, the app's X display
-//! unset): the app renders, follows a save, and draws its title on the
-//! title bar it draws itself. Under X11 the window names its class and
+//! unset): the app renders, follows a save, draws its title on the title
+//! bar it draws itself, takes the mouse and the keys, and asks about
+//! unsaved edits before it closes. Under X11 the window names its class and
 //! its title as window managers read them (`WM_CLASS`, `WM_NAME` in
 //! Latin-1, `_NET_WM_NAME` in UTF-8).
 //!
@@ -444,9 +445,11 @@ fn title_pixels(image: &image::RgbImage) -> usize {
 /// Under Wayland, where weston (like GNOME) draws no title bars: the app,
 /// its X display unset, opens its window, renders the scene, follows a
 /// save of the file from outside, shows its title on the bar it draws
-/// itself, and ends cleanly on SIGTERM.
+/// itself, orbits on a drag of the mouse, asks about the unsaved edit on
+/// Ctrl+Q (Escape cancels) and ends cleanly once it is discarded.
 #[test]
-fn under_wayland_the_window_renders_follows_the_file_and_shows_its_title() {
+fn under_wayland_the_window_renders_follows_the_file_takes_mouse_and_keys_and_asks_before_closing()
+{
     if !common::tool("weston", "weston") {
         return;
     }
@@ -481,9 +484,82 @@ fn under_wayland_the_window_renders_follows_the_file_and_shows_its_title() {
         count(image, GREEN) > 20_000 && count(image, RED) == 0
     });
     eprintln!("save to screen under weston: {took:?}");
-    let (status, took) = app.terminate(Duration::from_secs(3));
-    eprintln!("SIGTERM to exit under weston: {took:?}");
+
+    // The mouse: a drag on the picture orbits (weston passes the X
+    // pointer of its window to the app's surface, and the click gives it
+    // the keyboard).
+    let xdotool = |args: &[&str]| xdotool_on(&weston.display, args);
+    let before = shoot(&shots.join("wayland-orbit-0.png"));
+    let (x, y) = middle(&before, GREEN);
+    let from = centroid(&before, GREEN).0;
+    orbit(&xdotool, (x, y), 6);
+    let shot = shots.join("wayland-orbit-1.png");
+    wait_for_shots(
+        &shoot,
+        &shot,
+        Duration::from_secs(6),
+        "the orbit, under weston",
+        |image| (centroid(image, GREEN).0 - from).abs() > 5.0,
+    );
+    // The keys: Ctrl+Q asks about the unsaved edit (the modal's backdrop
+    // dims the picture); Escape cancels; Ctrl+Q again, then Tab to
+    // "Discard edits" and Space: the app ends, the file as it was.
+    let alive = |app: &mut Killed| app.0.try_wait().ok().flatten().is_none();
+    // The sphere behind the backdrop: green, darker, none at full.
+    let dimmed = |image: &image::RgbImage| {
+        let dark_green = image
+            .pixels()
+            .filter(|p| p[0] == 0 && p[2] == 0 && (60..220).contains(&p[1]))
+            .count();
+        count(image, GREEN) == 0 && dark_green > 20_000
+    };
+    xdotool(&["key", "ctrl+q"]);
+    let shot = shots.join("wayland-quit-asks.png");
+    wait_for_shots(
+        &shoot,
+        &shot,
+        Duration::from_secs(6),
+        "the unsaved-edits question, under weston",
+        |image| dimmed(image),
+    );
+    assert!(alive(&mut app), "the app waits for the answer");
+    xdotool(&["key", "Escape"]);
+    let shot = shots.join("wayland-quit-cancelled.png");
+    wait_for_shots(
+        &shoot,
+        &shot,
+        Duration::from_secs(6),
+        "the picture again after Escape",
+        |image| count(image, GREEN) > 20_000,
+    );
+    assert!(alive(&mut app), "Escape cancels the quit");
+    xdotool(&["key", "ctrl+q"]);
+    let shot = shots.join("wayland-quit-asks-again.png");
+    wait_for_shots(
+        &shoot,
+        &shot,
+        Duration::from_secs(6),
+        "the question again",
+        |image| dimmed(image),
+    );
+    for key in ["Tab", "Tab", "space"] {
+        xdotool(&["key", key]);
+        std::thread::sleep(Duration::from_millis(300));
+    }
+    let start = Instant::now();
+    let status = loop {
+        if let Some(status) = app.0.try_wait().unwrap() {
+            break status;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "the app ends once the edits are discarded"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    eprintln!("Discard edits to exit under weston: {:?}", start.elapsed());
     assert!(status.success(), "a clean exit: {status:?}");
+    assert_eq!(std::fs::read_to_string(&path).unwrap(), scene(GREEN));
 }
 
 #[test]
