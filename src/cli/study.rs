@@ -80,6 +80,7 @@ fn run_study(args: &StudyArgs, steps: &Steps) -> Result<(), String> {
         args.runs,
         args.threads,
         &rayoflight::render::Cancel::never(),
+        &study::StudyProgress::default(),
         &mut |r, image, reference| {
             if r.failed && picture_error.is_none() {
                 let path = args.out.join(chart::failure_file_name(r));

@@ -145,6 +145,7 @@ enum Message {
         generation: u64,
         scene: Box<StudyScene>,
         runs: usize,
+        progress: Arc<study::StudyProgress>,
     },
     Pass {
         scene: Arc<Scene>,
@@ -331,12 +332,18 @@ impl Worker {
 
     /// Asks for the study of `scene` (every method, `runs` renders each);
     /// cancels any older request. Returns its generation.
-    pub fn study(&self, scene: StudyScene, runs: usize) -> u64 {
+    pub fn study(
+        &self,
+        scene: StudyScene,
+        runs: usize,
+        progress: Arc<study::StudyProgress>,
+    ) -> u64 {
         let generation = self.newest.fetch_add(1, Ordering::Relaxed) + 1;
         let _ = self.to_worker.send(Message::Study {
             generation,
             scene: Box::new(scene),
             runs,
+            progress,
         });
         generation
     }
@@ -527,10 +534,11 @@ impl WorkerThread {
                 generation,
                 scene,
                 runs,
+                progress,
             } => {
                 let cancel = Cancel::new(self.newest.clone(), generation);
                 if !cancel.is_cancelled() {
-                    self.study(generation, &scene, runs, &cancel);
+                    self.study(generation, &scene, runs, &cancel, &progress);
                 }
             }
             Message::Pass {
@@ -665,7 +673,14 @@ impl Outbox {
 
 impl WorkerThread {
     /// Runs the study on the worker's pool, one row at a time.
-    fn study(&self, generation: u64, scene: &StudyScene, runs: usize, cancel: &Cancel) {
+    fn study(
+        &self,
+        generation: u64,
+        scene: &StudyScene,
+        runs: usize,
+        cancel: &Cancel,
+        progress: &study::StudyProgress,
+    ) {
         let methods = render::methods();
         self.send(Event::StudyStarted {
             generation,
@@ -681,6 +696,7 @@ impl WorkerThread {
                 runs,
                 None,
                 cancel,
+                progress,
                 &mut |row, image, reference| {
                     outbox.send(Event::StudyRow {
                         generation,

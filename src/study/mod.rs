@@ -73,14 +73,58 @@ fn render_or_stop(
     options: &RenderOptions,
     pool: &RenderPool,
     cancel: &Cancel,
+    progress: &Progress,
 ) -> Result<RgbImage, StudyError> {
     let options = RenderOptions {
         // The pool's threads.
         threads: None,
         ..options.clone()
     };
-    let done = pool.install(|| render::render_cancellable(scene, &options, cancel))?;
+    let done = pool.install(|| render::render_watched(scene, &options, cancel, progress))?;
     Ok(done.ok_or(StudyError::Cancelled)?.0)
+}
+
+/// Where a study is, for a window to show while it runs (a reference of
+/// a large scene, or a slow method, takes a minute): which render, and
+/// that render's pixels.
+#[derive(Debug, Default)]
+pub struct StudyProgress {
+    stage: std::sync::Mutex<Stage>,
+    /// The pixels of the render under way (counted again from 0 by each).
+    pub render: Progress,
+}
+
+/// Which render of a study is under way.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Stage {
+    /// Not started.
+    #[default]
+    Waiting,
+    /// A scene's reference image: the default method's, or the one
+    /// supersampled 16×16.
+    Reference { supersampled: bool },
+    /// The `index`-th method (from 0) of `of`, one of its runs.
+    Method {
+        index: usize,
+        of: usize,
+        name: &'static str,
+    },
+}
+
+impl StudyProgress {
+    pub fn stage(&self) -> Stage {
+        *self
+            .stage
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+    }
+
+    fn set(&self, stage: Stage) {
+        *self
+            .stage
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner) = stage;
+    }
 }
 
 /// A scene of the study and the name its rows carry.
@@ -154,14 +198,26 @@ impl References {
         methods: &[Method],
         pool: &RenderPool,
         cancel: &Cancel,
+        progress: &StudyProgress,
     ) -> Result<References, StudyError> {
-        let default = render_or_stop(scene, &RenderOptions::reference(), pool, cancel)?;
+        progress.set(Stage::Reference {
+            supersampled: false,
+        });
+        let options = RenderOptions::reference();
+        let default = render_or_stop(scene, &options, pool, cancel, &progress.render)?;
         let supersampled = if methods.iter().any(Method::supersamples) {
             let options = RenderOptions {
                 aa: MAX_AA,
                 ..RenderOptions::default()
             };
-            Some(render_or_stop(scene, &options, pool, cancel)?)
+            progress.set(Stage::Reference { supersampled: true });
+            Some(render_or_stop(
+                scene,
+                &options,
+                pool,
+                cancel,
+                &progress.render,
+            )?)
         } else {
             None
         };
@@ -211,11 +267,21 @@ pub fn measure(
     runs: usize,
 ) -> Result<Row, StudyError> {
     let pool = RenderPool::new(None)?;
-    measure_image(scene, method, reference, runs, &pool, &Cancel::never()).map(|(row, _)| row)
+    let progress = Progress::default();
+    measure_image(
+        scene,
+        method,
+        reference,
+        runs,
+        &pool,
+        &Cancel::never(),
+        &progress,
+    )
+    .map(|(row, _)| row)
 }
 
 /// [`measure()`] on `pool`, and the image the method rendered (its first
-/// run), unless cancelled. The time is render time as [`crate::render::measure`](mod@crate::render::measure)
+/// run), unless cancelled; each run's pixels counted in `progress`. The time is render time as [`crate::render::measure`](mod@crate::render::measure)
 /// defines it (`auto`'s planning included), as the command line renders
 /// with `--method`.
 pub fn measure_image(
@@ -225,6 +291,7 @@ pub fn measure_image(
     runs: usize,
     pool: &RenderPool,
     cancel: &Cancel,
+    progress: &Progress,
 ) -> Result<(Row, RgbImage), StudyError> {
     let request = crate::render::request::RenderRequest {
         method: Some(method.clone()),
@@ -232,7 +299,7 @@ pub fn measure_image(
     };
     let mut first = None;
     let time = median_of(runs, || {
-        let timed = render_timed(&scene.scene, &request, pool, cancel, &Progress::default())?
+        let timed = render_timed(&scene.scene, &request, pool, cancel, progress)?
             .ok_or(StudyError::Cancelled)?;
         let elapsed = timed.elapsed;
         first.get_or_insert(timed);
@@ -257,23 +324,31 @@ pub fn measure_image(
 /// threads (`None`: one per core, or the pool it runs in), stopping within
 /// a pixel once `cancel` is set; `progress` sees each row as it is done,
 /// with the method's image and the reference it was measured against (to
-/// picture a failure).
+/// picture a failure); `watch` says which render is under way and how far.
 pub fn run(
     scenes: &[StudyScene],
     methods: &[Method],
     runs: usize,
     threads: Option<usize>,
     cancel: &Cancel,
+    watch: &StudyProgress,
     progress: &mut dyn FnMut(&Row, &RgbImage, &RgbImage),
 ) -> Result<Vec<Row>, StudyError> {
     let mut rows = Vec::new();
     let pool = RenderPool::new(threads)?;
     for scene in scenes {
         check_memory(scene)?;
-        let references = References::new(&scene.scene, methods, &pool, cancel)?;
-        for method in methods {
+        let references = References::new(&scene.scene, methods, &pool, cancel, watch)?;
+        for (index, method) in methods.iter().enumerate() {
+            watch.set(Stage::Method {
+                index,
+                of: methods.len(),
+                name: method.name,
+            });
             let reference = references.for_method(method);
-            let (row, image) = measure_image(scene, method, reference, runs, &pool, cancel)?;
+            let render = &watch.render;
+            let (row, image) =
+                measure_image(scene, method, reference, runs, &pool, cancel, render)?;
             progress(&row, &image, reference);
             rows.push(row);
         }

@@ -492,7 +492,7 @@ fn the_worker_runs_the_study_row_by_row() {
         scene: parse(&scene_text(1.0, 64)),
     };
     let worker = Worker::spawn(1, || {});
-    let generation = worker.study(scene, 1);
+    let generation = worker.study(scene, 1, Default::default());
     let (events, _) = until_study_ends(&worker, generation, Duration::from_secs(60));
     let methods = rayoflight::render::methods();
     assert!(matches!(events[0], Event::StudyStarted { total, .. } if total == methods.len()));
@@ -528,7 +528,7 @@ fn a_study_is_cancelled_within_100_ms() {
         scene: mirrors(10_000, 3840, 2160),
     };
     let worker = Worker::spawn(Worker::default_threads(), || {});
-    let generation = worker.study(scene, 1);
+    let generation = worker.study(scene, 1, Default::default());
     std::thread::sleep(Duration::from_millis(300));
     let asked = Instant::now();
     worker.cancel();

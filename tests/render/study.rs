@@ -136,12 +136,57 @@ fn draft_and_depth_cut_trace_fewer_rays() {
     assert!(stats.rays < auto);
 }
 
+/// A window can show where a study is: after the references, each row
+/// comes while the study says it is at that method, its render's pixels
+/// all counted (the study showed "0 of 12 methods" for a minute on a
+/// large scene, nothing moving within a method).
+#[test]
+fn the_study_says_which_render_it_is_at_and_how_far() {
+    let s = scene("example");
+    let methods: Vec<Method> = ["default", "aa4", "f32"].into_iter().map(method).collect();
+    let watch = study::StudyProgress::default();
+    assert_eq!(watch.stage(), study::Stage::Waiting);
+    let mut seen = Vec::new();
+    study::run(
+        std::slice::from_ref(&s),
+        &methods,
+        2,
+        Some(2),
+        &render::Cancel::never(),
+        &watch,
+        &mut |row, _, _| {
+            let (done, all) = watch.render.pixels();
+            assert_eq!(done, all, "{}: the render's pixels", row.method);
+            assert_eq!(all, u64::from(s.scene.camera.width * s.scene.camera.height));
+            seen.push(watch.stage());
+        },
+    )
+    .unwrap();
+    let expected: Vec<study::Stage> = methods
+        .iter()
+        .enumerate()
+        .map(|(index, m)| study::Stage::Method {
+            index,
+            of: 3,
+            name: m.name,
+        })
+        .collect();
+    assert_eq!(seen, expected);
+}
+
 #[test]
 fn anti_aliasing_is_measured_against_the_supersampled_reference() {
     let s = scene("example");
     let methods = rayoflight::render::methods();
     let pool = rayoflight::render::measure::RenderPool::new(None).unwrap();
-    let refs = study::References::new(&s.scene, &methods, &pool, &render::Cancel::never()).unwrap();
+    let refs = study::References::new(
+        &s.scene,
+        &methods,
+        &pool,
+        &render::Cancel::never(),
+        &Default::default(),
+    )
+    .unwrap();
     let supersampled = refs.supersampled.as_ref().unwrap();
     let aa4 = method("aa4");
     assert!(std::ptr::eq(refs.for_method(&aa4), supersampled));

@@ -437,8 +437,11 @@ impl RayOfLightApp {
             name: name.clone(),
             scene: self.doc.scene().clone(),
         };
-        let generation = self.worker.study(scene, self.study.runs);
-        self.study.started(generation, name);
+        let progress = std::sync::Arc::default();
+        let generation =
+            self.worker
+                .study(scene, self.study.runs, std::sync::Arc::clone(&progress));
+        self.study.started(generation, name, progress);
         self.study.set_plan(self.doc.scene());
     }
 

@@ -15,10 +15,37 @@ use crate::render::request::RenderRequest;
 use crate::render::{self, Decision, Method};
 use crate::scene::Scene;
 use crate::session::worker::Event;
-use crate::study::{self, Row};
+use crate::study::{self, Row, Stage, StudyProgress};
 use egui::{Color32, RichText, TextureHandle, TextureOptions};
 use image::RgbImage;
+use std::sync::Arc;
 use std::time::Duration;
+
+/// The progress bar's share and words while a study runs, `done` of
+/// `total` methods measured: the references first (a minute on a large
+/// scene, before any method), then each method, with the pixels of the
+/// render under way (`(done, all)`).
+fn running(stage: Stage, pixels: (u64, u64), done: usize, total: usize) -> (f32, String) {
+    let within = match pixels {
+        (_, 0) => 0.0,
+        (done, all) => done as f32 / all as f32,
+    };
+    let percent = (within * 100.0).floor();
+    match stage {
+        Stage::Waiting => (0.0, "starting".to_owned()),
+        Stage::Reference { supersampled } => (
+            within,
+            format!(
+                "the reference{}: {percent} %",
+                if supersampled { ", 16×16 samples" } else { "" }
+            ),
+        ),
+        Stage::Method { index, of, name } => (
+            (index as f32 + within) / of.max(1) as f32,
+            format!("{done} of {total} methods; {name}: {percent} %"),
+        ),
+    }
+}
 
 /// What the user asked for in the window.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -91,6 +118,8 @@ pub struct StudyWindow {
     /// auto's decisions for the current scene.
     plan: Vec<Decision>,
     pub runs: usize,
+    /// Which render the running study is at, and its pixels.
+    progress: Arc<StudyProgress>,
 }
 
 impl Default for StudyWindow {
@@ -105,6 +134,7 @@ impl Default for StudyWindow {
             shown: None,
             plan: Vec::new(),
             runs: 3,
+            progress: Arc::default(),
         }
     }
 }
@@ -134,14 +164,15 @@ impl StudyWindow {
         matches!(self.state, StudyState::Running { .. })
     }
 
-    /// A study of `scene_name` was requested as `generation`: forget the
-    /// previous results.
-    pub fn started(&mut self, generation: u64, scene_name: String) {
+    /// A study of `scene_name` was requested as `generation`, reporting
+    /// where it is in `progress`: forget the previous results.
+    pub fn started(&mut self, generation: u64, scene_name: String, progress: Arc<StudyProgress>) {
         *self = StudyWindow {
             open: true,
             generation: Some(generation),
             state: StudyState::Running { done: 0, total: 0 },
             scene_name,
+            progress,
             plan: std::mem::take(&mut self.plan),
             runs: self.runs,
             ..StudyWindow::default()
@@ -235,16 +266,19 @@ impl StudyWindow {
                     ui.label("not run yet");
                 }
                 StudyState::Running { done, total } => {
-                    let progress = if *total == 0 {
-                        0.0
-                    } else {
-                        *done as f32 / *total as f32
-                    };
-                    ui.add(
-                        egui::ProgressBar::new(progress)
-                            .desired_width(160.0)
-                            .text(format!("{done} of {total} methods")),
+                    let (share, text) = running(
+                        self.progress.stage(),
+                        self.progress.render.pixels(),
+                        *done,
+                        *total,
                     );
+                    ui.add(
+                        egui::ProgressBar::new(share)
+                            .desired_width(260.0)
+                            .text(text),
+                    );
+                    // The render's pixels move between the rows' events.
+                    ui.ctx().request_repaint_after(Duration::from_millis(200));
                 }
                 StudyState::Done(elapsed) => {
                     ui.label(format!(
@@ -401,4 +435,28 @@ impl StudyWindow {
 fn color_image(image: &RgbImage) -> egui::ColorImage {
     let (w, h) = image.dimensions();
     egui::ColorImage::from_rgb([w as usize, h as usize], image.as_raw())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bar_moves_within_a_reference_and_within_a_method() {
+        let (share, text) = running(Stage::Reference { supersampled: true }, (25, 100), 0, 12);
+        assert_eq!(
+            (share, text.as_str()),
+            (0.25, "the reference, 16×16 samples: 25 %")
+        );
+        let name = "phong";
+        let stage = Stage::Method {
+            index: 3,
+            of: 12,
+            name,
+        };
+        let (share, text) = running(stage, (50, 100), 3, 12);
+        assert_eq!(share, 3.5 / 12.0);
+        assert_eq!(text, "3 of 12 methods; phong: 50 %");
+        assert_eq!(running(Stage::Waiting, (0, 0), 0, 12).0, 0.0);
+    }
 }
