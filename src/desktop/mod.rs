@@ -440,7 +440,12 @@ pub fn install(places: &defaults::Places, exec: &Path) -> Result<Done, DesktopEr
     let pins: Vec<String> = XML_TYPES
         .iter()
         .filter_map(|mime| match defaults::default_for(places, mime, &ours) {
-            defaults::Default::Preferred(id) => Some(format!("{mime}={id};")),
+            // An id is a file name: one with a control character (a
+            // newline) would break the list's lines and the record's.
+            defaults::Default::Preferred(id) if !id.contains(char::is_control) => {
+                Some(format!("{mime}={id};"))
+            }
+            defaults::Default::Preferred(_) => None,
             defaults::Default::Chosen(_) | defaults::Default::Nobody => None,
         })
         .collect();
@@ -533,7 +538,11 @@ fn pin_defaults(
     })?;
     if let Some(added) = added {
         let pinned = &mut manifest.pinned;
-        pinned.lines.extend(added.lines);
+        for line in added.lines {
+            if !pinned.lines.contains(&line) {
+                pinned.lines.push(line);
+            }
+        }
         pinned.group_after = pinned.group_after.or(added.group_after);
         pinned.made_file |= added.made_file;
         pinned.header_newline |= added.header_newline;
@@ -572,8 +581,19 @@ fn rewrite_list(
                 });
             }
         };
-        let text = old.as_deref().map(String::from_utf8_lossy);
-        let Some(new) = change(text.as_deref()) else {
+        // Written back as read but for the lines changed: a list that is
+        // not UTF-8 (the spec says it is) is not rewritten at all.
+        let text = match old.as_deref().map(std::str::from_utf8) {
+            Some(Err(_)) => {
+                return Err(DesktopError::Io {
+                    path: path.to_owned(),
+                    source: std::io::Error::other("not UTF-8 text; left as it is"),
+                });
+            }
+            Some(Ok(text)) => Some(text),
+            None => None,
+        };
+        let Some(new) = change(text) else {
             return Ok(());
         };
         let written = match &old {

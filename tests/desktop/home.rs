@@ -1243,3 +1243,65 @@ fn install_desktop_leaves_xml_to_the_editor_that_had_it() {
         );
     }
 }
+
+/// The user's `mimeapps.list` is written back as read but for the lines
+/// added: one that is not UTF-8 is not rewritten at all (its bytes would
+/// have become U+FFFD), and the install says the default was not kept. A
+/// reinstall after the user removed the list pins again without
+/// recording the lines twice (the uninstall named the second as changed).
+#[cfg(all(feature = "gui", unix))]
+#[test]
+fn install_desktop_never_rewrites_a_list_it_cannot_read_as_written() {
+    let dir = tempfile::tempdir().unwrap();
+    let system = dir.path().join("system/applications");
+    fs::create_dir_all(&system).unwrap();
+    fs::write(
+        system.join("xmleditor.desktop"),
+        "[Desktop Entry]\nType=Application\nName=XML\nExec=cat %f\nMimeType=application/xml;text/xml;\n",
+    )
+    .unwrap();
+    let config = dir.path().join("config");
+    fs::create_dir(&config).unwrap();
+    let list = config.join("mimeapps.list");
+    let latin1 = b"# caf\xe9\n[Added Associations]\ntext/plain=xmleditor.desktop;\n".to_vec();
+    fs::write(&list, &latin1).unwrap();
+    let places = [
+        ("XDG_DATA_HOME", dir.path().join("share").into_os_string()),
+        ("XDG_CONFIG_HOME", config.clone().into_os_string()),
+        ("XDG_DATA_DIRS", dir.path().join("system").into_os_string()),
+        ("XDG_CONFIG_DIRS", dir.path().join("etc").into_os_string()),
+    ];
+    let o = install_desktop_in(&places, &[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("could not be kept as the default")
+            && stderr(&o).contains("not UTF-8 text; left as it is"),
+        "{}",
+        stderr(&o)
+    );
+    assert_eq!(fs::read(&list).unwrap(), latin1);
+    assert!(
+        install_desktop_in(&places, &["--uninstall"])
+            .status
+            .success()
+    );
+    assert_eq!(fs::read(&list).unwrap(), latin1);
+
+    // Pinned, the list removed by the user, installed again: pinned
+    // again, recorded once.
+    fs::remove_file(&list).unwrap();
+    assert!(install_desktop_in(&places, &[]).status.success());
+    fs::remove_file(&list).unwrap();
+    let o = install_desktop_in(&places, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let record = fs::read_to_string(dir.path().join("share/rayoflight/installed-files")).unwrap();
+    assert_eq!(
+        record.matches("default application/xml=").count(),
+        1,
+        "{record}"
+    );
+    let o = install_desktop_in(&places, &["--uninstall"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("left the default"), "{}", stderr(&o));
+    assert!(!list.exists());
+}
