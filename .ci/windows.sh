@@ -36,6 +36,11 @@ mkdir -p "$work/bin" "$work/run"
 cp "$exe" "$work/bin/rayoflight.exe"
 x86_64-w64-mingw32-gcc -O2 -shared -o "$work/bin/bcryptprimitives.dll" \
     "$here/.ci/wine/bcryptprimitives.c" "$here/.ci/wine/bcryptprimitives.def" -ladvapi32
+# One server for the whole run: by default the server quits a few seconds
+# after its last client, and a command that connects as it quits dies with
+# "wine client error: recvmsg: Connection reset by peer" (a CI run did).
+mkdir -p "$WINEPREFIX"
+wineserver -p
 wineboot -i >/dev/null 2>&1 || true
 cd "$work/run"
 win() { timeout 300 wine "$work/bin/rayoflight.exe" "$@"; }
