@@ -113,7 +113,7 @@ pub enum DesktopError {
     )]
     Link { path: PathBuf },
     #[error(
-        "installed, but the application that opens XML files could not be kept as the default: {source}; choose it in \"Open with\", or run install-desktop --uninstall"
+        "nothing installed: the application that opens XML files could not be kept as the default: {source}"
     )]
     Default { source: Box<DesktopError> },
     #[error(
@@ -395,12 +395,7 @@ pub fn install(places: &defaults::Places, exec: &Path) -> Result<Done, DesktopEr
     let home = places.data_home.as_path();
     let mut done = Done::default();
     let earlier = Manifest::read(places)?.unwrap_or_default();
-    let files = files(exec);
-    let io = |path: &Path| {
-        let path = path.to_owned();
-        move |source| DesktopError::Io { path, source }
-    };
-    let mut to_write: Vec<(PathBuf, Vec<u8>)> = files;
+    let mut to_write: Vec<(PathBuf, Vec<u8>)> = files(exec);
     to_write.push((PathBuf::from(MANIFEST), Vec::new()));
     for (relative, _) in &to_write {
         let path = home.join(relative);
@@ -449,25 +444,60 @@ pub fn install(places: &defaults::Places, exec: &Path) -> Result<Done, DesktopEr
             defaults::Default::Chosen(_) | defaults::Default::Nobody => None,
         })
         .collect();
+    // The earlier record kept until each file is written again: a failure
+    // halfway leaves every file there recorded, for a retry or an uninstall.
     let mut manifest = Manifest {
-        files: Vec::new(),
+        files: earlier.files,
         folders: earlier.folders,
         made: earlier.made,
         pinned: earlier.pinned,
     };
     // A fresh home: the data folder and those above it, made and recorded.
+    make_folder(home, &mut manifest.made)?;
+    let result = write_install(places, &to_write, &pins, &mut manifest, &mut done);
+    // What was done, whatever failed after the data folder was there.
+    let recorded =
+        crate::system::files::write_atomic(&home.join(MANIFEST), manifest.text().as_bytes());
+    result?;
+    recorded?;
+    done.defaults = pins;
+    refresh(home, &mut done);
+    Ok(done)
+}
+
+/// Makes `folder` and the folders above it that are missing, top-down,
+/// each recorded in `made` once made (an uninstall removes them, empty).
+fn make_folder(folder: &Path, made: &mut Vec<PathBuf>) -> Result<(), DesktopError> {
     let mut missing = Vec::new();
-    let mut up = Some(home);
+    let mut up = Some(folder);
     while let Some(f) = up.filter(|f| !f.as_os_str().is_empty() && !f.exists()) {
         missing.push(f.to_owned());
         up = f.parent();
     }
     for f in missing.into_iter().rev() {
-        std::fs::create_dir(&f).map_err(io(&f))?;
-        manifest.made.push(f);
+        std::fs::create_dir(&f).map_err(|source| DesktopError::Io {
+            path: f.clone(),
+            source,
+        })?;
+        made.push(f);
     }
-    // Folders first, each recorded when this install creates it.
-    for (relative, _) in &to_write {
+    Ok(())
+}
+
+/// The steps of [`install`] after its checks, each recorded in `manifest`
+/// as it is done: the folders under the data folder (the manifest's among
+/// them), then the pin (if it fails, no file is written: the entry never
+/// takes XML from the application that had it), then the files of
+/// `to_write` but the manifest, which the caller writes.
+fn write_install(
+    places: &defaults::Places,
+    to_write: &[(PathBuf, Vec<u8>)],
+    pins: &[String],
+    manifest: &mut Manifest,
+    done: &mut Done,
+) -> Result<(), DesktopError> {
+    let home = places.data_home.as_path();
+    for (relative, _) in to_write {
         let mut missing = Vec::new();
         let mut folder = relative.parent();
         while let Some(f) = folder.filter(|f| !f.as_os_str().is_empty()) {
@@ -478,31 +508,27 @@ pub fn install(places: &defaults::Places, exec: &Path) -> Result<Done, DesktopEr
             folder = f.parent();
         }
         for f in missing.into_iter().rev() {
-            std::fs::create_dir(home.join(&f)).map_err(io(&home.join(&f)))?;
+            let path = home.join(&f);
+            std::fs::create_dir(&path).map_err(|source| DesktopError::Io { path, source })?;
             manifest.folders.push(f);
         }
     }
-    to_write.pop();
-    for (relative, bytes) in &to_write {
+    if !pins.is_empty() {
+        pin_defaults(places, pins, manifest).map_err(|e| DesktopError::Default {
+            source: Box::new(e),
+        })?;
+    }
+    for (relative, bytes) in to_write.iter().filter(|(f, _)| f != Path::new(MANIFEST)) {
         let path = home.join(relative);
         crate::system::files::write_atomic(&path, bytes)?;
-        manifest
-            .files
-            .push((relative.clone(), Some(fingerprint(bytes))));
+        let print = Some(fingerprint(bytes));
+        match manifest.files.iter_mut().find(|(f, _)| f == relative) {
+            Some(record) => record.1 = print,
+            None => manifest.files.push((relative.clone(), print)),
+        }
         done.files.push(path);
     }
-    // The pin last: a failure leaves the files recorded.
-    let pinned = match pins.is_empty() {
-        true => Ok(()),
-        false => pin_defaults(places, &pins, &mut manifest),
-    };
-    crate::system::files::write_atomic(&home.join(MANIFEST), manifest.text().as_bytes())?;
-    pinned.map_err(|e| DesktopError::Default {
-        source: Box::new(e),
-    })?;
-    done.defaults = pins;
-    refresh(home, &mut done);
-    Ok(done)
+    Ok(())
 }
 
 /// Adds `pins` to the user's `mimeapps.list`, recorded in `manifest`
@@ -513,20 +539,7 @@ fn pin_defaults(
     manifest: &mut Manifest,
 ) -> Result<(), DesktopError> {
     let list = places.user_list();
-    let io = |path: &Path| {
-        let path = path.to_owned();
-        move |source| DesktopError::Io { path, source }
-    };
-    let mut missing = Vec::new();
-    let mut up = Some(places.config_home.as_path());
-    while let Some(f) = up.filter(|f| !f.as_os_str().is_empty() && !f.exists()) {
-        missing.push(f.to_owned());
-        up = f.parent();
-    }
-    for f in missing.into_iter().rev() {
-        std::fs::create_dir(&f).map_err(io(&f))?;
-        manifest.made.push(f);
-    }
+    make_folder(&places.config_home, &mut manifest.made)?;
     let mut added = None;
     rewrite_list(&list, |text| {
         let (new, pinned) = defaults::pin(text.unwrap_or(""), pins);

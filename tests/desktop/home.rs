@@ -1246,7 +1246,8 @@ fn install_desktop_leaves_xml_to_the_editor_that_had_it() {
 
 /// The user's `mimeapps.list` is written back as read but for the lines
 /// added: one that is not UTF-8 is not rewritten at all (its bytes would
-/// have become U+FFFD), and the install says the default was not kept. A
+/// have become U+FFFD), and the install says the default was not kept and
+/// writes no file (its folders, recorded, go with the uninstall). A
 /// reinstall after the user removed the list pins again without
 /// recording the lines twice (the uninstall named the second as changed).
 #[cfg(all(feature = "gui", unix))]
@@ -1271,21 +1272,23 @@ fn install_desktop_never_rewrites_a_list_it_cannot_read_as_written() {
         ("XDG_DATA_DIRS", dir.path().join("system").into_os_string()),
         ("XDG_CONFIG_DIRS", dir.path().join("etc").into_os_string()),
     ];
+    let before = tree(dir.path());
     let o = install_desktop_in(&places, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(
-        stderr(&o).contains("could not be kept as the default")
+        stderr(&o).contains("nothing installed: the application that opens XML files could not be kept as the default")
             && stderr(&o).contains("not UTF-8 text; left as it is"),
         "{}",
         stderr(&o)
     );
     assert_eq!(fs::read(&list).unwrap(), latin1);
-    assert!(
-        install_desktop_in(&places, &["--uninstall"])
-            .status
-            .success()
-    );
+    // No entry that would have taken XML from the editor that has it.
+    let entry = format!("share/applications/{}.desktop", rayoflight::desktop::APP_ID);
+    assert!(!dir.path().join(&entry).exists());
+    let o = install_desktop_in(&places, &["--uninstall"]);
+    assert!(o.status.success(), "{}", stderr(&o));
     assert_eq!(fs::read(&list).unwrap(), latin1);
+    assert_eq!(tree(dir.path()), before);
 
     // Pinned, the list removed by the user, installed again: pinned
     // again, recorded once.
