@@ -103,11 +103,14 @@ pub enum Stage {
     /// A scene's reference image: the default method's, or the one
     /// supersampled 16×16.
     Reference { supersampled: bool },
-    /// The `index`-th method (from 0) of `of`, one of its runs.
+    /// The `index`-th method (from 0) of `of`, at its `run`-th render
+    /// (from 0) of `runs` (the time is their median).
     Method {
         index: usize,
         of: usize,
         name: &'static str,
+        run: usize,
+        runs: usize,
     },
 }
 
@@ -124,6 +127,26 @@ impl StudyProgress {
             .stage
             .lock()
             .unwrap_or_else(std::sync::PoisonError::into_inner) = stage;
+    }
+
+    /// A method's `run`-th render begins (a reference's stage kept).
+    fn set_run(&self, run: usize) {
+        if let Stage::Method {
+            index,
+            of,
+            name,
+            runs,
+            ..
+        } = self.stage()
+        {
+            self.set(Stage::Method {
+                index,
+                of,
+                name,
+                run,
+                runs,
+            });
+        }
     }
 }
 
@@ -267,7 +290,7 @@ pub fn measure(
     runs: usize,
 ) -> Result<Row, StudyError> {
     let pool = RenderPool::new(None)?;
-    let progress = Progress::default();
+    let watch = StudyProgress::default();
     measure_image(
         scene,
         method,
@@ -275,31 +298,35 @@ pub fn measure(
         runs,
         &pool,
         &Cancel::never(),
-        &progress,
+        &watch,
     )
     .map(|(row, _)| row)
 }
 
 /// [`measure()`] on `pool`, and the image the method rendered (its first
-/// run), unless cancelled; each run's pixels counted in `progress`. The time is render time as [`crate::render::measure`](mod@crate::render::measure)
+/// run), unless cancelled; each run said in `watch` (where its stage is
+/// this method) and its pixels counted in `watch.render`. The time is render time as [`crate::render::measure`](mod@crate::render::measure)
 /// defines it (`auto`'s planning included), as the command line renders
 /// with `--method`.
-pub fn measure_image(
+fn measure_image(
     scene: &StudyScene,
     method: &Method,
     reference: &RgbImage,
     runs: usize,
     pool: &RenderPool,
     cancel: &Cancel,
-    progress: &Progress,
+    watch: &StudyProgress,
 ) -> Result<(Row, RgbImage), StudyError> {
     let request = crate::render::request::RenderRequest {
         method: Some(method.clone()),
         ..Default::default()
     };
     let mut first = None;
+    let mut run = 0;
     let time = median_of(runs, || {
-        let timed = render_timed(&scene.scene, &request, pool, cancel, progress)?
+        watch.set_run(run);
+        run += 1;
+        let timed = render_timed(&scene.scene, &request, pool, cancel, &watch.render)?
             .ok_or(StudyError::Cancelled)?;
         let elapsed = timed.elapsed;
         first.get_or_insert(timed);
@@ -344,11 +371,11 @@ pub fn run(
                 index,
                 of: methods.len(),
                 name: method.name,
+                run: 0,
+                runs: runs.max(1),
             });
             let reference = references.for_method(method);
-            let render = &watch.render;
-            let (row, image) =
-                measure_image(scene, method, reference, runs, &pool, cancel, render)?;
+            let (row, image) = measure_image(scene, method, reference, runs, &pool, cancel, watch)?;
             progress(&row, &image, reference);
             rows.push(row);
         }

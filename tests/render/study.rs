@@ -169,6 +169,9 @@ fn the_study_says_which_render_it_is_at_and_how_far() {
             index,
             of: 3,
             name: m.name,
+            // The second of its two runs: each run is said.
+            run: 1,
+            runs: 2,
         })
         .collect();
     assert_eq!(seen, expected);

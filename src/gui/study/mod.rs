@@ -23,8 +23,8 @@ use std::time::Duration;
 
 /// The progress bar's share and words while a study runs, `done` of
 /// `total` methods measured: the references first (a minute on a large
-/// scene, before any method), then each method, with the pixels of the
-/// render under way (`(done, all)`).
+/// scene, before any method), then each method, run after run, with the
+/// pixels of the render under way (`(done, all)`).
 fn running(stage: Stage, pixels: (u64, u64), done: usize, total: usize) -> (f32, String) {
     let within = match pixels {
         (_, 0) => 0.0,
@@ -40,10 +40,24 @@ fn running(stage: Stage, pixels: (u64, u64), done: usize, total: usize) -> (f32,
                 if supersampled { ", 16×16 samples" } else { "" }
             ),
         ),
-        Stage::Method { index, of, name } => (
-            (index as f32 + within) / of.max(1) as f32,
-            format!("{done} of {total} methods; {name}: {percent} %"),
-        ),
+        Stage::Method {
+            index,
+            of,
+            name,
+            run,
+            runs,
+        } => {
+            // Each run of a method its share of the method's.
+            let method = (run as f32 + within) / runs.max(1) as f32;
+            let which = match runs {
+                0 | 1 => String::new(),
+                runs => format!(", run {} of {runs}", run + 1),
+            };
+            (
+                (index as f32 + method) / of.max(1) as f32,
+                format!("{done} of {total} methods; {name}{which}: {percent} %"),
+            )
+        }
     }
 }
 
@@ -449,14 +463,21 @@ mod tests {
             (0.25, "the reference, 16×16 samples: 25 %")
         );
         let name = "phong";
-        let stage = Stage::Method {
+        let stage = |run, runs| Stage::Method {
             index: 3,
             of: 12,
             name,
+            run,
+            runs,
         };
-        let (share, text) = running(stage, (50, 100), 3, 12);
+        let (share, text) = running(stage(0, 1), (50, 100), 3, 12);
         assert_eq!(share, 3.5 / 12.0);
         assert_eq!(text, "3 of 12 methods; phong: 50 %");
+        // The second of four runs half done: the method 3/8 done, the bar
+        // not back to the method's start.
+        let (share, text) = running(stage(1, 4), (50, 100), 3, 12);
+        assert_eq!(share, (3.0 + 1.5 / 4.0) / 12.0);
+        assert_eq!(text, "3 of 12 methods; phong, run 2 of 4: 50 %");
         assert_eq!(running(Stage::Waiting, (0, 0), 0, 12).0, 0.0);
     }
 }
