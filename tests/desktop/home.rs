@@ -1066,6 +1066,35 @@ fn install_desktop_writes_and_removes_only_what_it_owns() {
     assert_eq!(tree(&home), ["icons"]);
 }
 
+/// A throwaway desktop under `dir`: system applications (`system/`) with
+/// these entries (name, MIME types; each runs `cat`, which exists: gio
+/// lists an entry only if its program does), the user's data folder
+/// `share/` and config folder `config/`, no system config; the XDG
+/// variables that say so.
+#[cfg(all(feature = "gui", unix))]
+fn throwaway_desktop(
+    dir: &Path,
+    entries: &[(&str, &str)],
+) -> [(&'static str, std::ffi::OsString); 4] {
+    let system = dir.join("system");
+    fs::create_dir_all(system.join("applications")).unwrap();
+    for (name, types) in entries {
+        fs::write(
+            system.join(format!("applications/{name}.desktop")),
+            format!(
+                "[Desktop Entry]\nType=Application\nName={name}\nExec=cat %f\nMimeType={types}\n"
+            ),
+        )
+        .unwrap();
+    }
+    [
+        ("XDG_DATA_HOME", dir.join("share").into_os_string()),
+        ("XDG_CONFIG_HOME", dir.join("config").into_os_string()),
+        ("XDG_DATA_DIRS", system.into_os_string()),
+        ("XDG_CONFIG_DIRS", dir.join("etc").into_os_string()),
+    ]
+}
+
 /// An XML editor is installed for the system and nobody chose a default
 /// for XML: gio and xdg-mime named RayOfLight the default for every XML
 /// file once it was installed (they prefer the user's own folder). Now the
@@ -1093,21 +1122,15 @@ fn install_desktop_leaves_xml_to_the_editor_that_had_it() {
         ),
     ] {
         let dir = tempfile::tempdir().unwrap();
-        let system = dir.path().join("system");
-        fs::create_dir_all(system.join("applications")).unwrap();
-        // gio lists an entry only if its program is there: cat is.
-        for (name, types) in [
-            ("xmleditor", "application/xml;text/xml;"),
-            ("other", "text/xml;"),
-        ] {
-            fs::write(
-                system.join(format!("applications/{name}.desktop")),
-                format!("[Desktop Entry]\nType=Application\nName={name}\nExec=cat %f\nMimeType={types}\n"),
-            )
-            .unwrap();
-        }
+        let places = throwaway_desktop(
+            dir.path(),
+            &[
+                ("xmleditor", "application/xml;text/xml;"),
+                ("other", "text/xml;"),
+            ],
+        );
         let o = Command::new("update-desktop-database")
-            .arg(system.join("applications"))
+            .arg(dir.path().join("system/applications"))
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", stderr(&o));
@@ -1117,13 +1140,6 @@ fn install_desktop_leaves_xml_to_the_editor_that_had_it() {
             fs::create_dir(&config).unwrap();
             fs::write(&list, text).unwrap();
         }
-        let home = dir.path().join("share");
-        let places = [
-            ("XDG_DATA_HOME", home.clone().into_os_string()),
-            ("XDG_CONFIG_HOME", config.clone().into_os_string()),
-            ("XDG_DATA_DIRS", system.clone().into_os_string()),
-            ("XDG_CONFIG_DIRS", dir.path().join("etc").into_os_string()),
-        ];
         let defaults = |mime: &str| -> (String, String, String) {
             let gio = Command::new("gio")
                 .args(["mime", mime])
@@ -1254,24 +1270,12 @@ fn install_desktop_leaves_xml_to_the_editor_that_had_it() {
 #[test]
 fn install_desktop_never_rewrites_a_list_it_cannot_read_as_written() {
     let dir = tempfile::tempdir().unwrap();
-    let system = dir.path().join("system/applications");
-    fs::create_dir_all(&system).unwrap();
-    fs::write(
-        system.join("xmleditor.desktop"),
-        "[Desktop Entry]\nType=Application\nName=XML\nExec=cat %f\nMimeType=application/xml;text/xml;\n",
-    )
-    .unwrap();
+    let places = throwaway_desktop(dir.path(), &[("xmleditor", "application/xml;text/xml;")]);
     let config = dir.path().join("config");
     fs::create_dir(&config).unwrap();
     let list = config.join("mimeapps.list");
     let latin1 = b"# caf\xe9\n[Added Associations]\ntext/plain=xmleditor.desktop;\n".to_vec();
     fs::write(&list, &latin1).unwrap();
-    let places = [
-        ("XDG_DATA_HOME", dir.path().join("share").into_os_string()),
-        ("XDG_CONFIG_HOME", config.clone().into_os_string()),
-        ("XDG_DATA_DIRS", dir.path().join("system").into_os_string()),
-        ("XDG_CONFIG_DIRS", dir.path().join("etc").into_os_string()),
-    ];
     let before = tree(dir.path());
     let o = install_desktop_in(&places, &[]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
