@@ -78,14 +78,18 @@ impl Subcommand for InstallDesktopFlags {
             }
             true => {
                 let done = desktop::uninstall(&places).map_err(fail)?;
-                match done.files.len() {
-                    0 => eprintln!(
-                        "nothing to remove: install-desktop wrote nothing under {}",
-                        home.display()
+                // A failed install may have made folders and no file.
+                let home = home.display();
+                match (done.files.len(), done.folders.len()) {
+                    (0, 0) => {
+                        eprintln!("nothing to remove: install-desktop wrote nothing under {home}")
+                    }
+                    (0, m) => eprintln!(
+                        "removed the {m} folders install-desktop made, empty (it wrote no file under {home})"
                     ),
-                    n => eprintln!(
-                        "removed the {n} files install-desktop wrote under {}",
-                        home.display()
+                    (n, 0) => eprintln!("removed the {n} files install-desktop wrote under {home}"),
+                    (n, m) => eprintln!(
+                        "removed the {n} files install-desktop wrote under {home} and the {m} folders it made"
                     ),
                 }
                 for line in &done.defaults {

@@ -132,6 +132,8 @@ const XML_TYPES: &[&str] = &["application/xml", "text/xml"];
 pub struct Done {
     /// The files written or removed, in order.
     pub files: Vec<PathBuf>,
+    /// The folders an uninstall removed (made by the install, empty now).
+    pub folders: Vec<PathBuf>,
     /// The database tools run (`update-mime-database`), with their folder.
     pub ran: Vec<String>,
     /// Tools that were not found, so not run.
@@ -710,12 +712,12 @@ pub fn uninstall(places: &defaults::Places) -> Result<Done, DesktopError> {
     // The deepest first; a folder something else now holds stays.
     let mut folders = manifest.folders;
     folders.sort_by_key(|f| std::cmp::Reverse(f.components().count()));
-    for f in folders {
-        let _ = std::fs::remove_dir(home.join(f));
-    }
     // The data folder and those above it, if this install made them.
-    for f in manifest.made.iter().rev() {
-        let _ = std::fs::remove_dir(f);
+    let made = manifest.made.into_iter().rev();
+    for f in folders.into_iter().map(|f| home.join(f)).chain(made) {
+        if std::fs::remove_dir(&f).is_ok() {
+            done.folders.push(f);
+        }
     }
     Ok(done)
 }

@@ -1291,6 +1291,11 @@ fn install_desktop_never_rewrites_a_list_it_cannot_read_as_written() {
     assert!(!dir.path().join(&entry).exists());
     let o = install_desktop_in(&places, &["--uninstall"]);
     assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("folders install-desktop made, empty (it wrote no file under"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(fs::read(&list).unwrap(), latin1);
     assert_eq!(tree(dir.path()), before);
 
