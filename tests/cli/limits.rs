@@ -719,6 +719,31 @@ fn text_to_special(dir: &Path, error: &str) -> Result<(), String> {
     if fs::metadata("/dev/null").unwrap().is_file() {
         return Err("/dev/null was replaced".into());
     }
+    // The shell's pipe through /proc's links (`-out /dev/stdout | less`):
+    // written into; no file is made beside it (none can be, in /proc).
+    let edit = ["edit", "tiny.xml", "--set", "model.depth=3", "-out"];
+    for out in ["/dev/stdout", "/proc/self/fd/1"] {
+        for args in [&["export-pov", "tiny.xml", "-out"][..], &edit] {
+            let args = [args, &[out]].concat();
+            let o = run(dir, &args);
+            accepted(&o, &format!("{args:?} into a pipe"))?;
+            if !stdout(&o).contains("sphere") {
+                return Err(format!("{args:?}: the pipe got {:?}", stdout(&o)));
+            }
+        }
+    }
+    // The shell's redirection to a file (`-out /dev/stdout > s.pov`): the
+    // text in the file the shell opened.
+    let o = run_with(
+        dir,
+        &["sh", "-c", r#"exec "$0" "$@" >redirected.xml"#],
+        &[&edit[..], &["/dev/stdout"]].concat(),
+    );
+    accepted(&o, "edit -out /dev/stdout > redirected.xml")?;
+    let text = fs::read_to_string(dir.join("redirected.xml")).unwrap();
+    if !text.contains("depth=\"3\"") {
+        return Err(format!("the redirected file got {text:?}"));
+    }
     Ok(())
 }
 

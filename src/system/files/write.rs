@@ -78,7 +78,12 @@ pub fn check_file_target(path: &Path) -> Result<(), WriteError> {
         return Err(WriteError::EmptyName);
     }
     let place = place(path)?;
-    in_the_way(path, &place)?;
+    let seen = in_the_way(path, &place)?;
+    // Written into, never replaced: no new file is made beside it (beside
+    // `/proc/self/fd/1` none can be).
+    if place.is_magic() || seen.is_some_and(|(kind, _)| kind == Kind::Special) {
+        return Ok(());
+    }
     let _cleanly = crate::system::interrupt::cleanly();
     place
         .new_file(".rayoflight-", ".tmp")
