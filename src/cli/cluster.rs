@@ -272,7 +272,7 @@ impl Subcommand for SplitFlags {
     }
 }
 
-/// Put the parts `--region` wrote together into the full image.
+/// Put the parts that --region wrote together into the full image.
 ///
 /// The image is the same file a render of the whole writes, byte for
 /// byte. Every part's PNG records where it belongs, the full image's

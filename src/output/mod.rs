@@ -12,6 +12,7 @@ use crate::system::files::write::{
 };
 use crate::system::files::{Kind, Place};
 use image::codecs::jpeg::JpegEncoder;
+use image::codecs::pnm::{PnmEncoder, PnmSubtype, SampleEncoding};
 use image::{ImageFormat, RgbImage};
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -363,7 +364,8 @@ fn scratch_file(path: &Path) -> std::io::Result<std::fs::File> {
 }
 
 /// The image encoded in memory (JPEG at [`JPEG_QUALITY`]; an 8-bit image
-/// in EXR as floats, each channel value / 255).
+/// in EXR as floats, each channel value / 255; `.ppm` a binary PPM, P6:
+/// `image`'s PNM encoder writes PAM, P7, unless told).
 pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::ImageError> {
     let mut bytes = std::io::Cursor::new(Vec::new());
     if format == ImageFormat::OpenExr {
@@ -374,6 +376,9 @@ pub fn encode(image: &RgbImage, format: ImageFormat) -> Result<Vec<u8>, image::I
         image.write_with_encoder(JpegEncoder::new_with_quality(&mut bytes, JPEG_QUALITY))?;
     } else if format == ImageFormat::Gif {
         return encode_gif(image);
+    } else if format == ImageFormat::Pnm {
+        let pixmap = PnmSubtype::Pixmap(SampleEncoding::Binary);
+        image.write_with_encoder(PnmEncoder::new(&mut bytes).with_subtype(pixmap))?;
     } else if format == ImageFormat::Png {
         write_png_image(
             &mut bytes,
@@ -461,6 +466,10 @@ mod tests {
                 .unwrap_or_else(|e| panic!("{ext}: {e}"))
                 .to_rgb8();
             assert_eq!(back.dimensions(), (7, 5), "{ext}");
+            if *ext == "ppm" {
+                // A PPM, as its name says, not a PAM (P7).
+                assert_eq!(&bytes[..2], b"P6");
+            }
             if !matches!(format, ImageFormat::Jpeg | ImageFormat::Gif) {
                 assert_eq!(back, sample(), "{ext} should be lossless");
             }
