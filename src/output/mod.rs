@@ -8,7 +8,7 @@
 
 use crate::render::{KeptPass, Pass, PassForm, PassImage, PassPixels};
 use crate::system::files::write::{
-    WriteError, check_file_target, in_the_way, place, write_atomic, write_atomic_with,
+    WriteError, check_room, in_the_way, place, write_atomic, write_atomic_with,
 };
 use crate::system::files::{Kind, Place};
 use image::codecs::jpeg::JpegEncoder;
@@ -141,8 +141,9 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
     }
     // A device or a pipe would be written directly: never an image.
     let place = place(path)?;
-    if let Some((_, meta)) = in_the_way(path, &place)?
-        && let Some(kind) = crate::system::files::special_kind(&meta)
+    let seen = in_the_way(path, &place)?;
+    if let Some((_, meta)) = &seen
+        && let Some(kind) = crate::system::files::special_kind(meta)
     {
         // Through /dev/stdout or /proc/self/fd/N: the shell's pipe.
         let kind = if kind == "a FIFO" && place.is_magic() {
@@ -155,7 +156,7 @@ pub fn check_target(path: &Path, width: u32, height: u32) -> Result<ImageFormat,
             kind,
         });
     }
-    check_file_target(path)?;
+    check_room(path, &place, seen.map(|(kind, _)| kind))?;
     Ok(format)
 }
 
@@ -453,6 +454,7 @@ fn encode_gif(image: &RgbImage) -> Result<Vec<u8>, image::ImageError> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::system::files::write::check_file_target;
 
     fn sample() -> RgbImage {
         RgbImage::from_fn(7, 5, |x, y| image::Rgb([x as u8 * 30, y as u8 * 40, 200]))

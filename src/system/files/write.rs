@@ -79,9 +79,15 @@ pub fn check_file_target(path: &Path) -> Result<(), WriteError> {
     }
     let place = place(path)?;
     let seen = in_the_way(path, &place)?;
-    // Written into, never replaced: no new file is made beside it (beside
-    // `/proc/self/fd/1` none can be).
-    if place.is_magic() || seen.is_some_and(|(kind, _)| kind == Kind::Special) {
+    check_room(path, &place, seen.map(|(kind, _)| kind))
+}
+
+/// The end of [`check_file_target`], for a `place` already reached and
+/// looked at (`kind`: what [`in_the_way`] found there): a new file can be
+/// made in its folder, unless the write goes into what is there.
+pub(crate) fn check_room(path: &Path, place: &Place, kind: Option<Kind>) -> Result<(), WriteError> {
+    // No new file is made beside it (beside `/proc/self/fd/1` none can be).
+    if written_into(place, kind) {
         return Ok(());
     }
     let _cleanly = crate::system::interrupt::cleanly();
@@ -189,6 +195,13 @@ pub fn write_new(path: &Path, bytes: &[u8]) -> Result<(), WriteError> {
     Ok(())
 }
 
+/// Whether a write to `place`, where a `kind` of file is, goes into that
+/// file instead of replacing it: a device or pipe, or what a link of
+/// `/proc` stands for (the shell's pipe or redirection).
+fn written_into(place: &Place, kind: Option<Kind>) -> bool {
+    place.is_magic() || kind == Some(Kind::Special)
+}
+
 /// How many times a write looks at and opens a name that another program
 /// keeps replacing between the two, before it gives up.
 const MAX_TRIES: usize = 8;
@@ -249,9 +262,8 @@ pub fn write_atomic_with<E: From<WriteError>>(
             old = Some(None);
             break;
         };
-        // Written through: a device or pipe, a file of several names, or
-        // what a link of /proc stands for (the shell's redirection).
-        let into = kind == Kind::Special || several_names(&meta) || place.is_magic();
+        // Written through: what is written into, or a file of several names.
+        let into = written_into(&place, Some(kind)) || several_names(&meta);
         let opened = place
             .open(kind, &meta, into)
             .map_err(|e| match e.raw_os_error() {
@@ -270,7 +282,7 @@ pub fn write_atomic_with<E: From<WriteError>>(
         return Err(moved().into());
     };
     if let Some((kind, meta, file)) = &old
-        && (*kind == Kind::Special || place.is_magic())
+        && written_into(&place, Some(*kind))
     {
         if meta.is_file() {
             file.set_len(0).map_err(io_error)?;
