@@ -131,21 +131,12 @@ impl StudyProgress {
 
     /// A method's `run`-th render begins (a reference's stage kept).
     fn set_run(&self, run: usize) {
-        if let Stage::Method {
-            index,
-            of,
-            name,
-            runs,
-            ..
-        } = self.stage()
-        {
-            self.set(Stage::Method {
-                index,
-                of,
-                name,
-                run,
-                runs,
-            });
+        let mut stage = self
+            .stage
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner);
+        if let Stage::Method { run: now, .. } = &mut *stage {
+            *now = run;
         }
     }
 }
